@@ -1,0 +1,75 @@
+//! Orthonormal shading frames: local coordinates have the normal on +z, so
+//! `cos theta = w.z` (pbrt-v4's convention).
+
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Frame {
+    pub s: Vec3,
+    pub t: Vec3,
+    pub n: Vec3,
+}
+
+impl Frame {
+    /// A frame around unit normal `n`, tangent chosen by Duff et al. 2017
+    /// ("Building an Orthonormal Basis, Revisited"): continuous except at
+    /// n.z = -1 exactly, branch-free, and written identically in GLSL.
+    pub fn from_normal(n: Vec3) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        Self { s, t, n }
+    }
+
+    /// A frame around unit normal `n` whose `s` axis follows `tangent`
+    /// projected onto the tangent plane (Gram-Schmidt); falls back to
+    /// [`Frame::from_normal`] when the tangent is degenerate or parallel to n.
+    pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
+        let s = tangent - n * n.dot(tangent);
+        let len2 = s.length_squared();
+        if !(len2 > 1e-12) || !len2.is_finite() {
+            return Self::from_normal(n);
+        }
+        let s = s / len2.sqrt();
+        Self { s, t: n.cross(s), n }
+    }
+
+    #[inline]
+    pub fn to_local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    }
+
+    #[inline]
+    pub fn to_world(&self, v: Vec3) -> Vec3 {
+        self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frames_are_orthonormal_and_invert() {
+        let normals = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::X,
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+            Vec3::new(1e-7, 0.0, -1.0).normalize(),
+        ];
+        for n in normals {
+            for f in [Frame::from_normal(n), Frame::from_normal_tangent(n, Vec3::new(1.0, 2.0, 3.0).normalize())] {
+                assert!((f.s.length() - 1.0).abs() < 1e-5);
+                assert!((f.t.length() - 1.0).abs() < 1e-5);
+                assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(f.n).abs() < 1e-5 && f.t.dot(f.n).abs() < 1e-5);
+                // Right-handed: s x t = n.
+                assert!((f.s.cross(f.t) - f.n).length() < 1e-4, "{f:?}");
+                let v = Vec3::new(0.2, -0.7, 0.4);
+                assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
+            }
+        }
+    }
+}

@@ -1,0 +1,16 @@
+//! glint-cpu: the CPU reference renderer.
+//!
+//! Everything the GPU backend must match lives here: the scene model and its
+//! GPU-shared layouts, the glTF loader, the BVH, the BSDFs and the path tracer.
+//! No Vulkan.
+
+pub mod bsdf;
+pub mod bvh;
+pub mod frame;
+pub mod loader;
+pub mod scene;
+
+pub use bsdf::{Bsdf, BsdfSample};
+pub use bvh::{Bvh, BvhNode, Hit, Ray};
+pub use frame::Frame;
+pub use scene::{Camera, Material, PunctualLight, Scene, Triangle, TriangleShading};

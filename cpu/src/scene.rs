@@ -1,0 +1,152 @@
+//! The scene model shared by both backends.
+//!
+//! Geometry is flattened to world-space triangles at load time. The `#[repr(C)]`
+//! structs here are uploaded to the GPU unchanged (std430 on the GLSL side, see
+//! `shaders/`); each has `const` size/offset assertions so a layout change
+//! cannot slip past the GLSL mirror unnoticed.
+
+use std::mem::{offset_of, size_of};
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Mat4, Vec3};
+
+use crate::bsdf::Bsdf;
+use crate::bvh::Bvh;
+
+/// Sentinel for "no emissive-triangle index".
+pub const NO_LIGHT: u32 = u32::MAX;
+
+/// A world-space triangle as traversal reads it: three `vec4`s in std430,
+/// the integers riding in `.w` (read with `floatBitsToUint` in GLSL).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct Triangle {
+    pub p0: [f32; 3],
+    /// Index into `Scene::materials`.
+    pub material: u32,
+    pub p1: [f32; 3],
+    /// Index of this triangle in the emitter list, or [`NO_LIGHT`].
+    pub light: u32,
+    pub p2: [f32; 3],
+    /// Bit 0: the triangle's material emits on both sides.
+    pub flags: u32,
+}
+const _: () = assert!(size_of::<Triangle>() == 48);
+const _: () = assert!(offset_of!(Triangle, p1) == 16 && offset_of!(Triangle, p2) == 32);
+
+impl Triangle {
+    pub fn vertices(&self) -> [Vec3; 3] {
+        [self.p0.into(), self.p1.into(), self.p2.into()]
+    }
+    /// Unnormalised geometric normal (p1 - p0) x (p2 - p0): counter-clockwise
+    /// winding faces the viewer, so it points to a dielectric's outside.
+    pub fn geometric_normal(&self) -> Vec3 {
+        let [a, b, c] = self.vertices();
+        (b - a).cross(c - a)
+    }
+    pub fn area(&self) -> f32 {
+        0.5 * self.geometric_normal().length()
+    }
+}
+
+/// Per-triangle shading data, in the same order as the triangles.
+/// `.w` of each normal is 1 when the mesh had NORMAL (0: use the geometric
+/// normal); `.w` of each tangent is 1 when a tangent is known (TANGENT, or
+/// dP/du from TEXCOORD_0), else 0 and the frame is built from the normal.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleShading {
+    pub n: [[f32; 4]; 3],
+    pub t: [[f32; 4]; 3],
+}
+const _: () = assert!(size_of::<TriangleShading>() == 96);
+
+/// A glTF material as glint renders it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub bsdf: Bsdf,
+    /// Emitted radiance (emissiveFactor x KHR_materials_emissive_strength).
+    pub emission: Vec3,
+    /// glTF `doubleSided`: emission leaves both faces.
+    pub double_sided: bool,
+}
+
+impl Material {
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
+
+/// KHR_lights_punctual, in the file's own units (no photometric conversion).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PunctualLight {
+    /// `intensity`: radiant intensity per steradian (color x intensity).
+    Point { position: Vec3, intensity: Vec3 },
+    /// Cone falloff as the KHR_lights_punctual spec writes it: t = saturate of
+    /// a linear ramp in cos(angle) from the outer (0) to the inner cone (1),
+    /// attenuation t^2.
+    Spot {
+        position: Vec3,
+        /// Unit direction the light points to (the node's -Z).
+        direction: Vec3,
+        intensity: Vec3,
+        inner_cone_angle: f32,
+        outer_cone_angle: f32,
+    },
+    /// `irradiance` on a surface facing the light; `direction` is the unit
+    /// direction the light travels (the node's -Z).
+    Directional { direction: Vec3, irradiance: Vec3 },
+}
+
+/// A perspective camera: `to_world` maps camera space (looking down -Z, +Y
+/// up) to world space, without scale.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: Option<String>,
+    pub to_world: Mat4,
+    /// Vertical field of view in radians.
+    pub yfov: f32,
+    /// The file's aspect ratio (width / height), if it gave one.
+    pub aspect_ratio: Option<f32>,
+}
+
+/// A loaded scene. Triangles and their shading data are in BVH leaf order
+/// once [`Scene::build_bvh`] has run.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    pub triangles: Vec<Triangle>,
+    pub shading: Vec<TriangleShading>,
+    pub materials: Vec<Material>,
+    pub lights: Vec<PunctualLight>,
+    /// Cameras of the default scene in document order of their nodes.
+    pub cameras: Vec<Camera>,
+    /// `scene.extras.background`: constant radiance (default black).
+    pub background: Vec3,
+    pub bvh: Bvh,
+}
+
+impl Scene {
+    /// Build the BVH and reorder triangles and shading into leaf order, so
+    /// leaves address contiguous ranges of the triangle array (the layout the
+    /// GPU reads unchanged).
+    pub fn build_bvh(&mut self) {
+        let (bvh, order) = Bvh::build(&self.triangles);
+        self.triangles = order.iter().map(|&i| self.triangles[i as usize]).collect();
+        self.shading = order.iter().map(|&i| self.shading[i as usize]).collect();
+        self.bvh = bvh;
+    }
+
+    /// World-space bounds of all geometry (min, max); (0, 0) for an empty scene.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for t in &self.triangles {
+            for p in t.vertices() {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+        if lo.x > hi.x { (Vec3::ZERO, Vec3::ZERO) } else { (lo, hi) }
+    }
+}

@@ -1,0 +1,3 @@
+//! glint: the host side. CLI glue and the Vulkan compute backend.
+
+pub use glint_cpu as cpu;
