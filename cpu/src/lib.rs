@@ -6,11 +6,13 @@
 
 pub mod bsdf;
 pub mod bvh;
+pub mod film;
 pub mod frame;
 pub mod loader;
 pub mod scene;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, BvhNode, Hit, Ray};
+pub use film::{Film, RenderOptions, RenderStats};
 pub use frame::Frame;
-pub use scene::{Camera, Material, PunctualLight, Scene, Triangle, TriangleShading};
+pub use scene::{Camera, GpuMaterial, Material, PunctualLight, Scene, Triangle, TriangleShading};

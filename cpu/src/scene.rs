@@ -10,7 +10,7 @@ use std::mem::{offset_of, size_of};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{Bsdf, ConductorParams, Shadowing};
 use crate::bvh::Bvh;
 
 /// Sentinel for "no emissive-triangle index".
@@ -75,6 +75,83 @@ pub struct Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+}
+
+/// A material as the GPU reads it (std430 `struct Material` in
+/// `shaders/bsdf/material.glsl`): 16 bytes of scalars, then `vec4`s.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// One of the `GpuMaterial::KIND_*` tags.
+    pub kind: u32,
+    /// 0: height-correlated Smith G2, 1: separable G1 G1.
+    pub shadowing: u32,
+    /// GGX alphas; the smooth (delta) form when max < SMOOTH_ALPHA_THRESHOLD.
+    pub alpha_u: f32,
+    pub alpha_v: f32,
+    /// Diffuse reflectance (diffuse, metallic blend's base); `.w` = metallic weight.
+    pub reflectance: [f32; 4],
+    /// Conductor eta (rgb); dielectric: `.x` = int_ior / ext_ior.
+    pub eta: [f32; 4],
+    /// Conductor k (rgb).
+    pub k: [f32; 4],
+    /// Conductor specular_reflectance (rgb).
+    pub specular: [f32; 4],
+    /// Emitted radiance (rgb); `.w` = 1 when emission leaves both faces.
+    pub emission: [f32; 4],
+}
+const _: () = assert!(size_of::<GpuMaterial>() == 96);
+const _: () = assert!(offset_of!(GpuMaterial, reflectance) == 16 && offset_of!(GpuMaterial, emission) == 80);
+
+impl GpuMaterial {
+    pub const KIND_DIFFUSE: u32 = 0;
+    pub const KIND_CONDUCTOR: u32 = 1;
+    pub const KIND_DIELECTRIC: u32 = 2;
+    pub const KIND_METALLIC: u32 = 3;
+}
+
+fn vec4(v: Vec3, w: f32) -> [f32; 4] {
+    [v.x, v.y, v.z, w]
+}
+
+impl From<&Material> for GpuMaterial {
+    fn from(m: &Material) -> Self {
+        let mut g = GpuMaterial {
+            emission: vec4(m.emission, if m.double_sided { 1.0 } else { 0.0 }),
+            ..Default::default()
+        };
+        let mut conductor = |g: &mut GpuMaterial, c: &ConductorParams| {
+            g.eta = vec4(c.eta, 0.0);
+            g.k = vec4(c.k, 0.0);
+            g.specular = vec4(c.specular_reflectance, 0.0);
+            g.alpha_u = c.roughness.alpha_u;
+            g.alpha_v = c.roughness.alpha_v;
+            g.shadowing = (c.roughness.shadowing == Shadowing::Separable) as u32;
+        };
+        match &m.bsdf {
+            Bsdf::Diffuse { reflectance } => {
+                g.kind = Self::KIND_DIFFUSE;
+                g.reflectance = vec4(*reflectance, 0.0);
+            }
+            Bsdf::Conductor(c) => {
+                g.kind = Self::KIND_CONDUCTOR;
+                conductor(&mut g, c);
+            }
+            Bsdf::Dielectric { eta, roughness } => {
+                g.kind = Self::KIND_DIELECTRIC;
+                g.eta = [*eta, 0.0, 0.0, 0.0];
+                g.alpha_u = roughness.alpha_u;
+                g.alpha_v = roughness.alpha_v;
+                g.shadowing = (roughness.shadowing == Shadowing::Separable) as u32;
+            }
+            Bsdf::Metallic { metallic, base, conductor: c } => {
+                g.kind = Self::KIND_METALLIC;
+                g.reflectance = vec4(*base, *metallic);
+                conductor(&mut g, c);
+            }
+        }
+        g
     }
 }
 

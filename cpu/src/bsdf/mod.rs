@@ -113,3 +113,17 @@ impl Bsdf {
         matches!(self, Bsdf::Dielectric { .. })
     }
 }
+
+/// Named indices of refraction (the contract's table, at least: vacuum, air,
+/// water ice / ice, water, bk7 / crown glass, diamond). Case-insensitive.
+pub fn named_ior(name: &str) -> Option<f32> {
+    let _ = name;
+    todo!("BSDF work")
+}
+
+/// Named metals' RGB complex IOR (eta, k), at least Au, Ag, Cu, Al, Cr;
+/// each value and its source documented where the table is written.
+pub fn named_metal(name: &str) -> Option<(Vec3, Vec3)> {
+    let _ = name;
+    todo!("BSDF work")
+}
