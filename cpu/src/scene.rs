@@ -121,7 +121,7 @@ impl From<&Material> for GpuMaterial {
             emission: vec4(m.emission, if m.double_sided { 1.0 } else { 0.0 }),
             ..Default::default()
         };
-        let mut conductor = |g: &mut GpuMaterial, c: &ConductorParams| {
+        let conductor = |g: &mut GpuMaterial, c: &ConductorParams| {
             g.eta = vec4(c.eta, 0.0);
             g.k = vec4(c.k, 0.0);
             g.specular = vec4(c.specular_reflectance, 0.0);
