@@ -1,3 +1,5 @@
 //! glint: the host side. CLI glue and the Vulkan compute backend.
 
 pub use glint_cpu as cpu;
+
+pub mod gpu;

@@ -33,7 +33,11 @@ impl Frame {
             return Self::from_normal(n);
         }
         let s = s / len2.sqrt();
-        Self { s, t: n.cross(s), n }
+        Self {
+            s,
+            t: n.cross(s),
+            n,
+        }
     }
 
     #[inline]
@@ -61,10 +65,17 @@ mod tests {
             Vec3::new(1e-7, 0.0, -1.0).normalize(),
         ];
         for n in normals {
-            for f in [Frame::from_normal(n), Frame::from_normal_tangent(n, Vec3::new(1.0, 2.0, 3.0).normalize())] {
+            for f in [
+                Frame::from_normal(n),
+                Frame::from_normal_tangent(n, Vec3::new(1.0, 2.0, 3.0).normalize()),
+            ] {
                 assert!((f.s.length() - 1.0).abs() < 1e-5);
                 assert!((f.t.length() - 1.0).abs() < 1e-5);
-                assert!(f.s.dot(f.t).abs() < 1e-5 && f.s.dot(f.n).abs() < 1e-5 && f.t.dot(f.n).abs() < 1e-5);
+                assert!(
+                    f.s.dot(f.t).abs() < 1e-5
+                        && f.s.dot(f.n).abs() < 1e-5
+                        && f.t.dot(f.n).abs() < 1e-5
+                );
                 // Right-handed: s x t = n.
                 assert!((f.s.cross(f.t) - f.n).length() < 1e-4, "{f:?}");
                 let v = Vec3::new(0.2, -0.7, 0.4);

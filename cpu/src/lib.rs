@@ -15,4 +15,7 @@ pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, BvhNode, Hit, Ray};
 pub use film::{Film, RenderOptions, RenderStats};
 pub use frame::Frame;
-pub use scene::{Camera, GpuMaterial, Material, PunctualLight, Scene, Triangle, TriangleShading};
+pub use scene::{
+    Camera, GpuMaterial, Material, NO_LIGHT, PunctualLight, Scene, TRI_DOUBLE_SIDED, Triangle,
+    TriangleShading,
+};

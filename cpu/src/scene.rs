@@ -15,6 +15,8 @@ use crate::bvh::Bvh;
 
 /// Sentinel for "no emissive-triangle index".
 pub const NO_LIGHT: u32 = u32::MAX;
+/// `Triangle::flags` bit: the material emits on both faces (glTF doubleSided).
+pub const TRI_DOUBLE_SIDED: u32 = 1;
 
 /// A world-space triangle as traversal reads it: three `vec4`s in std430,
 /// the integers riding in `.w` (read with `floatBitsToUint` in GLSL).
@@ -102,7 +104,8 @@ pub struct GpuMaterial {
     pub emission: [f32; 4],
 }
 const _: () = assert!(size_of::<GpuMaterial>() == 96);
-const _: () = assert!(offset_of!(GpuMaterial, reflectance) == 16 && offset_of!(GpuMaterial, emission) == 80);
+const _: () =
+    assert!(offset_of!(GpuMaterial, reflectance) == 16 && offset_of!(GpuMaterial, emission) == 80);
 
 impl GpuMaterial {
     pub const KIND_DIFFUSE: u32 = 0;
@@ -145,7 +148,11 @@ impl From<&Material> for GpuMaterial {
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = (roughness.shadowing == Shadowing::Separable) as u32;
             }
-            Bsdf::Metallic { metallic, base, conductor: c } => {
+            Bsdf::Metallic {
+                metallic,
+                base,
+                conductor: c,
+            } => {
                 g.kind = Self::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
                 conductor(&mut g, c);
@@ -206,12 +213,40 @@ pub struct Scene {
 impl Scene {
     /// Build the BVH and reorder triangles and shading into leaf order, so
     /// leaves address contiguous ranges of the triangle array (the layout the
-    /// GPU reads unchanged).
+    /// GPU reads unchanged); then number the emitters in that final order.
     pub fn build_bvh(&mut self) {
         let (bvh, order) = Bvh::build(&self.triangles);
         self.triangles = order.iter().map(|&i| self.triangles[i as usize]).collect();
         self.shading = order.iter().map(|&i| self.shading[i as usize]).collect();
         self.bvh = bvh;
+        self.assign_emitters();
+    }
+
+    /// Set `Triangle::light` to 0, 1, 2, ... for the emissive triangles of
+    /// non-zero area, in triangle order, and `NO_LIGHT` elsewhere; set the
+    /// double-sided flag. The emitter list is then exactly
+    /// `emitter_triangles()`, the same on both backends.
+    pub fn assign_emitters(&mut self) {
+        let mut next = 0u32;
+        for t in &mut self.triangles {
+            let m = &self.materials[t.material as usize];
+            t.flags =
+                (t.flags & !TRI_DOUBLE_SIDED) | if m.double_sided { TRI_DOUBLE_SIDED } else { 0 };
+            let area = t.area();
+            if m.is_emissive() && area > 0.0 && area.is_finite() {
+                t.light = next;
+                next += 1;
+            } else {
+                t.light = NO_LIGHT;
+            }
+        }
+    }
+
+    /// Indices of the emissive triangles, in emitter order.
+    pub fn emitter_triangles(&self) -> Vec<u32> {
+        (0..self.triangles.len() as u32)
+            .filter(|&i| self.triangles[i as usize].light != NO_LIGHT)
+            .collect()
     }
 
     /// World-space bounds of all geometry (min, max); (0, 0) for an empty scene.
@@ -224,6 +259,10 @@ impl Scene {
                 hi = hi.max(p);
             }
         }
-        if lo.x > hi.x { (Vec3::ZERO, Vec3::ZERO) } else { (lo, hi) }
+        if lo.x > hi.x {
+            (Vec3::ZERO, Vec3::ZERO)
+        } else {
+            (lo, hi)
+        }
     }
 }

@@ -36,7 +36,11 @@ pub struct Roughness {
 }
 
 impl Roughness {
-    pub const SMOOTH: Self = Self { alpha_u: 0.0, alpha_v: 0.0, shadowing: Shadowing::Correlated };
+    pub const SMOOTH: Self = Self {
+        alpha_u: 0.0,
+        alpha_v: 0.0,
+        shadowing: Shadowing::Correlated,
+    };
     pub fn is_smooth(&self) -> bool {
         self.alpha_u.max(self.alpha_v) < SMOOTH_ALPHA_THRESHOLD
     }
@@ -65,7 +69,11 @@ pub enum Bsdf {
     Dielectric { eta: f32, roughness: Roughness },
     /// glTF metallic-roughness with 0 < metallic < 1: `metallic` x conductor
     /// lobe + (1 - metallic) x Lambertian with `base` reflectance. Two-sided.
-    Metallic { metallic: f32, base: Vec3, conductor: ConductorParams },
+    Metallic {
+        metallic: f32,
+        base: Vec3,
+        conductor: ConductorParams,
+    },
 }
 
 /// The result of [`Bsdf::sample`].
