@@ -92,6 +92,10 @@ impl<'a> Buffer<'a> {
     ) -> Result<Self, GpuError> {
         let bytes: &[u8] = bytemuck::cast_slice(data);
         let buf = Self::new(ctx, name, kind, bytes.len() as u64)?;
+        // The padding of small and empty arrays reads as zeros, not garbage.
+        if bytes.len() as u64 != buf.size {
+            buf.fill_zero()?;
+        }
         buf.write(bytes)?;
         Ok(buf)
     }

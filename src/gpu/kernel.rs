@@ -8,7 +8,7 @@
 //! ```no_run
 //! use glint::gpu::{Context, ContextDesc, Validation};
 //! # fn main() -> Result<(), glint::gpu::GpuError> {
-//! let ctx = Context::new(&ContextDesc { device: None, validation: Validation::IfAvailable })?;
+//! let ctx = Context::new(&ContextDesc { device: None, validation: Validation::IfAvailable, loader: None })?;
 //! let a = [1.0f32, 2.0, 3.0];
 //! let b = [10.0f32, 20.0, 30.0];
 //! let mut c = [0.0f32; 3];

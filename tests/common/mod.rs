@@ -55,11 +55,22 @@ impl Drop for ValidatedContext {
     }
 }
 
-/// A context on the default device, validated when the layer is installed.
+/// Validation for tests: required under scripts/test.sh (which sets
+/// GLINT_VALIDATION and installs the layer), else used when installed.
+pub fn validation() -> Validation {
+    match Validation::from_env() {
+        Validation::Off => Validation::IfAvailable,
+        _ => Validation::Required,
+    }
+}
+
+/// A context on the default device, validated when the layer is installed
+/// (always under scripts/test.sh).
 pub fn context() -> ValidatedContext {
     let ctx = Context::new(&ContextDesc {
         device: None,
-        validation: Validation::IfAvailable,
+        validation: validation(),
+        loader: None,
     })
     .unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
     let log = ctx.validation_log();
