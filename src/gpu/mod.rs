@@ -74,6 +74,8 @@ pub enum GpuError {
     UnknownKernel(String),
     #[error("{0}")]
     Invalid(String),
+    #[error("the Vulkan validation layer reported errors:\n{}", .0.join("\n"))]
+    Validation(Vec<String>),
 }
 
 impl GpuError {
