@@ -10,7 +10,15 @@ use glint::gpu::{
 
 #[test]
 fn smoke_kernel_adds_arrays() {
-    let ctx = common::context();
+    smoke(common::context());
+}
+
+#[test]
+fn smoke_kernel_through_staging_buffers() {
+    smoke(common::staging_context());
+}
+
+fn smoke(ctx: common::ValidatedContext) {
     // Not a multiple of the local size (64), to exercise the bounds check.
     let n = 1000u32;
     let a: Vec<f32> = (0..n).map(|i| i as f32).collect();
@@ -38,7 +46,15 @@ fn smoke_kernel_adds_arrays() {
 
 #[test]
 fn kernel_reuse_and_zero_length_buffers() {
-    let ctx = common::context();
+    reuse(common::context());
+}
+
+#[test]
+fn kernel_reuse_through_staging_buffers() {
+    reuse(common::staging_context());
+}
+
+fn reuse(ctx: common::ValidatedContext) {
     let empty: [f32; 0] = [];
     // Empty arrays still get a (small) buffer: Vulkan forbids size 0.
     let a = Buffer::from_slice(&ctx, "a", BufferKind::Storage, &empty).unwrap();
