@@ -123,11 +123,12 @@ pub fn intersect_triangle(r: &PreparedRay, tri: &Triangle, tmax: f32) -> Option<
     let bz = sz * b[kz];
     let cz = sz * c[kz];
     let t = (u * az + v * bz + w * cz) / det;
-    // Also rejects NaN (from non-finite input).
-    if !(t > 0.0 && t < tmax) {
-        return None;
+    // Written so that NaN (from non-finite input) is rejected too.
+    if t > 0.0 && t < tmax {
+        Some((t, v / det, w / det))
+    } else {
+        None
     }
-    Some((t, v / det, w / det))
 }
 
 fn node_box(n: &BvhNode) -> (Vec3, Vec3) {
@@ -158,8 +159,9 @@ pub(super) fn intersect(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> Opti
         let n = &nodes[node];
         if n.is_leaf() {
             let first = n.left_or_first as usize;
-            for i in first..first + n.tri_count as usize {
-                if let Some((t, u, v)) = intersect_triangle(&r, &tris[i], best.t) {
+            let leaf = &tris[first..first + n.tri_count as usize];
+            for (i, tri) in (first..).zip(leaf) {
+                if let Some((t, u, v)) = intersect_triangle(&r, tri, best.t) {
                     best = Hit {
                         t,
                         tri: i as u32,
@@ -215,10 +217,12 @@ pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool 
         let n = &nodes[node];
         if n.is_leaf() {
             let first = n.left_or_first as usize;
-            for i in first..first + n.tri_count as usize {
-                if intersect_triangle(&r, &tris[i], ray.tmax).is_some() {
-                    return true;
-                }
+            let leaf = &tris[first..first + n.tri_count as usize];
+            if leaf
+                .iter()
+                .any(|tri| intersect_triangle(&r, tri, ray.tmax).is_some())
+            {
+                return true;
             }
         } else {
             let c1 = n.left_or_first as usize;
@@ -241,5 +245,24 @@ pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool 
         }
         sp -= 1;
         node = stack[sp] as usize;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// shaders/bvh.glsl spells the pad as raw bits: keep them in step.
+    #[test]
+    fn slab_pad_matches_glsl_bits() {
+        assert_eq!(SLAB_PAD.to_bits(), 0x3f80_0003);
+    }
+
+    #[test]
+    fn safe_rcp_is_finite_and_signed() {
+        assert_eq!(safe_rcp(0.0), 1e30);
+        assert_eq!(safe_rcp(-0.0), -1e30);
+        assert_eq!(safe_rcp(2.0), 0.5);
+        assert!(safe_rcp(-1e-38).is_finite() && safe_rcp(-1e-38) < 0.0);
     }
 }
