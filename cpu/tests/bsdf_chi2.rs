@@ -22,7 +22,7 @@ fn run_case(case: &Case, seed: u64) -> Result<Chi2Report, String> {
         &deltas,
         SAMPLES,
         seed,
-        Grid::DEFAULT,
+        &Grid::for_case(&bsdf, wo),
     )
 }
 
@@ -72,10 +72,13 @@ fn chi2_rejects_wrong_densities() {
         &[],
         SAMPLES,
         7,
-        Grid::DEFAULT,
-    )
-    .unwrap();
-    assert!(r.p_value < level, "alpha +10% not detected: {r:?}");
+        &Grid::new(20, 40),
+    );
+    // Detected by the normalisation check or by the statistic.
+    assert!(
+        r.as_ref().map_or(true, |r| r.p_value < level),
+        "alpha +10% not detected: {r:?}"
+    );
 
     let diffuse = Bsdf::Diffuse {
         reflectance: Vec3::ONE,
@@ -93,7 +96,7 @@ fn chi2_rejects_wrong_densities() {
         &[],
         SAMPLES,
         8,
-        Grid::DEFAULT,
+        &Grid::new(20, 40),
     )
     .unwrap();
     assert!(r.p_value < level, "cos^1.1 not detected: {r:?}");
@@ -105,7 +108,7 @@ fn chi2_rejects_wrong_densities() {
         &[],
         SAMPLES,
         7,
-        Grid::DEFAULT,
+        &Grid::new(20, 40),
     )
     .unwrap();
     assert!(r.p_value >= level, "{r:?}");
