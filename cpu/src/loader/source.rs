@@ -47,7 +47,8 @@ pub fn read(path: &Path) -> Result<Source, String> {
         }
     })?;
     check_required_extensions(&root)?;
-    let doc = Document::from_json(root).map_err(describe_validation)?;
+    validate(&root)?;
+    let doc = Document::from_json_without_validation(root);
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(&doc, base, bin)?;
     Ok(Source { doc, buffers })
@@ -149,23 +150,29 @@ fn check_required_extensions(root: &gltf::json::Root) -> Result<(), String> {
     }
 }
 
-fn describe_validation(e: gltf::Error) -> String {
-    match e {
-        gltf::Error::Validation(errors) => {
-            let shown: Vec<String> = errors
-                .iter()
-                .take(4)
-                .map(|(path, err)| format!("{}: {err}", path.as_str()))
-                .collect();
-            let more = if errors.len() > shown.len() {
-                format!(" (and {} more)", errors.len() - shown.len())
-            } else {
-                String::new()
-            };
-            format!("invalid glTF: {}{more}", shown.join("; "))
+/// The `gltf` crate's structural validation (every index in range, every
+/// enum value known), less one rule: POSITION accessors' `min`/`max`, which
+/// glTF requires but glint never reads, so a file missing them still loads.
+fn validate(root: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::validation::{Error, Validate};
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().as_str().to_string();
+        let bounds = path.ends_with(".min") || path.ends_with(".max");
+        if !(bounds && matches!(error, Error::Missing)) {
+            errors.push(format!("{path}: {error}"));
         }
-        other => format!("invalid glTF: {other}"),
+    });
+    if errors.is_empty() {
+        return Ok(());
     }
+    let more = if errors.len() > 4 {
+        format!(" (and {} more)", errors.len() - 4)
+    } else {
+        String::new()
+    };
+    errors.truncate(4);
+    Err(format!("invalid glTF: {}{more}", errors.join("; ")))
 }
 
 fn load_buffers(doc: &Document, base: &Path, bin: Option<&[u8]>) -> Result<Vec<Vec<u8>>, String> {
