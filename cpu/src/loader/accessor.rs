@@ -11,8 +11,8 @@ use gltf::json::validation::Checked;
 use gltf::json::{Accessor, Root};
 
 /// Upper bound on the element count of an accessor with no buffer view (its
-/// elements are implicit zeros, so no buffer bounds it).
-pub const MAX_IMPLICIT_ELEMENTS: u64 = 1 << 26;
+/// elements are implicit zeros, so no buffer bounds it): 2^22, at most 64 MB.
+pub const MAX_IMPLICIT_ELEMENTS: u64 = 1 << 22;
 
 fn component_size(c: ComponentType) -> u64 {
     match c {

@@ -44,6 +44,7 @@ pub fn collect(
     let meshes: Vec<gltf::Mesh> = src.doc.meshes().collect();
     let mut visited = vec![false; root.nodes.len()];
     let mut out = Collected::default();
+    let mut instances: Vec<(&gltf::Mesh, Mat4, String)> = Vec::new();
     // Explicit stack: a 100,000-deep chain of nodes must not overflow the
     // call stack.
     let mut stack: Vec<(usize, Mat4)> = scene
@@ -77,8 +78,7 @@ pub fn collect(
             let mesh = meshes
                 .get(m.value())
                 .ok_or_else(|| format!("{label}: mesh {} does not exist", m.value()))?;
-            add_mesh(src, mesh, world, default_material, &mut out)
-                .map_err(|e| format!("{label}: {e}"))?;
+            instances.push((mesh, world, label.clone()));
         }
         if let Some(cam) = node.camera {
             out.cameras
@@ -91,6 +91,23 @@ pub fn collect(
         for child in node.children.iter().flatten().rev() {
             stack.push((child.value(), world));
         }
+    }
+    // Count before generating anything: instancing can multiply a small
+    // file into billions of triangles.
+    let mut total = 0u64;
+    for (mesh, _, _) in &instances {
+        total = total.saturating_add(declared_triangles(root, mesh));
+    }
+    if total > MAX_TRIANGLES {
+        return Err(format!(
+            "the scene would hold {total} triangles, more than glint's limit of {MAX_TRIANGLES}"
+        ));
+    }
+    out.triangles.reserve(total as usize);
+    out.shading.reserve(total as usize);
+    for (mesh, world, label) in instances {
+        add_mesh(src, mesh, world, default_material, &mut out)
+            .map_err(|e| format!("{label}: {e}"))?;
     }
     Ok(out)
 }
@@ -218,19 +235,7 @@ fn add_mesh(
             None => None,
         };
         let n_refs = indices.as_ref().map_or(n_verts, Vec::len);
-        let n_tris = match mode {
-            // A trailing partial triangle (count not a multiple of 3) is ignored.
-            Mode::Triangles => n_refs / 3,
-            _ => n_refs.saturating_sub(2),
-        };
-        let total = out.triangles.len() as u64 + n_tris as u64;
-        if total > MAX_TRIANGLES {
-            return Err(err(format!(
-                "the scene would hold {total} triangles, more than glint's limit of {MAX_TRIANGLES}"
-            )));
-        }
-        out.triangles.reserve(n_tris);
-        out.shading.reserve(n_tris);
+        let n_tris = triangles_from_refs(mode, n_refs as u64) as usize;
         let vertex = |k: usize| -> Result<usize, String> {
             let v = match &indices {
                 Some(ix) => ix[k] as usize,
@@ -307,6 +312,29 @@ fn add_mesh(
         }
     }
     Ok(())
+}
+
+/// Triangles drawn from `refs` vertex references (glTF 2.0 spec 3.7.2.1);
+/// a trailing partial triangle (a count not a multiple of 3) is ignored.
+fn triangles_from_refs(mode: Mode, refs: u64) -> u64 {
+    match mode {
+        Mode::Triangles => refs / 3,
+        Mode::TriangleStrip | Mode::TriangleFan => refs.saturating_sub(2),
+        _ => 0,
+    }
+}
+
+/// The triangle count a mesh's accessors declare, before reading any data.
+fn declared_triangles(root: &gltf::json::Root, mesh: &gltf::Mesh) -> u64 {
+    mesh.primitives()
+        .map(|p| {
+            let acc = p.indices().or_else(|| p.get(&gltf::Semantic::Positions));
+            let refs = acc
+                .and_then(|a| root.accessors.get(a.index()))
+                .map_or(0, |a| a.count.0);
+            triangles_from_refs(p.mode(), refs)
+        })
+        .fold(0u64, u64::saturating_add)
 }
 
 /// dP/du of a triangle from its texture coordinates (pbrt-v4,

@@ -152,14 +152,30 @@ fn check_required_extensions(root: &gltf::json::Root) -> Result<(), String> {
 
 /// The `gltf` crate's structural validation (every index in range, every
 /// enum value known), less one rule: POSITION accessors' `min`/`max`, which
-/// glTF requires but glint never reads, so a file missing them still loads.
+/// glTF requires but glint never reads, so a file missing (or garbling) them
+/// still loads.
 fn validate(root: &gltf::json::Root) -> Result<(), String> {
-    use gltf::json::validation::{Error, Validate};
+    use gltf::json::validation::{Checked, Error, Validate};
+    // The crate's primitive hook indexes `accessors[POSITION]` unchecked:
+    // check that index first so a bad one is an error, not a panic.
+    for (i, mesh) in root.meshes.iter().enumerate() {
+        for (j, prim) in mesh.primitives.iter().enumerate() {
+            let pos = prim
+                .attributes
+                .get(&Checked::Valid(gltf::Semantic::Positions));
+            if let Some(a) = pos.filter(|a| a.value() >= root.accessors.len()) {
+                return Err(format!(
+                    "invalid glTF: meshes[{i}].primitives[{j}].attributes[\"POSITION\"]: accessor {} does not exist",
+                    a.value()
+                ));
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path().as_str().to_string();
         let bounds = path.ends_with(".min") || path.ends_with(".max");
-        if !(bounds && matches!(error, Error::Missing)) {
+        if !(bounds && matches!(error, Error::Missing | Error::Invalid)) {
             errors.push(format!("{path}: {error}"));
         }
     });
