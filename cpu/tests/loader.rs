@@ -765,6 +765,12 @@ fn glb_data_uri_and_external_buffers_agree() {
     let p = dir.join("spaced.gltf");
     std::fs::write(&p, serde_json::to_vec(&j).unwrap()).unwrap();
     assert_eq!(parse(&p).unwrap().triangles, scenes[0].triangles);
+    // A UTF-8 byte order mark before the JSON is skipped.
+    let mut bom = b"\xEF\xBB\xBF".to_vec();
+    bom.extend(std::fs::read(&paths[0]).unwrap());
+    let p = dir.join("bom.gltf");
+    std::fs::write(&p, bom).unwrap();
+    assert_eq!(parse(&p).unwrap().triangles, scenes[0].triangles);
 }
 
 #[test]

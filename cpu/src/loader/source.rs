@@ -39,19 +39,34 @@ pub fn read(path: &Path) -> Result<Source, String> {
     } else {
         (&bytes[..], None)
     };
+    // A UTF-8 byte order mark is not JSON; glTF says loaders may skip it.
+    let json = json.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(json);
     let root: gltf::json::Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
         if e.is_syntax() || e.is_eof() {
-            format!("not a glTF file: JSON {e}")
-        } else {
-            format!("not a valid glTF document: {e}")
+            return format!("not a glTF file: JSON {e}");
+        }
+        // glTF 1.0 documents fail to deserialise as 2.0: say why.
+        let version = serde_json::from_slice::<serde_json::Value>(json)
+            .ok()
+            .and_then(|v| v.get("asset")?.get("version")?.as_str().map(str::to_string));
+        match version {
+            Some(v) if !v.starts_with("2.") => unsupported_version(&v),
+            _ => format!("not a valid glTF document: {e}"),
         }
     })?;
+    if !root.asset.version.starts_with("2.") {
+        return Err(unsupported_version(&root.asset.version));
+    }
     check_required_extensions(&root)?;
     validate(&root)?;
     let doc = Document::from_json_without_validation(root);
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(&doc, base, bin)?;
     Ok(Source { doc, buffers })
+}
+
+fn unsupported_version(v: &str) -> String {
+    format!("glTF version {v} is not supported (glTF 2.0 only)")
 }
 
 fn read_file(path: &Path) -> Result<Vec<u8>, String> {
