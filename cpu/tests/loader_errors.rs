@@ -677,7 +677,7 @@ fn mutated_files_never_panic() {
         json!({ "KHR_lights_punctual": { "lights": [{ "type": "spot", "spot": {} }] } });
     let child = d.child(json!({ "mesh": m, "scale": [1, 2, 3] }));
     d.node(json!({ "children": [child], "camera": 0, "translation": [1, 2, 3] }));
-    d.node(json!({ "extensions": { "KHR_lights_punctual": { "light": 0 } }, "rotation": [0, 0.7071068, 0, 0.7071068] }));
+    d.node(json!({ "extensions": { "KHR_lights_punctual": { "light": 0 } }, "rotation": glam::Quat::from_rotation_y(1.0).to_array() }));
     let dir = temp_dir("mutate");
     let glb = d.glb_bytes();
     let gltf = std::fs::read(d.write_gltf(&dir, "seed")).unwrap();

@@ -92,18 +92,31 @@ struct Strided<'a> {
     stride: usize,
 }
 
-/// Resolve `count` elements of `elem` bytes at `offset` into buffer view
-/// `view`, checking every range in 64-bit arithmetic against the loaded bytes.
-fn strided<'a>(
-    root: &Root,
-    buffers: &'a [Vec<u8>],
+/// Where an accessor's (or a sparse part's) elements lie in a buffer view.
+struct Span {
     view: usize,
+    /// Byte offset into the view.
     offset: u64,
     count: u64,
+    /// Bytes per element.
     elem: u64,
+    /// Component size: offsets and strides must be multiples of it.
     align: u64,
+    /// Whether the view's byteStride applies (sparse parts are packed).
     allow_stride: bool,
-) -> Result<Strided<'a>, String> {
+}
+
+/// Resolve a [`Span`], checking every range in 64-bit arithmetic against the
+/// loaded bytes.
+fn strided<'a>(root: &Root, buffers: &'a [Vec<u8>], span: Span) -> Result<Strided<'a>, String> {
+    let Span {
+        view,
+        offset,
+        count,
+        elem,
+        align,
+        allow_stride,
+    } = span;
     let v = root
         .buffer_views
         .get(view)
@@ -225,12 +238,14 @@ fn read_vec_inner<const N: usize>(
             let s = strided(
                 root,
                 buffers,
-                view.value(),
-                acc.byte_offset.map_or(0, |o| o.0),
-                count,
-                elem,
-                csize,
-                true,
+                Span {
+                    view: view.value(),
+                    offset: acc.byte_offset.map_or(0, |o| o.0),
+                    count,
+                    elem,
+                    align: csize,
+                    allow_stride: true,
+                },
             )?;
             (0..count as usize)
                 .map(|i| {
@@ -255,23 +270,27 @@ fn read_vec_inner<const N: usize>(
         let idx = strided(
             root,
             buffers,
-            sparse.indices.buffer_view.value(),
-            sparse.indices.byte_offset.0,
-            n,
-            isize,
-            isize,
-            false,
+            Span {
+                view: sparse.indices.buffer_view.value(),
+                offset: sparse.indices.byte_offset.0,
+                count: n,
+                elem: isize,
+                align: isize,
+                allow_stride: false,
+            },
         )
         .map_err(|e| format!("sparse indices: {e}"))?;
         let vals = strided(
             root,
             buffers,
-            sparse.values.buffer_view.value(),
-            sparse.values.byte_offset.0,
-            n,
-            elem,
-            csize,
-            false,
+            Span {
+                view: sparse.values.buffer_view.value(),
+                offset: sparse.values.byte_offset.0,
+                count: n,
+                elem,
+                align: csize,
+                allow_stride: false,
+            },
         )
         .map_err(|e| format!("sparse values: {e}"))?;
         for k in 0..n as usize {
@@ -310,12 +329,14 @@ pub fn read_indices(root: &Root, buffers: &[Vec<u8>], index: usize) -> Result<Ve
         let s = strided(
             root,
             buffers,
-            view.value(),
-            acc.byte_offset.map_or(0, |o| o.0),
-            count,
-            csize,
-            csize,
-            true,
+            Span {
+                view: view.value(),
+                offset: acc.byte_offset.map_or(0, |o| o.0),
+                count,
+                elem: csize,
+                align: csize,
+                allow_stride: true,
+            },
         )?;
         (0..count as usize)
             .map(|i| decode_index(comp, s.elem(i)).ok_or_else(|| "bad index type".to_string()))
