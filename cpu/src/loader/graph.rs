@@ -103,8 +103,6 @@ pub fn collect(
             "the scene would hold {total} triangles, more than glint's limit of {MAX_TRIANGLES}"
         ));
     }
-    out.triangles.reserve(total as usize);
-    out.shading.reserve(total as usize);
     for (mesh, world, label) in instances {
         add_mesh(src, mesh, world, default_material, &mut out)
             .map_err(|e| format!("{label}: {e}"))?;
@@ -236,6 +234,10 @@ fn add_mesh(
         };
         let n_refs = indices.as_ref().map_or(n_verts, Vec::len);
         let n_tris = triangles_from_refs(mode, n_refs as u64) as usize;
+        // Reserve only now that the data has been read: declared counts are
+        // not trusted until their bytes have been found.
+        out.triangles.reserve(n_tris);
+        out.shading.reserve(n_tris);
         let vertex = |k: usize| -> Result<usize, String> {
             let v = match &indices {
                 Some(ix) => ix[k] as usize,
@@ -262,7 +264,7 @@ fn add_mesh(
             let refs = match mode {
                 Mode::Triangles => [3 * t, 3 * t + 1, 3 * t + 2],
                 Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
-                Mode::TriangleStrip => [t + 1, t, t + 2],
+                Mode::TriangleStrip => [t, t + 2, t + 1],
                 _ => [t + 1, t + 2, 0],
             };
             let mut v = [vertex(refs[0])?, vertex(refs[1])?, vertex(refs[2])?];
