@@ -37,8 +37,11 @@ struct PreparedRay {
     vec3 o;
     vec3 d;
     // 1 / d with zero (and tiny) components replaced by +-1e30, so the slab
-    // test never forms 0 * inf = NaN (tinybvh's safercp).
+    // test never forms 0 * inf = NaN (tinybvh's safercp); exactly zero
+    // components are then settled by zero_d in intersect_aabb.
     vec3 inv_d;
+    // Which components of d are exactly zero (either sign).
+    bvec3 zero_d;
     // Woop et al. 2013: kz is the dominant axis of d, kx and ky follow it
     // cyclically, swapped when d[kz] < 0 to keep the winding.
     int kx;
@@ -61,6 +64,7 @@ PreparedRay prepare_ray(vec3 o, vec3 d) {
     r.o = o;
     r.d = d;
     r.inv_d = vec3(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z));
+    r.zero_d = equal(d, vec3(0.0));
     vec3 a = abs(d);
     int kz = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
     int kx = (kz + 1) % 3;
@@ -84,8 +88,14 @@ PreparedRay prepare_ray(vec3 o, vec3 d) {
 float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
     vec3 t1 = (bmin - r.o) * r.inv_d;
     vec3 t2 = (bmax - r.o) * r.inv_d;
-    vec3 tlo = min(t1, t2);
-    vec3 thi = max(t1, t2);
+    // Along an axis where d is exactly zero the slab holds the whole line when
+    // the origin is within it, faces included, and none of it otherwise (the
+    // 1e30 inverse would end the slab at t = 0 with the origin on a face).
+    bvec3 ge = greaterThanEqual(r.o, bmin);
+    bvec3 le = lessThanEqual(r.o, bmax);
+    bvec3 inside = bvec3(ge.x && le.x, ge.y && le.y, ge.z && le.z);
+    vec3 tlo = mix(min(t1, t2), mix(vec3(BVH_INF), vec3(-BVH_INF), inside), r.zero_d);
+    vec3 thi = mix(max(t1, t2), mix(vec3(-BVH_INF), vec3(BVH_INF), inside), r.zero_d);
     float tnear = max(max(max(tlo.x, tlo.y), tlo.z), 0.0);
     float tfar = min(min(min(thi.x, thi.y), thi.z), tmax) * BVH_SLAB_PAD;
     return tnear <= tfar ? tnear : BVH_INF;

@@ -1,7 +1,7 @@
 //! Ray queries: robust slab test, watertight triangle test, stack traversal.
 //! `shaders/bvh.glsl` mirrors every function here under the same name.
 
-use glam::Vec3;
+use glam::{BVec3, Vec3};
 
 use super::{BvhNode, Hit, Ray, STACK_SIZE};
 use crate::scene::Triangle;
@@ -21,8 +21,11 @@ pub struct PreparedRay {
     pub o: Vec3,
     pub d: Vec3,
     /// 1 / d, with zero (and tiny) components replaced by +-1e30: finite, so
-    /// the slab test never forms 0 * inf = NaN (tinybvh's `safercp`).
+    /// the slab test never forms 0 * inf = NaN (tinybvh's `safercp`); exactly
+    /// zero components are then settled by `zero_d` in [`intersect_aabb`].
     pub inv_d: Vec3,
+    /// Which components of d are exactly zero (either sign).
+    pub zero_d: BVec3,
     /// Woop et al. 2013, fig. 1: kz is the dominant axis of d; kx, ky follow
     /// it cyclically, swapped when d[kz] < 0 to keep the winding.
     pub kx: usize,
@@ -60,6 +63,7 @@ impl PreparedRay {
             o,
             d,
             inv_d: Vec3::new(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z)),
+            zero_d: d.cmpeq(Vec3::ZERO),
             kx,
             ky,
             kz,
@@ -73,13 +77,22 @@ impl PreparedRay {
 pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 {
     let t1 = (bmin - r.o) * r.inv_d;
     let t2 = (bmax - r.o) * r.inv_d;
-    let tnear = t1.min(t2).max_element().max(0.0);
+    // Along an axis where d is exactly zero the slab holds the whole line when
+    // the origin is within it, faces included, and none of it otherwise. The
+    // +-1e30 inverse gives that, except with the origin exactly on a face,
+    // where 0 * 1e30 = 0 would end the slab at t = 0 and lose hits on that
+    // face's triangles (rays along grid lines); so set those axes outright.
+    let inside = r.o.cmpge(bmin) & r.o.cmple(bmax);
+    let (inf, ninf) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    let tlo = Vec3::select(r.zero_d, Vec3::select(inside, ninf, inf), t1.min(t2));
+    let thi = Vec3::select(r.zero_d, Vec3::select(inside, inf, ninf), t1.max(t2));
+    let tnear = tlo.max_element().max(0.0);
     // The pad also widens tmax (the best hit so far): a triangle's computed
     // t and its box's computed entry distance round independently, and a box
     // entered a few ulps "after" the current best may still hold a hit a few
     // ulps before it (rays through shared vertices). Too wide only costs a
     // triangle test; too narrow would lose the closest hit.
-    let tfar = t1.max(t2).min_element().min(tmax) * SLAB_PAD;
+    let tfar = thi.min_element().min(tmax) * SLAB_PAD;
     if tnear <= tfar { tnear } else { f32::INFINITY }
 }
 
