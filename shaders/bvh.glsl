@@ -91,11 +91,15 @@ float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
     // Along an axis where d is exactly zero the slab holds the whole line when
     // the origin is within it, faces included, and none of it otherwise (the
     // 1e30 inverse would end the slab at t = 0 with the origin on a face).
-    bvec3 ge = greaterThanEqual(r.o, bmin);
-    bvec3 le = lessThanEqual(r.o, bmax);
-    bvec3 inside = bvec3(ge.x && le.x, ge.y && le.y, ge.z && le.z);
-    vec3 tlo = mix(min(t1, t2), mix(vec3(BVH_INF), vec3(-BVH_INF), inside), r.zero_d);
-    vec3 thi = mix(max(t1, t2), mix(vec3(-BVH_INF), vec3(BVH_INF), inside), r.zero_d);
+    vec3 tlo = min(t1, t2);
+    vec3 thi = max(t1, t2);
+    if (any(r.zero_d)) {
+        bvec3 ge = greaterThanEqual(r.o, bmin);
+        bvec3 le = lessThanEqual(r.o, bmax);
+        bvec3 inside = bvec3(ge.x && le.x, ge.y && le.y, ge.z && le.z);
+        tlo = mix(tlo, mix(vec3(BVH_INF), vec3(-BVH_INF), inside), r.zero_d);
+        thi = mix(thi, mix(vec3(-BVH_INF), vec3(BVH_INF), inside), r.zero_d);
+    }
     float tnear = max(max(max(tlo.x, tlo.y), tlo.z), 0.0);
     float tfar = min(min(min(thi.x, thi.y), thi.z), tmax) * BVH_SLAB_PAD;
     return tnear <= tfar ? tnear : BVH_INF;

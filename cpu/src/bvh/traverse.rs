@@ -82,10 +82,14 @@ pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32
     // +-1e30 inverse gives that, except with the origin exactly on a face,
     // where 0 * 1e30 = 0 would end the slab at t = 0 and lose hits on that
     // face's triangles (rays along grid lines); so set those axes outright.
-    let inside = r.o.cmpge(bmin) & r.o.cmple(bmax);
-    let (inf, ninf) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-    let tlo = Vec3::select(r.zero_d, Vec3::select(inside, ninf, inf), t1.min(t2));
-    let thi = Vec3::select(r.zero_d, Vec3::select(inside, inf, ninf), t1.max(t2));
+    // Most rays have no zero component: they skip the selects.
+    let (mut tlo, mut thi) = (t1.min(t2), t1.max(t2));
+    if r.zero_d.any() {
+        let inside = r.o.cmpge(bmin) & r.o.cmple(bmax);
+        let (inf, ninf) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        tlo = Vec3::select(r.zero_d, Vec3::select(inside, ninf, inf), tlo);
+        thi = Vec3::select(r.zero_d, Vec3::select(inside, inf, ninf), thi);
+    }
     let tnear = tlo.max_element().max(0.0);
     // The pad also widens tmax (the best hit so far): a triangle's computed
     // t and its box's computed entry distance round independently, and a box
