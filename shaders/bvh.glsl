@@ -204,8 +204,9 @@ bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
     return hit.tri != BVH_NO_HIT;
 }
 
-// Any hit in (0, tmax): the first triangle hit ends the search; children in
-// stored order.
+// Any hit in (0, tmax): the first triangle hit ends the search. Children are
+// still visited nearer first (tinybvh's IsOccluded): the near side is the
+// likelier to hold a blocker.
 bool bvh_occluded(vec3 o, vec3 d, float tmax) {
     if (uint(BVH_NODE_COUNT) == 0u) {
         return false;
@@ -230,14 +231,22 @@ bool bvh_occluded(vec3 o, vec3 d, float tmax) {
         } else {
             uint c1 = first;
             uint c2 = first + 1u;
-            bool hit1 = intersect_aabb(r, bvh_nodes[c1].min_left.xyz, bvh_nodes[c1].max_count.xyz, tmax) != BVH_INF;
-            bool hit2 = intersect_aabb(r, bvh_nodes[c2].min_left.xyz, bvh_nodes[c2].max_count.xyz, tmax) != BVH_INF;
-            if (hit1 || hit2) {
-                if (hit1 && hit2) {
+            float d1 = intersect_aabb(r, bvh_nodes[c1].min_left.xyz, bvh_nodes[c1].max_count.xyz, tmax);
+            float d2 = intersect_aabb(r, bvh_nodes[c2].min_left.xyz, bvh_nodes[c2].max_count.xyz, tmax);
+            if (d1 > d2) {
+                float td = d1;
+                d1 = d2;
+                d2 = td;
+                uint tc = c1;
+                c1 = c2;
+                c2 = tc;
+            }
+            if (d1 != BVH_INF) {
+                if (d2 != BVH_INF) {
                     stack[sp] = c2;
                     sp++;
                 }
-                node = hit1 ? c1 : c2;
+                node = c1;
                 continue;
             }
         }

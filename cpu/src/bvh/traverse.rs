@@ -74,6 +74,8 @@ impl PreparedRay {
 
 /// Entry distance of the ray into the box, clamped to >= 0, or +inf when the
 /// ray misses it within [0, tmax].
+// Forced: LLVM kept it a call in `occluded`, 10% more instructions there.
+#[inline(always)]
 pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 {
     let t1 = (bmin - r.o) * r.inv_d;
     let t2 = (bmax - r.o) * r.inv_d;
@@ -113,6 +115,7 @@ pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32
 /// paper's double-precision recomputation when an edge function is exactly 0
 /// only decides which of the two is hit, and is left out so the GPU (no fp64
 /// required) computes the same thing.
+#[inline]
 pub fn intersect_triangle(r: &PreparedRay, tri: &Triangle, tmax: f32) -> Option<(f32, f32, f32)> {
     let a = Vec3::from(tri.p0) - r.o;
     let b = Vec3::from(tri.p1) - r.o;
@@ -216,8 +219,9 @@ pub(super) fn intersect(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> Opti
     (best.tri != u32::MAX).then_some(best)
 }
 
-/// Any hit: the first triangle hit in (0, tmax) ends the search; children in
-/// stored order.
+/// Any hit: the first triangle hit in (0, tmax) ends the search. Children
+/// are still visited nearer first, as tinybvh's `IsOccluded` does: the near
+/// side is the likelier to hold a blocker.
 pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool {
     if nodes.is_empty() {
         return false;
@@ -242,18 +246,22 @@ pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool 
                 return true;
             }
         } else {
-            let c1 = n.left_or_first as usize;
-            let c2 = c1 + 1;
+            let mut c1 = n.left_or_first as usize;
+            let mut c2 = c1 + 1;
             let (min1, max1) = node_box(&nodes[c1]);
             let (min2, max2) = node_box(&nodes[c2]);
-            let hit1 = intersect_aabb(&r, min1, max1, ray.tmax) != f32::INFINITY;
-            let hit2 = intersect_aabb(&r, min2, max2, ray.tmax) != f32::INFINITY;
-            if hit1 || hit2 {
-                if hit1 && hit2 {
+            let mut d1 = intersect_aabb(&r, min1, max1, ray.tmax);
+            let mut d2 = intersect_aabb(&r, min2, max2, ray.tmax);
+            if d1 > d2 {
+                std::mem::swap(&mut d1, &mut d2);
+                std::mem::swap(&mut c1, &mut c2);
+            }
+            if d1 != f32::INFINITY {
+                if d2 != f32::INFINITY {
                     stack[sp] = c2 as u32;
                     sp += 1;
                 }
-                node = if hit1 { c1 } else { c2 };
+                node = c1;
                 continue;
             }
         }
