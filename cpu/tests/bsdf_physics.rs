@@ -110,7 +110,7 @@ fn fresnel_total_internal_reflection() {
         // From inside (cos < 0), beyond the critical angle.
         let c = -cos_c * i as f32 / 100.0;
         assert_eq!(fresnel_dielectric(c, eta), 1.0, "cos {c}");
-        assert!(refract(dir_cos(c, 0.3), Vec3::Z, eta).is_none());
+        assert!(refract_dir(dir_cos(c, 0.3), Vec3::Z, eta).is_none());
         // Outside with eta < 1 (denser medium outside): the same.
         assert_eq!(fresnel_dielectric(-c, 1.0 / eta), 1.0);
     }
@@ -126,7 +126,7 @@ fn fresnel_is_reversible() {
         for i in 0..=50 {
             let c = 0.01 + 0.99 * i as f32 / 50.0;
             let wo = dir_cos(c, 0.7);
-            let Some((wt, _)) = refract(wo, Vec3::Z, eta) else {
+            let Some((wt, _)) = refract_dir(wo, Vec3::Z, eta) else {
                 continue;
             };
             let a = fresnel_dielectric(c, eta);

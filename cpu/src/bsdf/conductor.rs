@@ -7,7 +7,7 @@ use glam::{Vec2, Vec3};
 
 use super::fresnel::fresnel_conductor;
 use super::microfacet::{
-    MIN_ALPHA, ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect,
+    MIN_ALPHA, ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
 };
 use super::{BsdfSample, ConductorParams, Roughness, Shadowing};
 
@@ -78,7 +78,7 @@ pub fn conductor_sample(c: &ConductorParams, wo: Vec3, u: Vec2) -> Option<BsdfSa
     }
     let (ax, ay) = rough_alphas(&c.roughness);
     let wm = ggx_sample_visible(wo_up, ax, ay, u);
-    let mut wi = reflect(wo_up, wm);
+    let mut wi = reflect_dir(wo_up, wm);
     if wi.z <= 0.0 {
         return None;
     }

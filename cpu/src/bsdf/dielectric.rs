@@ -7,8 +7,8 @@
 use glam::{Vec2, Vec3};
 
 use super::conductor::rough_alphas;
-use super::fresnel::{fresnel_dielectric, refract};
-use super::microfacet::{ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect};
+use super::fresnel::{fresnel_dielectric, refract_dir};
+use super::microfacet::{ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir};
 use super::{BsdfSample, Roughness, Shadowing};
 
 /// Whether the interface is rendered as the smooth (delta) model: a small
@@ -22,14 +22,14 @@ pub fn dielectric_is_smooth(eta: f32, r: &Roughness) -> bool {
 /// +z, with eta_rel (1 for reflection); None when degenerate or when a
 /// direction sees the back of the microfacet (Walter's condition
 /// chi+(v . m / v . n)).
-fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool, f32)> {
+pub fn dielectric_half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool)> {
     let co = wo.z;
     let ci = wi.z;
     if co == 0.0 || ci == 0.0 {
         return None;
     }
-    let reflect = co * ci > 0.0;
-    let etap = if reflect {
+    let is_reflection = co * ci > 0.0;
+    let etap = if is_reflection {
         1.0
     } else if co > 0.0 {
         eta
@@ -48,14 +48,14 @@ fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool, f32)> {
     if wm.dot(wi) * ci <= 0.0 || wm.dot(wo) * co <= 0.0 {
         return None;
     }
-    Some((wm, etap, reflect, len2))
+    Some((wm, etap, is_reflection))
 }
 
 pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     if dielectric_is_smooth(eta, r) {
         return Vec3::ZERO;
     }
-    let Some((wm, etap, reflect, _)) = half_vector(eta, wo, wi) else {
+    let Some((wm, etap, is_reflection)) = dielectric_half_vector(eta, wo, wi) else {
         return Vec3::ZERO;
     };
     let (ax, ay) = rough_alphas(r);
@@ -63,7 +63,7 @@ pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     let d = ggx_d(wm, ax, ay);
     let v = ggx_visibility(wo, wi, ax, ay, separable);
     let f = fresnel_dielectric(wo.dot(wm), eta);
-    if reflect {
+    if is_reflection {
         // Walter 2007 eq. 20 with V = G / (4 |co| |ci|).
         return Vec3::splat(d * f * v);
     }
@@ -83,7 +83,7 @@ pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
     if dielectric_is_smooth(eta, r) {
         return 0.0;
     }
-    let Some((wm, etap, reflect, _)) = half_vector(eta, wo, wi) else {
+    let Some((wm, etap, is_reflection)) = dielectric_half_vector(eta, wo, wi) else {
         return 0.0;
     };
     let (ax, ay) = rough_alphas(r);
@@ -92,7 +92,7 @@ pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
     let pr = fresnel_dielectric(dot_o, eta);
     let pt = 1.0 - pr;
     let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
-    if reflect {
+    if is_reflection {
         // Walter 2007 eq. 14.
         pdf_wm / (4.0 * dot_o.abs()) * pr
     } else {
@@ -128,7 +128,7 @@ pub fn dielectric_sample(
                 eta: 1.0,
             });
         }
-        let (wi, etap) = refract(wo, Vec3::Z, eta)?;
+        let (wi, etap) = refract_dir(wo, Vec3::Z, eta)?;
         if wi.z == 0.0 {
             return None;
         }
@@ -145,13 +145,13 @@ pub fn dielectric_sample(
     // Choose R or T by the Fresnel term of the sampled microfacet.
     let pr = fresnel_dielectric(wo.dot(wm), eta);
     let (wi, eta_rel) = if uc < pr {
-        let wi = reflect(wo, wm);
+        let wi = reflect_dir(wo, wm);
         if wi.z * wo.z <= 0.0 {
             return None;
         }
         (wi, 1.0)
     } else {
-        let (wi, etap) = refract(wo, wm, eta)?;
+        let (wi, etap) = refract_dir(wo, wm, eta)?;
         if wi.z * wo.z >= 0.0 {
             return None;
         }
