@@ -8,7 +8,9 @@ use glam::{Vec2, Vec3};
 
 use super::conductor::rough_alphas;
 use super::fresnel::{fresnel_dielectric, refract_dir};
-use super::microfacet::{ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir};
+use super::microfacet::{
+    ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
+};
 use super::{BsdfSample, Roughness, Shadowing};
 
 /// Whether the interface is rendered as the smooth (delta) model: a small
@@ -142,31 +144,50 @@ pub fn dielectric_sample(
     }
     let (ax, ay) = rough_alphas(r);
     let wm = ggx_sample_visible(wo, ax, ay, u);
+    let dot_o = wo.dot(wm);
     // Choose R or T by the Fresnel term of the sampled microfacet.
-    let pr = fresnel_dielectric(wo.dot(wm), eta);
-    let (wi, eta_rel) = if uc < pr {
+    let pr = fresnel_dielectric(dot_o, eta);
+    let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
+    let g1 = ggx_g1(wo, ax, ay);
+    if !(g1 > 0.0) {
+        return None;
+    }
+    let separable = r.shadowing == Shadowing::Separable;
+    // As for conductors, pdf and weight come from the sampled normal
+    // (well conditioned); the weights are f |cos_i| / pdf simplified:
+    // reflection F G2 / (G1 pr) = G2 / G1, transmission
+    // (1 - F) G2 / (G1 pt eta_rel^2) = G2 / (G1 eta_rel^2).
+    let (wi, pdf, weight, eta_rel) = if uc < pr {
         let wi = reflect_dir(wo, wm);
         if wi.z * wo.z <= 0.0 {
             return None;
         }
-        (wi, 1.0)
+        let pdf = pdf_wm / (4.0 * dot_o.abs()) * pr;
+        (wi, pdf, ggx_g2(wo, wi, ax, ay, separable) / g1, 1.0)
     } else {
         let (wi, etap) = refract_dir(wo, wm, eta)?;
         if wi.z * wo.z >= 0.0 {
             return None;
         }
-        (wi, etap)
+        let dot_i = wi.dot(wm);
+        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        if !(denom > 0.0) {
+            return None;
+        }
+        let pdf = pdf_wm * (dot_i.abs() / denom) * (1.0 - pr);
+        let w = ggx_g2(wo, wi, ax, ay, separable) / g1 / (etap * etap);
+        (wi, pdf, w, etap)
     };
-    // Weight from eval and pdf at the sampled direction (consistency with
-    // what the integrator's MIS sees).
-    let pdf = dielectric_pdf(eta, r, wo, wi);
     if !(pdf > 0.0) || !pdf.is_finite() {
         return None;
     }
-    let f = dielectric_eval(eta, r, wo, wi);
+    // Keep the support consistent with eval/pdf: where rounding makes the
+    // half vector rebuilt from (wo, wi) fail its back-facing test (grazing,
+    // near-specular), eval would return 0 for this direction.
+    dielectric_half_vector(eta, wo, wi)?;
     Some(BsdfSample {
         wi,
-        weight: f * (wi.z.abs() / pdf),
+        weight: Vec3::splat(weight),
         pdf,
         delta: false,
         eta: eta_rel,
