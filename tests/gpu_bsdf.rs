@@ -168,30 +168,22 @@ fn eval_agrees(c: &Cpu, g: &GpuResult) -> bool {
     close3(c.f, Vec3::from_slice(&g.f_pdf[..3])) && close(c.pdf, g.f_pdf[3])
 }
 
-/// The sampled direction must match to 1e-4 (trigonometric functions differ
-/// between the CPU's libm and the device, so a sharp lobe's pdf at the two
-/// directions may differ by more than 1e-4); pdf, weight and eta are then
-/// compared with the CPU crate evaluated at the GPU's direction, which
-/// checks the same math on identical inputs. Delta samples are compared
-/// directly.
-fn sample_agrees(b: &Bsdf, wo: Vec3, c: &Cpu, g: &GpuResult) -> bool {
+/// Sample outputs: the same success flag and delta flag, the direction to
+/// 1e-4, pdf, weight and eta to the common tolerance. Both sides compute
+/// pdf and weight from the sampled microfacet normal.
+fn sample_agrees(c: &Cpu, g: &GpuResult) -> bool {
     let Some((wi, pdf, w, eta, delta)) = c.sample else {
         return g.flags[0] == 0;
     };
-    let gwi = Vec3::from_slice(&g.s_wi_pdf[..3]);
-    if g.flags[0] != 1 || (g.flags[1] == 1) != delta || (wi - gwi).abs().max_element() > 1e-4 {
-        return false;
-    }
-    if !close(eta, g.s_weight_eta[3]) {
-        return false;
-    }
-    let gw = Vec3::from_slice(&g.s_weight_eta[..3]);
-    if delta {
-        return close(pdf, g.s_wi_pdf[3]) && close3(w, gw);
-    }
-    let p = b.pdf(wo, gwi);
-    let f = b.eval(wo, gwi);
-    p > 0.0 && close(p, g.s_wi_pdf[3]) && close3(f * (gwi.z.abs() / p), gw)
+    g.flags[0] == 1
+        && (g.flags[1] == 1) == delta
+        && (wi - Vec3::from_slice(&g.s_wi_pdf[..3]))
+            .abs()
+            .max_element()
+            <= 1e-4
+        && close(pdf, g.s_wi_pdf[3])
+        && close3(w, Vec3::from_slice(&g.s_weight_eta[..3]))
+        && close(eta, g.s_weight_eta[3])
 }
 
 fn as_gpu(c: &Cpu) -> GpuResult {
@@ -214,9 +206,9 @@ fn as_gpu(c: &Cpu) -> GpuResult {
 /// (the device's sin/cos are less exact than libm's). Returns (eval/pdf
 /// sensitive, sample sensitive).
 fn sensitive(b: &Bsdf, q: &Query, rng: &mut Rng) -> (bool, bool) {
-    let wo0 = v3(q.wo);
-    let base = cpu(b, wo0, v3(q.wi), q.wo[3], Vec2::new(q.wi[3], q.u[0]));
-    let ulps = |x: f32, rng: &mut Rng| x + x.abs().max(1e-30) * (rng.f32() - 0.5) * 8.0 * f32::EPSILON;
+    let base = cpu(b, v3(q.wo), v3(q.wi), q.wo[3], Vec2::new(q.wi[3], q.u[0]));
+    let ulps =
+        |x: f32, rng: &mut Rng| x + x.abs().max(1e-30) * (rng.f32() - 0.5) * 8.0 * f32::EPSILON;
     let abs = |x: f32, rng: &mut Rng| (x + (rng.f32() - 0.5) * 2e-6).clamp(0.0, 0.999_999_94);
     let (mut ef, mut s) = (false, false);
     for _ in 0..8 {
@@ -226,7 +218,7 @@ fn sensitive(b: &Bsdf, q: &Query, rng: &mut Rng) -> (bool, bool) {
         let u = Vec2::new(abs(q.wi[3], rng), abs(q.u[0], rng));
         let other = as_gpu(&cpu(b, wo, wi, uc, u));
         ef |= !eval_agrees(&base, &other);
-        s |= !sample_agrees(b, wo0, &base, &other);
+        s |= !sample_agrees(&base, &other);
     }
     (ef, s)
 }
@@ -260,7 +252,10 @@ fn glsl_bsdfs_match_the_cpu_crate() {
             let wo = random_dir(&mut rng);
             let (uc, u) = (rng.f32(), Vec2::new(rng.f32(), rng.f32()));
             // Half the eval points on the sampled lobe, where values are large.
-            let wi = match mats[id].1.sample(wo, rng.f32(), Vec2::new(rng.f32(), rng.f32())) {
+            let wi = match mats[id]
+                .1
+                .sample(wo, rng.f32(), Vec2::new(rng.f32(), rng.f32()))
+            {
                 Some(s) if rng.f32() < 0.5 => s.wi,
                 _ => random_dir(&mut rng),
             };
@@ -300,7 +295,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
             if (g.flags[2] == 1) != c.delta {
                 failures.push(format!("{b:?}: is_delta differs"));
             }
-            let (ef, s) = (eval_agrees(&c, g), sample_agrees(b, v3(q.wo), &c, g));
+            let (ef, s) = (eval_agrees(&c, g), sample_agrees(&c, g));
             if ef && s {
                 continue;
             }
@@ -317,12 +312,13 @@ fn glsl_bsdfs_match_the_cpu_crate() {
                         "excused ef={ef} s={s} {b:?}\n  wo {:?} wi {:?} u {:?}\n  cpu f {} pdf {} sample {:?}\n  gpu {g:?}",
                         q.wo, q.wi, q.u, c.f, c.pdf, c.sample
                     );
-                    let gwi = Vec3::from_slice(&g.s_wi_pdf[..3]);
-                    eprintln!("  cpu pdf at gpu wi {} (gwi {:?} cwi {:?})", b.pdf(v3(q.wo), gwi), gwi.to_array(), c.sample.map(|s| s.0.to_array()));
                 }
             }
         }
-        report.push(format!("{}: {checked} tuples, {excused} excused", names[kind]));
+        report.push(format!(
+            "{}: {checked} tuples, {excused} excused",
+            names[kind]
+        ));
         // Float-noise cases must be rare.
         assert!(
             excused * 200 <= checked,

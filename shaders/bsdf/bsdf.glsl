@@ -126,19 +126,23 @@ bool conductor_sample(Material m, vec3 wo, vec2 u, out BsdfSample s) {
     }
     vec2 a = rough_alphas(m);
     vec3 wm = ggx_sample_visible(wo_up, a.x, a.y, u);
+    float d = dot(wo_up, wm);
     vec3 wi = reflect_dir(wo_up, wm);
-    if (wi.z <= 0.0) {
+    if (wi.z <= 0.0 || d <= 0.0) {
         return false;
     }
+    // pdf and weight from the sampled normal (see conductor.rs).
+    float pdf = ggx_pdf_visible(wo_up, wm, a.x, a.y) / (4.0 * d);
+    float g1 = ggx_g1(wo_up, a.x, a.y);
+    if (!(pdf > 0.0) || isinf(pdf) || !(g1 > 0.0)) {
+        return false;
+    }
+    vec3 f = fresnel_conductor(d, m.eta.xyz, m.k.xyz) * m.specular.xyz;
+    vec3 weight = f * (ggx_g2(wo_up, wi, a.x, a.y, material_separable(m)) / g1);
     if (flip) {
         wi.z = -wi.z;
     }
-    float pdf = conductor_pdf(m, wo, wi);
-    if (!(pdf > 0.0) || isinf(pdf)) {
-        return false;
-    }
-    vec3 f = conductor_eval(m, wo, wi);
-    s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
+    s = BsdfSample(wi, pdf, weight, 1.0, false);
     return true;
 }
 
@@ -253,29 +257,53 @@ bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out Bsd
     }
     vec2 a = rough_alphas(m);
     vec3 wm = ggx_sample_visible(wo, a.x, a.y, u);
-    float pr = fresnel_dielectric(dot(wo, wm), eta);
+    float dot_o = dot(wo, wm);
+    float pr = fresnel_dielectric(dot_o, eta);
+    float pdf_wm = ggx_pdf_visible(wo, wm, a.x, a.y);
+    float g1 = ggx_g1(wo, a.x, a.y);
+    if (!(g1 > 0.0)) {
+        return false;
+    }
+    bool separable = material_separable(m);
     vec3 wi;
+    float pdf;
+    float weight;
     float eta_rel;
     if (uc < pr) {
         wi = reflect_dir(wo, wm);
         if (wi.z * wo.z <= 0.0) {
             return false;
         }
+        pdf = pdf_wm / (4.0 * abs(dot_o)) * pr;
+        weight = ggx_g2(wo, wi, a.x, a.y, separable) / g1;
         eta_rel = 1.0;
     } else {
-        if (!refract_dir(wo, wm, eta, wi, eta_rel)) {
+        float etap;
+        if (!refract_dir(wo, wm, eta, wi, etap)) {
             return false;
         }
         if (wi.z * wo.z >= 0.0) {
             return false;
         }
+        float dot_i = dot(wi, wm);
+        float denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        if (!(denom > 0.0)) {
+            return false;
+        }
+        pdf = pdf_wm * (abs(dot_i) / denom) * (1.0 - pr);
+        weight = ggx_g2(wo, wi, a.x, a.y, separable) / g1 / (etap * etap);
+        eta_rel = etap;
     }
-    float pdf = dielectric_pdf(eta, m, wo, wi);
     if (!(pdf > 0.0) || isinf(pdf)) {
         return false;
     }
-    vec3 f = dielectric_eval(eta, m, wo, wi);
-    s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), eta_rel, false);
+    vec3 hm;
+    float hetap;
+    bool hrefl;
+    if (!dielectric_half_vector(eta, wo, wi, hm, hetap, hrefl)) {
+        return false;
+    }
+    s = BsdfSample(wi, pdf, vec3(weight), eta_rel, false);
     return true;
 }
 
@@ -292,6 +320,10 @@ float metallic_pdf(float w, Material m, vec3 wo, vec3 wi) {
 bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
                      out BsdfSample s) {
     vec3 wi;
+    float pdf_c;
+    vec3 f_c;
+    float pdf_d;
+    vec3 f_d;
     if (uc < w) {
         if (!conductor_sample(m, wo, u, s)) {
             return false;
@@ -301,18 +333,26 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
             return true;
         }
         wi = s.wi;
+        pdf_c = s.pdf;
+        f_c = s.weight * (s.pdf / abs(wi.z));
+        pdf_d = diffuse_pdf(wo, wi);
+        f_d = diffuse_eval(base, wo, wi);
     } else {
         if (!diffuse_sample(base, wo, u, s)) {
             return false;
         }
         wi = s.wi;
+        pdf_d = s.pdf;
+        f_d = diffuse_eval(base, wo, wi);
+        pdf_c = conductor_pdf(m, wo, wi);
+        f_c = conductor_eval(m, wo, wi);
     }
-    float pdf = metallic_pdf(w, m, wo, wi);
+    float pdf = w * pdf_c + (1.0 - w) * pdf_d;
     if (!(pdf > 0.0) || isinf(pdf)) {
         s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
         return false;
     }
-    vec3 f = metallic_eval(w, base, m, wo, wi);
+    vec3 f = w * f_c + (1.0 - w) * f_d;
     s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
     return true;
 }
