@@ -9,11 +9,13 @@
 //!    of that mean, sum(pixel variance of the mean) / n^2 (pixels are
 //!    independent; each pixel's variance comes from the film's own
 //!    sum/sum_sq).
-//! 2. Welch's z = (mean_A - mean_B) / sqrt(var_A + var_B). Zero variance:
-//!    both zero -> z = 0 when the means are equal (within 1e-6 relative),
-//!    else infinite; only one zero -> the other image's variance stands in
-//!    for it (a floor: a deterministic region on one side is compared at
-//!    the noise level of the other).
+//! 2. Welch's z = (mean_A - mean_B) / sqrt(var_A + var_B + floor), the
+//!    floor (1e-5 x max(|mean_A|, |mean_B|))^2 standing for the f32
+//!    rounding of the sums (a noise-free region must match to 1e-5
+//!    relative). When one image has zero variance in a block and the other
+//!    not, the other's variance stands in for it (a deterministic region on
+//!    one side is compared at the noise level of the other); against an
+//!    exact reference (`compare_to_reference`) B's variance is truly zero.
 //! 3. Two one-sided tests share the overall significance `alpha` (default
 //!    1e-3) equally:
 //!    - local: any |z| above the Sidak-corrected two-sided threshold for N
@@ -119,23 +121,28 @@ fn blocks(film: &Film, mask: &dyn Fn(u32, u32) -> bool) -> Blocks {
     Blocks { bx, by, data }
 }
 
-/// Welch's z with the zero-variance rules of the module notes.
-fn welch_z(ma: f64, va: f64, mb: f64, vb: f64) -> f64 {
+/// Relative noise floor standing for the f32 rounding of the films' sums:
+/// means closer than this (relative) are never told apart.
+pub const ROUNDING_FLOOR: f64 = 1e-5;
+
+/// Welch's z with the zero-variance rules of the module notes. `b_exact`:
+/// B is a reference value, not a noisy image (its variance is truly zero).
+fn welch_z(ma: f64, va: f64, mb: f64, vb: f64, b_exact: bool) -> f64 {
     let d = ma - mb;
-    let (va, vb) = match (va > 0.0, vb > 0.0) {
-        (true, true) => (va, vb),
+    let (va, vb) = match (va > 0.0, vb > 0.0 || b_exact) {
+        (false, true) if !b_exact => (vb, vb),
         (true, false) => (va, va),
-        (false, true) => (vb, vb),
-        (false, false) => {
-            let scale = ma.abs().max(mb.abs());
-            return if d.abs() <= 1e-6 * scale {
-                0.0
-            } else {
-                f64::INFINITY
-            };
-        }
+        _ => (va, vb),
     };
-    d / (va + vb).sqrt()
+    let floor = (ROUNDING_FLOOR * ma.abs().max(mb.abs())).powi(2);
+    let var = va + vb + floor;
+    if var > 0.0 {
+        d / var.sqrt()
+    } else if d == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY
+    }
 }
 
 /// The inverse of the standard normal CDF (Acklam's rational
@@ -307,7 +314,13 @@ pub fn compare_films_masked(
                 continue;
             }
             for c in 0..3 {
-                let z = welch_z(ma[c] as f64, va[c] as f64, mb[c] as f64, vb[c] as f64);
+                let z = welch_z(
+                    ma[c] as f64,
+                    va[c] as f64,
+                    mb[c] as f64,
+                    vb[c] as f64,
+                    false,
+                );
                 zs.push((z, (bx, by, c)));
             }
         }
@@ -319,31 +332,51 @@ pub fn compare_films_masked(
 }
 
 /// Test a render against a known constant radiance `value` over the pixels
-/// where `mask(x, y)`: the same rule with B's variance zero (a zero-variance
-/// block must then match the constant to 1e-6 relative).
+/// where `mask(x, y)`: the same rule with B exact (variance zero; a
+/// zero-variance block must then match to the rounding floor).
 pub fn compare_to_constant(
     film: &Film,
     value: Vec3,
     mask: &dyn Fn(u32, u32) -> bool,
 ) -> Result<CompareReport, CompareError> {
+    let reference = vec![value; film.sum.len()];
+    compare_to_reference(film, &reference, mask)
+}
+
+/// Test a render against exact per-pixel expected values (row-major, top
+/// row first), e.g. an analytic solution integrated over each pixel.
+pub fn compare_to_reference(
+    film: &Film,
+    reference: &[Vec3],
+    mask: &dyn Fn(u32, u32) -> bool,
+) -> Result<CompareReport, CompareError> {
     if film.spp == 0 {
         return Err(CompareError::Empty);
     }
+    if reference.len() != film.sum.len() {
+        return Err(CompareError::Size(
+            film.width,
+            film.height,
+            reference.len() as u32,
+            1,
+        ));
+    }
     let ba = blocks(film, mask);
+    let mut exact = Film::new(film.width, film.height);
+    exact.spp = 1;
+    exact.sum.copy_from_slice(reference);
+    let bb = blocks(&exact, mask);
     let mut zs = Vec::new();
     for by in 0..ba.by {
         for bx in 0..ba.bx {
-            let (ma, va, n) = ba.data[(by * ba.bx + bx) as usize];
+            let i = (by * ba.bx + bx) as usize;
+            let (ma, va, n) = ba.data[i];
+            let (mb, _, _) = bb.data[i];
             if n == 0 {
                 continue;
             }
             for c in 0..3 {
-                let (m, v, r) = (ma[c] as f64, va[c] as f64, value[c] as f64);
-                let z = if v > 0.0 {
-                    (m - r) / v.sqrt()
-                } else {
-                    welch_z(m, 0.0, r, 0.0)
-                };
+                let z = welch_z(ma[c] as f64, va[c] as f64, mb[c] as f64, 0.0, true);
                 zs.push((z, (bx, by, c)));
             }
         }
@@ -351,7 +384,7 @@ pub fn compare_to_constant(
     if zs.is_empty() {
         return Err(CompareError::Empty);
     }
-    Ok(decide(&zs, ALPHA, overall_mean(&ba), value))
+    Ok(decide(&zs, ALPHA, overall_mean(&ba), overall_mean(&bb)))
 }
 
 #[cfg(test)]

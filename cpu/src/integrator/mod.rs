@@ -21,7 +21,8 @@
 //!   eps(p) = 1e-4 max|p_i| + 1e-6 * scene extent (relative to the
 //!   position's own magnitude, where float error of the interpolated hit
 //!   point lives, with an absolute floor scaled by the scene for points at
-//!   the origin); shadow rays stop eps(light point) short of the light.
+//!   the origin); shadow rays run from that offset origin to eps(q) short
+//!   of the light point q.
 //! - Light leaks: a direction whose side of the geometric normal differs
 //!   from its side of the shading normal is discarded (light sample) or
 //!   ends the path (BSDF sample), since it would pass through the surface
@@ -43,7 +44,7 @@ use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
 use crate::film::{Film, RenderOptions, RenderStats};
 use crate::frame::Frame;
-use crate::lights::{Lights, background_direction_frame, emitted};
+use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{Rng, power_heuristic, seed_key};
 use crate::scene::{NO_LIGHT, Scene};
 
@@ -175,6 +176,30 @@ impl<'a> PathTracer<'a> {
         SurfaceFrame { ng, ns, frame }
     }
 
+    /// The shadow ray from `p` (geometric normal `ng`) toward a light
+    /// sample: from the offset origin to eps(q) short of the light point q,
+    /// measured from the offset origin (which may sit closer to the light
+    /// than p by up to eps(p)).
+    pub fn shadow_ray(&self, p: Vec3, ng: Vec3, ls: &LightSample) -> Ray {
+        let o = offset_origin(p, ng, ls.wi, self.eps_abs);
+        if ls.dist.is_finite() {
+            let q = p + ls.wi * ls.dist;
+            let to = q - o;
+            let len = to.length();
+            Ray {
+                o,
+                d: to / len,
+                tmax: len - ray_eps(q, self.eps_abs),
+            }
+        } else {
+            Ray {
+                o,
+                d: ls.wi,
+                tmax: f32::MAX,
+            }
+        }
+    }
+
     /// One radiance sample for pixel (x, y), sample index `s`; `rays`
     /// counts camera, continuation and shadow rays.
     pub fn sample(&self, x: u32, y: u32, s: u32, rays: &mut u64) -> Vec3 {
@@ -255,19 +280,9 @@ impl<'a> PathTracer<'a> {
                 if same_side {
                     let f = bsdf.eval(wo_local, wi_local) * wi_local.z.abs();
                     if f.max_element() > 0.0 {
-                        let o = offset_origin(p, sf.ng, ls.wi, self.eps_abs);
-                        let tmax = if ls.dist.is_finite() {
-                            let q = p + ls.wi * ls.dist;
-                            ls.dist - ray_eps(q, self.eps_abs)
-                        } else {
-                            f32::MAX
-                        };
+                        let shadow = self.shadow_ray(p, sf.ng, &ls);
                         *rays += 1;
-                        if tmax > 0.0
-                            && !scene
-                                .bvh
-                                .occluded(&scene.triangles, &Ray { o, d: ls.wi, tmax })
-                        {
+                        if shadow.tmax > 0.0 && !scene.bvh.occluded(&scene.triangles, &shadow) {
                             let w = if ls.delta {
                                 1.0
                             } else {
