@@ -1,3 +1,393 @@
-fn main() {
-    println!("glint");
+//! `glint`: the command line. Every failure ends with one line on stderr
+//! naming the file and the problem, a non-zero status, and no output file
+//! left behind.
+
+mod cli;
+mod stats;
+
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Parser;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use cli::{Backend, Cli, Command, RenderArgs};
+use glint::cpu::film::{OutputFormat, temp_path_for};
+use glint::cpu::{Film, RenderOptions, Scene};
+use stats::{Stats, cpu_device_name};
+
+/// Largest image side accepted.
+const MAX_SIZE: u32 = 16384;
+/// Width used when neither --width nor --height is given.
+const DEFAULT_WIDTH: u32 = 512;
+
+fn main() -> ExitCode {
+    // Last resort: a bug must still end in one line, not a backtrace.
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!("glint: internal error: {}{at}", one_line(&msg));
+    }));
+
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+                let _ = e.print();
+                return ExitCode::from(2);
+            }
+            // clap's first paragraph is the error itself (a list of
+            // missing arguments may follow its first line); then usage.
+            let text = e.to_string();
+            let first: Vec<&str> = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty())
+                .map(str::trim)
+                .collect();
+            eprintln!(
+                "glint: {} (see glint --help)",
+                first.join(" ").trim_start_matches("error: ")
+            );
+            return ExitCode::from(2);
+        }
+    };
+    // A panic unwinds through `Outputs::drop` (removing partial files), is
+    // reported by the hook above, and ends here with status 101.
+    let result = match cli.command {
+        Command::Render(args) => std::panic::catch_unwind(|| run_render(&args)),
+    };
+    match result {
+        Ok(Ok(())) => ExitCode::SUCCESS,
+        Ok(Err(e)) => {
+            eprintln!("glint: {}", one_line(&format!("{e:#}")));
+            ExitCode::FAILURE
+        }
+        Err(_) => ExitCode::from(101),
+    }
+}
+
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Output files in two phases: temporaries beside each final path are
+/// created up front (so an unwritable destination fails before any
+/// rendering), filled at the end, then renamed. Dropping the set without
+/// `commit` removes every temporary and every file already renamed.
+struct Outputs {
+    finals: Vec<PathBuf>,
+    temps: Vec<PathBuf>,
+    renamed: usize,
+    committed: bool,
+}
+
+impl Outputs {
+    fn new() -> Self {
+        Self {
+            finals: Vec::new(),
+            temps: Vec::new(),
+            renamed: 0,
+            committed: false,
+        }
+    }
+
+    /// Reserve `path`: create its temporary now.
+    fn reserve(&mut self, path: &Path) -> Result<usize> {
+        if let Some(i) = self.finals.iter().position(|p| p == path) {
+            return Ok(i);
+        }
+        if path.is_dir() {
+            bail!("{}: is a directory", path.display());
+        }
+        let tmp = temp_path_for(path);
+        std::fs::File::create(&tmp).with_context(|| format!("{}: cannot write", path.display()))?;
+        self.finals.push(path.to_path_buf());
+        self.temps.push(tmp);
+        Ok(self.finals.len() - 1)
+    }
+
+    fn write(
+        &self,
+        i: usize,
+        f: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> Result<()>,
+    ) -> Result<()> {
+        let path = &self.finals[i];
+        let file = std::fs::File::create(&self.temps[i])
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        let mut w = std::io::BufWriter::new(file);
+        f(&mut w).with_context(|| format!("{}", path.display()))?;
+        let file = w
+            .into_inner()
+            .map_err(|e| anyhow!("{}: {}", path.display(), e.error()))?;
+        file.sync_all()
+            .with_context(|| format!("{}: cannot write", path.display()))?;
+        Ok(())
+    }
+
+    /// Rename every temporary over its final path.
+    fn commit(mut self) -> Result<()> {
+        for i in 0..self.finals.len() {
+            std::fs::rename(&self.temps[i], &self.finals[i])
+                .with_context(|| format!("{}: cannot write", self.finals[i].display()))?;
+            self.renamed = i + 1;
+        }
+        self.committed = true;
+        Ok(())
+    }
+}
+
+impl Drop for Outputs {
+    fn drop(&mut self) {
+        if self.committed {
+            return;
+        }
+        for (i, (t, f)) in self.temps.iter().zip(&self.finals).enumerate() {
+            let _ = std::fs::remove_file(if i < self.renamed { f } else { t });
+        }
+    }
+}
+
+/// Pick the camera: an index if the text is a number in range, else a name.
+fn resolve_camera(scene: &Scene, path: &Path, camera: Option<&str>) -> Result<usize> {
+    let Some(c) = camera else { return Ok(0) };
+    if let Ok(i) = c.parse::<usize>()
+        && i < scene.cameras.len()
+    {
+        return Ok(i);
+    }
+    if let Some(i) = scene
+        .cameras
+        .iter()
+        .position(|cam| cam.name.as_deref() == Some(c))
+    {
+        return Ok(i);
+    }
+    let names: Vec<String> = scene
+        .cameras
+        .iter()
+        .enumerate()
+        .map(|(i, cam)| match &cam.name {
+            Some(n) => format!("{i} \"{n}\""),
+            None => i.to_string(),
+        })
+        .collect();
+    bail!(
+        "{}: no camera \"{c}\" (cameras: {})",
+        path.display(),
+        if names.is_empty() {
+            "none".into()
+        } else {
+            names.join(", ")
+        }
+    )
+}
+
+/// The image size: both given, or one given and the other from the
+/// camera's aspect ratio (glTF `aspectRatio`, else 1:1), or 512 wide.
+fn image_size(args: &RenderArgs, aspect: f32) -> Result<(u32, u32)> {
+    let check = |name: &str, v: u32| -> Result<u32> {
+        if (1..=MAX_SIZE).contains(&v) {
+            Ok(v)
+        } else {
+            bail!("--{name} {v} is out of range (1..={MAX_SIZE})")
+        }
+    };
+    let from = |v: u32, r: f32| ((v as f32 * r).round() as u32).clamp(1, MAX_SIZE);
+    Ok(match (args.width, args.height) {
+        (Some(w), Some(h)) => (check("width", w)?, check("height", h)?),
+        (Some(w), None) => {
+            let w = check("width", w)?;
+            (w, from(w, 1.0 / aspect))
+        }
+        (None, Some(h)) => {
+            let h = check("height", h)?;
+            (from(h, aspect), h)
+        }
+        (None, None) => (DEFAULT_WIDTH, from(DEFAULT_WIDTH, 1.0 / aspect)),
+    })
+}
+
+fn progress_bar() -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let pb = ProgressBar::new(1);
+    if let Ok(style) =
+        ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent:>3}% eta {eta}")
+    {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    Some(pb)
+}
+
+fn run_render(args: &RenderArgs) -> Result<()> {
+    let setup_start = Instant::now();
+    // Parameters first: nothing is read or created for a bad command line.
+    if args.spp == 0 {
+        bail!("--spp must be at least 1");
+    }
+    if args.max_depth == 0 || args.max_depth < -1 {
+        bail!(
+            "--max-depth {} is out of range (-1 for unbounded, or at least 1)",
+            args.max_depth
+        );
+    }
+    let mut formats = Vec::new();
+    for o in &args.outputs {
+        match OutputFormat::from_path(o) {
+            Some(f) => formats.push(f),
+            None => bail!(
+                "{}: unsupported output format (use .exr or .png)",
+                o.display()
+            ),
+        }
+    }
+    if let Some(s) = &args.stats
+        && args.outputs.contains(s)
+    {
+        bail!("{}: given both as an image and as --stats", s.display());
+    }
+    if !args.scene.is_file() {
+        bail!("{}: no such file", args.scene.display());
+    }
+
+    let mut outputs = Outputs::new();
+    let image_slots: Vec<usize> = args
+        .outputs
+        .iter()
+        .map(|o| outputs.reserve(o))
+        .collect::<Result<_>>()?;
+    let stats_slot = args
+        .stats
+        .as_ref()
+        .map(|s| outputs.reserve(s))
+        .transpose()?;
+
+    let scene = glint::cpu::loader::load(&args.scene)?;
+    let camera = resolve_camera(&scene, &args.scene, args.camera.as_deref())?;
+    let aspect = scene
+        .cameras
+        .get(camera)
+        .and_then(|c| c.aspect_ratio)
+        .filter(|a| a.is_finite() && *a > 0.0)
+        .unwrap_or(1.0);
+    let (width, height) = image_size(args, aspect)?;
+    let opts = RenderOptions {
+        width,
+        height,
+        spp: args.spp,
+        max_depth: args.max_depth,
+        seed: args.seed,
+        camera,
+    };
+    glint::cpu::integrator::validate_options(&scene, &opts)
+        .map_err(|e| anyhow!("{}: {e}", args.scene.display()))?;
+
+    let pb = progress_bar();
+    let (film, rays, render_seconds, setup_seconds, device, driver, threads) = match args.backend {
+        Backend::Cpu => {
+            let pt = glint::cpu::PathTracer::new(&scene, &opts)
+                .map_err(|e| anyhow!("{}: {e}", args.scene.display()))?;
+            let setup = setup_start.elapsed().as_secs_f64();
+            let progress = |done: u32, total: u32| {
+                if let Some(pb) = &pb {
+                    pb.set_length(total as u64);
+                    pb.set_position(done as u64);
+                }
+            };
+            let (film, st) = pt.render(opts.spp, &progress);
+            let threads = rayon::current_num_threads();
+            (
+                film,
+                st.rays,
+                st.render_seconds,
+                setup,
+                cpu_device_name(threads),
+                None,
+                Some(threads),
+            )
+        }
+        Backend::Gpu => {
+            let load_seconds = setup_start.elapsed().as_secs_f64();
+            let progress = |done: u32, total: u32| {
+                if let Some(pb) = &pb {
+                    pb.set_length(total as u64);
+                    pb.set_position(done as u64);
+                }
+            };
+            let r = glint::gpu::render(&scene, &opts, args.device.as_deref(), &progress)
+                .map_err(|e| anyhow!("{}: GPU backend: {e}", args.scene.display()))?;
+            (
+                r.film,
+                r.stats.rays,
+                r.stats.render_seconds,
+                load_seconds + r.setup_seconds,
+                r.device,
+                Some(r.driver),
+                None,
+            )
+        }
+    };
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+
+    for (&slot, &format) in image_slots.iter().zip(&formats) {
+        outputs.write(slot, |w| encode(&film, w, format))?;
+    }
+    if let Some(slot) = stats_slot {
+        let st = Stats {
+            backend: args.backend.name(),
+            device,
+            driver,
+            scene: args.scene.display().to_string(),
+            width,
+            height,
+            spp: args.spp,
+            max_depth: args.max_depth,
+            seed: args.seed,
+            camera: scene
+                .cameras
+                .get(camera)
+                .map(|c| c.name.clone().unwrap_or_else(|| camera.to_string())),
+            triangles: scene.triangles.len(),
+            emitters: scene.emitter_triangles().len(),
+            lights: scene.lights.len(),
+            threads,
+            setup_seconds,
+            render_seconds,
+            rays,
+        };
+        outputs.write(slot, |w| {
+            serde_json::to_writer_pretty(&mut *w, &st.to_json())?;
+            use std::io::Write;
+            writeln!(w)?;
+            Ok(())
+        })?;
+    }
+    outputs.commit()
+}
+
+fn encode(
+    film: &Film,
+    w: &mut std::io::BufWriter<std::fs::File>,
+    format: OutputFormat,
+) -> Result<()> {
+    film.encode(w, format).map_err(|e| anyhow!("{e}"))
 }
