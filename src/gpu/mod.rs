@@ -1,14 +1,94 @@
 //! The Vulkan compute backend.
 //!
-//! INTERFACE FIXED BY THE LEAD; owned by the Vulkan host work (replace the
-//! placeholder body of `render`, keep its signature).
+//! One concern per module: [`context`] (instance, device, queue, allocator,
+//! validation), [`buffer`] (device buffers, upload, readback), [`kernel`]
+//! (compute pipelines over buffers at bindings 0..N), [`shaders`] (the
+//! SPIR-V build.rs compiled) and [`render`](mod@render) (the path tracer's
+//! host side).
 
+pub mod buffer;
+pub mod context;
+pub mod kernel;
+pub mod render;
+pub mod shaders;
+
+use ash::vk;
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
+
+pub use buffer::{Buffer, BufferKind};
+pub use context::{Context, ContextDesc, DeviceInfo, Validation, ValidationLog};
+pub use kernel::{Kernel, groups};
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
     #[error("{0}")]
     Unavailable(String),
+    #[error(
+        "cannot load the Vulkan loader (libvulkan.so.1): {0}; install the Vulkan loader and a driver (e.g. mesa-vulkan-drivers for lavapipe), or use --backend cpu"
+    )]
+    Loader(String),
+    #[error(
+        "no Vulkan driver found (vkCreateInstance: ERROR_INCOMPATIBLE_DRIVER); install a GPU driver or mesa-vulkan-drivers (lavapipe), or use --backend cpu"
+    )]
+    NoDriver,
+    #[error(
+        "no Vulkan device found; install a GPU driver or mesa-vulkan-drivers (lavapipe), or use --backend cpu"
+    )]
+    NoDevice,
+    #[error("no Vulkan device name contains '{wanted}'; available: {}", available.join(", "))]
+    DeviceNotFound {
+        wanted: String,
+        available: Vec<String>,
+    },
+    #[error("no Vulkan device supports Vulkan 1.2 with a compute queue; found: {}", available.join(", "))]
+    NoUsableDevice { available: Vec<String> },
+    #[error(
+        "validation was requested (GLINT_VALIDATION) but VK_LAYER_KHRONOS_validation is not installed"
+    )]
+    ValidationUnavailable,
+    #[error(
+        "the Vulkan device was lost ({what}): the driver reset or crashed, possibly a watchdog timeout"
+    )]
+    DeviceLost { what: &'static str },
+    #[error("out of {kind} memory in {what}")]
+    OutOfMemory {
+        kind: &'static str,
+        what: &'static str,
+    },
+    #[error("{what} failed: {result}")]
+    Vk {
+        what: &'static str,
+        result: vk::Result,
+    },
+    #[error("cannot allocate GPU memory for {what}: {source}")]
+    Allocation {
+        what: String,
+        #[source]
+        source: gpu_allocator::AllocationError,
+    },
+    #[error(
+        "buffer '{name}' needs {size} bytes, more than the device's limit of {max} bytes per buffer binding"
+    )]
+    BufferTooLarge { name: String, size: u64, max: u64 },
+    #[error("no compiled kernel named '{0}' (shaders/{0}.comp)")]
+    UnknownKernel(String),
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl GpuError {
+    /// Map a failed Vulkan call, singling out device loss and exhaustion.
+    pub fn from_vk(what: &'static str, result: vk::Result) -> Self {
+        match result {
+            vk::Result::ERROR_DEVICE_LOST => GpuError::DeviceLost { what },
+            vk::Result::ERROR_OUT_OF_DEVICE_MEMORY => GpuError::OutOfMemory {
+                kind: "device",
+                what,
+            },
+            vk::Result::ERROR_OUT_OF_HOST_MEMORY => GpuError::OutOfMemory { kind: "host", what },
+            _ => GpuError::Vk { what, result },
+        }
+    }
 }
 
 /// What a GPU render returns beside the film.
@@ -35,6 +115,6 @@ pub fn render(
 ) -> Result<GpuRender, GpuError> {
     let _ = (scene, opts, device, progress);
     Err(GpuError::Unavailable(
-        "the Vulkan backend is not built yet; use --backend cpu".into(),
+        "the path tracing kernel has not landed yet".into(),
     ))
 }

@@ -1,0 +1,385 @@
+//! Compute kernels: a pipeline built from one of the compiled SPIR-V kernels
+//! with buffers at bindings `0..N` of set 0 and optional push constants.
+//!
+//! The quickest way to run a test kernel is [`Context::run_kernel`]: inputs
+//! are uploaded to bindings `0..inputs.len()`, outputs follow them, start
+//! with the caller's contents and are read back in place.
+//!
+//! ```no_run
+//! use glint::gpu::{Context, ContextDesc, Validation};
+//! # fn main() -> Result<(), glint::gpu::GpuError> {
+//! let ctx = Context::new(&ContextDesc { device: None, validation: Validation::IfAvailable, loader: None })?;
+//! let a = [1.0f32, 2.0, 3.0];
+//! let b = [10.0f32, 20.0, 30.0];
+//! let mut c = [0.0f32; 3];
+//! let mut count = [0u32];
+//! // shaders/tests/smoke.comp: c[i] = a[i] + b[i] * scale; local size 64.
+//! let push: [u32; 2] = [3, 2.0f32.to_bits()];
+//! ctx.run_kernel(
+//!     "tests/smoke",
+//!     &[bytemuck::cast_slice(&a), bytemuck::cast_slice(&b)],
+//!     &mut [bytemuck::cast_slice_mut(&mut c), bytemuck::cast_slice_mut(&mut count)],
+//!     bytemuck::bytes_of(&push),
+//!     [glint::gpu::groups(3, 64), 1, 1],
+//! )?;
+//! assert_eq!(c, [21.0, 42.0, 63.0]);
+//! # Ok(()) }
+//! ```
+//!
+//! For repeated dispatches over the same buffers (the renderer), build a
+//! [`Kernel`] once, [`Kernel::bind`] the buffers, and call
+//! [`Kernel::dispatch`] or record [`Kernel::record_dispatch`] into a command
+//! buffer of your own.
+
+use std::ffi::CStr;
+
+use ash::vk;
+
+use super::GpuError;
+use super::buffer::{Buffer, BufferKind};
+use super::context::Context;
+
+/// Workgroups needed to cover `n` items with `local_size` per group.
+pub fn groups(n: u32, local_size: u32) -> u32 {
+    n.div_ceil(local_size.max(1))
+}
+
+pub struct Kernel<'a> {
+    ctx: &'a Context,
+    name: String,
+    bindings: Vec<BufferKind>,
+    push_constant_size: u32,
+    set_layout: vk::DescriptorSetLayout,
+    pipeline_layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+    descriptor_pool: vk::DescriptorPool,
+    set: vk::DescriptorSet,
+    /// Whether `set` has been written since creation.
+    bound: bool,
+}
+
+impl<'a> Kernel<'a> {
+    /// Kernel `name` with `num_bindings` storage buffers at bindings
+    /// `0..num_bindings` and `push_constant_size` bytes of push constants.
+    pub fn new(
+        ctx: &'a Context,
+        name: &str,
+        num_bindings: usize,
+        push_constant_size: u32,
+    ) -> Result<Self, GpuError> {
+        Self::with_bindings(
+            ctx,
+            name,
+            &vec![BufferKind::Storage; num_bindings],
+            push_constant_size,
+        )
+    }
+
+    /// Kernel `name` with binding `i` of set 0 of kind `bindings[i]`.
+    pub fn with_bindings(
+        ctx: &'a Context,
+        name: &str,
+        bindings: &[BufferKind],
+        push_constant_size: u32,
+    ) -> Result<Self, GpuError> {
+        let code =
+            super::shaders::spirv(name).ok_or_else(|| GpuError::UnknownKernel(name.to_string()))?;
+        let max_push = ctx.info().limits.max_push_constants_size;
+        if push_constant_size > max_push || push_constant_size % 4 != 0 {
+            return Err(GpuError::Invalid(format!(
+                "kernel '{name}': {push_constant_size} bytes of push constants (must be a multiple of 4, at most {max_push})"
+            )));
+        }
+        let device = &ctx.device;
+        let mut kernel = Kernel {
+            ctx,
+            name: name.to_string(),
+            bindings: bindings.to_vec(),
+            push_constant_size,
+            set_layout: vk::DescriptorSetLayout::null(),
+            pipeline_layout: vk::PipelineLayout::null(),
+            pipeline: vk::Pipeline::null(),
+            descriptor_pool: vk::DescriptorPool::null(),
+            set: vk::DescriptorSet::null(),
+            bound: false,
+        };
+        // `kernel`'s Drop destroys whatever was created if a step fails.
+        let layout_bindings: Vec<_> = bindings
+            .iter()
+            .enumerate()
+            .map(|(i, k)| {
+                vk::DescriptorSetLayoutBinding::default()
+                    .binding(i as u32)
+                    .descriptor_type(k.descriptor_type())
+                    .descriptor_count(1)
+                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            })
+            .collect();
+        kernel.set_layout = unsafe {
+            device.create_descriptor_set_layout(
+                &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
+                None,
+            )
+        }
+        .map_err(|e| GpuError::from_vk("vkCreateDescriptorSetLayout", e))?;
+
+        let set_layouts = [kernel.set_layout];
+        let ranges = [vk::PushConstantRange::default()
+            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .offset(0)
+            .size(push_constant_size)];
+        let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
+        if push_constant_size > 0 {
+            layout_info = layout_info.push_constant_ranges(&ranges);
+        }
+        kernel.pipeline_layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
+            .map_err(|e| GpuError::from_vk("vkCreatePipelineLayout", e))?;
+
+        let module = unsafe {
+            device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
+        }
+        .map_err(|e| GpuError::from_vk("vkCreateShaderModule", e))?;
+        let entry: &CStr = c"main";
+        let stage = vk::PipelineShaderStageCreateInfo::default()
+            .stage(vk::ShaderStageFlags::COMPUTE)
+            .module(module)
+            .name(entry);
+        let info = [vk::ComputePipelineCreateInfo::default()
+            .stage(stage)
+            .layout(kernel.pipeline_layout)];
+        let pipelines =
+            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        unsafe { device.destroy_shader_module(module, None) };
+        kernel.pipeline =
+            pipelines.map_err(|(_, e)| GpuError::from_vk("vkCreateComputePipelines", e))?[0];
+
+        if !bindings.is_empty() {
+            let mut sizes = Vec::new();
+            for kind in [BufferKind::Storage, BufferKind::Uniform] {
+                let n = bindings.iter().filter(|&&k| k == kind).count() as u32;
+                if n > 0 {
+                    sizes.push(
+                        vk::DescriptorPoolSize::default()
+                            .ty(kind.descriptor_type())
+                            .descriptor_count(n),
+                    );
+                }
+            }
+            kernel.descriptor_pool = unsafe {
+                device.create_descriptor_pool(
+                    &vk::DescriptorPoolCreateInfo::default()
+                        .max_sets(1)
+                        .pool_sizes(&sizes),
+                    None,
+                )
+            }
+            .map_err(|e| GpuError::from_vk("vkCreateDescriptorPool", e))?;
+            kernel.set = unsafe {
+                device.allocate_descriptor_sets(
+                    &vk::DescriptorSetAllocateInfo::default()
+                        .descriptor_pool(kernel.descriptor_pool)
+                        .set_layouts(&set_layouts),
+                )
+            }
+            .map_err(|e| GpuError::from_vk("vkAllocateDescriptorSets", e))?[0];
+        }
+        Ok(kernel)
+    }
+
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// Point bindings `0..N` at `buffers` (one per binding, matching kinds).
+    /// Must not be called while a dispatch using this kernel is in flight;
+    /// [`Kernel::dispatch`] always waits, so that holds for its users.
+    pub fn bind(&mut self, buffers: &[&Buffer<'_>]) -> Result<(), GpuError> {
+        if buffers.len() != self.bindings.len() {
+            return Err(GpuError::Invalid(format!(
+                "kernel '{}' has {} bindings, got {} buffers",
+                self.name,
+                self.bindings.len(),
+                buffers.len()
+            )));
+        }
+        for (i, (b, k)) in buffers.iter().zip(&self.bindings).enumerate() {
+            if b.kind() != *k {
+                return Err(GpuError::Invalid(format!(
+                    "kernel '{}' binding {i} wants a {k:?} buffer, got {:?}",
+                    self.name,
+                    b.kind()
+                )));
+            }
+        }
+        let infos: Vec<[vk::DescriptorBufferInfo; 1]> = buffers
+            .iter()
+            .map(|b| {
+                [vk::DescriptorBufferInfo::default()
+                    .buffer(b.raw())
+                    .offset(0)
+                    .range(b.size())]
+            })
+            .collect();
+        let writes: Vec<_> = infos
+            .iter()
+            .zip(&self.bindings)
+            .enumerate()
+            .map(|(i, (info, k))| {
+                vk::WriteDescriptorSet::default()
+                    .dst_set(self.set)
+                    .dst_binding(i as u32)
+                    .descriptor_type(k.descriptor_type())
+                    .buffer_info(info)
+            })
+            .collect();
+        unsafe { self.ctx.device.update_descriptor_sets(&writes, &[]) };
+        self.bound = true;
+        Ok(())
+    }
+
+    fn check_dispatch(&self, push_constants: &[u8], groups: [u32; 3]) -> Result<(), GpuError> {
+        if push_constants.len() != self.push_constant_size as usize {
+            return Err(GpuError::Invalid(format!(
+                "kernel '{}' takes {} bytes of push constants, got {}",
+                self.name,
+                self.push_constant_size,
+                push_constants.len()
+            )));
+        }
+        if !self.bound && !self.bindings.is_empty() {
+            return Err(GpuError::Invalid(format!(
+                "kernel '{}' dispatched before its buffers were bound",
+                self.name
+            )));
+        }
+        let max = self.ctx.info().limits.max_compute_work_group_count;
+        if groups.iter().zip(max).any(|(&g, m)| g > m) {
+            return Err(GpuError::Invalid(format!(
+                "kernel '{}': {groups:?} workgroups exceed the device limit {max:?}",
+                self.name
+            )));
+        }
+        Ok(())
+    }
+
+    /// Record bind + push constants + dispatch into `cmd`, followed by a
+    /// barrier that makes the shader's writes visible to later dispatches,
+    /// transfers and the host.
+    pub fn record_dispatch(
+        &self,
+        cmd: vk::CommandBuffer,
+        push_constants: &[u8],
+        groups: [u32; 3],
+    ) -> Result<(), GpuError> {
+        self.check_dispatch(push_constants, groups)?;
+        let d = &self.ctx.device;
+        unsafe {
+            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            if !self.bindings.is_empty() {
+                d.cmd_bind_descriptor_sets(
+                    cmd,
+                    vk::PipelineBindPoint::COMPUTE,
+                    self.pipeline_layout,
+                    0,
+                    &[self.set],
+                    &[],
+                );
+            }
+            if !push_constants.is_empty() {
+                d.cmd_push_constants(
+                    cmd,
+                    self.pipeline_layout,
+                    vk::ShaderStageFlags::COMPUTE,
+                    0,
+                    push_constants,
+                );
+            }
+            d.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+            let barrier = [vk::MemoryBarrier::default()
+                .src_access_mask(vk::AccessFlags::SHADER_WRITE)
+                .dst_access_mask(
+                    vk::AccessFlags::SHADER_READ
+                        | vk::AccessFlags::SHADER_WRITE
+                        | vk::AccessFlags::TRANSFER_READ
+                        | vk::AccessFlags::HOST_READ,
+                )];
+            d.cmd_pipeline_barrier(
+                cmd,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+                vk::PipelineStageFlags::COMPUTE_SHADER
+                    | vk::PipelineStageFlags::TRANSFER
+                    | vk::PipelineStageFlags::HOST,
+                vk::DependencyFlags::empty(),
+                &barrier,
+                &[],
+                &[],
+            );
+        }
+        Ok(())
+    }
+
+    /// Dispatch over the bound buffers and wait for completion.
+    pub fn dispatch(&self, push_constants: &[u8], groups: [u32; 3]) -> Result<(), GpuError> {
+        self.check_dispatch(push_constants, groups)?;
+        let mut recorded = Ok(());
+        self.ctx.submit_and_wait(|cmd| {
+            recorded = self.record_dispatch(cmd, push_constants, groups);
+        })?;
+        recorded
+    }
+}
+
+impl Drop for Kernel<'_> {
+    fn drop(&mut self) {
+        let d = &self.ctx.device;
+        // Null handles are ignored by vkDestroy*, so a half-built kernel
+        // tears down cleanly too.
+        unsafe {
+            d.destroy_descriptor_pool(self.descriptor_pool, None);
+            d.destroy_pipeline(self.pipeline, None);
+            d.destroy_pipeline_layout(self.pipeline_layout, None);
+            d.destroy_descriptor_set_layout(self.set_layout, None);
+        }
+    }
+}
+
+impl Context {
+    /// Run kernel `name` once: `inputs` at bindings `0..I`, `outputs` at
+    /// `I..I+O` (all storage buffers), uploaded with their current contents;
+    /// waits, then reads each output back into its slice. Push constants
+    /// must be exactly the size the kernel declares (empty for none).
+    pub fn run_kernel(
+        &self,
+        name: &str,
+        inputs: &[&[u8]],
+        outputs: &mut [&mut [u8]],
+        push_constants: &[u8],
+        groups: [u32; 3],
+    ) -> Result<(), GpuError> {
+        let mut buffers = Vec::with_capacity(inputs.len() + outputs.len());
+        for (i, data) in inputs.iter().enumerate() {
+            buffers.push(Buffer::from_slice(
+                self,
+                &format!("{name} input {i}"),
+                BufferKind::Storage,
+                data,
+            )?);
+        }
+        for (i, data) in outputs.iter().enumerate() {
+            buffers.push(Buffer::from_slice(
+                self,
+                &format!("{name} output {i}"),
+                BufferKind::Storage,
+                data,
+            )?);
+        }
+        let mut kernel = Kernel::new(self, name, buffers.len(), push_constants.len() as u32)?;
+        let refs: Vec<&Buffer<'_>> = buffers.iter().collect();
+        kernel.bind(&refs)?;
+        kernel.dispatch(push_constants, groups)?;
+        for (out, buf) in outputs.iter_mut().zip(&buffers[inputs.len()..]) {
+            buf.read_into(out)?;
+        }
+        Ok(())
+    }
+}

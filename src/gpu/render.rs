@@ -1,0 +1,278 @@
+//! The path tracer's host side: upload the scene once, dispatch batches of
+//! samples, read the film back.
+//!
+//! The binding table is `shaders/bindings.glsl` (set 0): 0 uniform Params,
+//! 1 triangles, 2 bvh_nodes, 3 shading, 4 materials, 5 emitters, 6 lights,
+//! 7 accum (two `vec4` per pixel: sum, sum of squares; added to by every
+//! dispatch), 8 ray_counts (one `uint` per pixel, added to). Push constants:
+//! `uint sample_start; uint sample_count;`. One invocation per pixel, local
+//! size 8x8.
+//!
+//! Batching: one dispatch renders `sample_count` samples of every pixel. A
+//! dispatch that runs for seconds can trip a desktop driver's watchdog
+//! (TDR, about 2 s on Windows) and starves progress reports, so batches are
+//! sized from the measured time of the previous one to stay near
+//! [`TARGET_BATCH_SECONDS`].
+
+use std::time::Instant;
+
+use ash::vk;
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use glint_cpu::{Film, RenderStats};
+
+use super::GpuError;
+use super::buffer::{Buffer, BufferKind};
+use super::context::Context;
+use super::kernel::{Kernel, groups};
+
+/// Aim for dispatches of about this long: well under any watchdog, long
+/// enough that per-dispatch overhead (submit, wait) is negligible.
+pub const TARGET_BATCH_SECONDS: f64 = 0.25;
+/// The path tracing kernels' workgroup size (8x8 pixels).
+pub const LOCAL_SIZE: u32 = 8;
+
+/// `uint sample_start; uint sample_count;`
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct SamplePush {
+    pub sample_start: u32,
+    pub sample_count: u32,
+}
+
+/// The bytes of bindings 0..=6, ready to upload. Arrays may be empty (they
+/// get a minimal buffer; the kernel learns real counts from Params).
+#[derive(Clone, Copy, Debug)]
+pub struct SceneBytes<'d> {
+    pub params: &'d [u8],
+    pub triangles: &'d [u8],
+    pub bvh_nodes: &'d [u8],
+    pub shading: &'d [u8],
+    pub materials: &'d [u8],
+    pub emitters: &'d [u8],
+    pub lights: &'d [u8],
+}
+
+/// What a render produced, before the caller adds device names.
+#[derive(Clone, Debug)]
+pub struct FilmRender {
+    pub film: Film,
+    pub stats: RenderStats,
+    /// Pipeline creation, scene upload and the kernel's first (compiling)
+    /// dispatch, excluding context creation.
+    pub setup_seconds: f64,
+    /// Samples per dispatch, in order (for tests and tuning).
+    pub batches: Vec<u32>,
+    /// Whether `stats.render_seconds` came from GPU timestamps.
+    pub timestamped: bool,
+}
+
+/// Timestamp queries around each batch's dispatch.
+struct Timer<'a> {
+    ctx: &'a Context,
+    pool: vk::QueryPool,
+    /// Seconds per tick.
+    period: f64,
+    /// Mask of the valid timestamp bits.
+    mask: u64,
+}
+
+impl<'a> Timer<'a> {
+    fn new(ctx: &'a Context) -> Result<Option<Self>, GpuError> {
+        let info = ctx.info();
+        if !info.timestamps() || info.timestamp_period <= 0.0 {
+            return Ok(None);
+        }
+        let pool = unsafe {
+            ctx.device.create_query_pool(
+                &vk::QueryPoolCreateInfo::default()
+                    .query_type(vk::QueryType::TIMESTAMP)
+                    .query_count(2),
+                None,
+            )
+        }
+        .map_err(|e| GpuError::from_vk("vkCreateQueryPool", e))?;
+        let bits = info.timestamp_valid_bits;
+        Ok(Some(Timer {
+            ctx,
+            pool,
+            period: info.timestamp_period as f64 * 1e-9,
+            mask: if bits >= 64 {
+                u64::MAX
+            } else {
+                (1u64 << bits) - 1
+            },
+        }))
+    }
+
+    fn seconds(&self) -> Result<f64, GpuError> {
+        let mut ticks = [0u64; 2];
+        unsafe {
+            self.ctx.device.get_query_pool_results(
+                self.pool,
+                0,
+                &mut ticks,
+                vk::QueryResultFlags::TYPE_64 | vk::QueryResultFlags::WAIT,
+            )
+        }
+        .map_err(|e| GpuError::from_vk("vkGetQueryPoolResults", e))?;
+        // Counters wrap at their valid bits.
+        let dt = ticks[1].wrapping_sub(ticks[0]) & self.mask;
+        Ok(dt as f64 * self.period)
+    }
+}
+
+impl Drop for Timer<'_> {
+    fn drop(&mut self) {
+        unsafe { self.ctx.device.destroy_query_pool(self.pool, None) };
+    }
+}
+
+/// Next batch size from the last one: scale to the target time, grow at
+/// most 4x per step (the first batch's time includes one-off costs), and
+/// never pass the samples left.
+pub fn next_batch(last_count: u32, last_seconds: f64, remaining: u32) -> u32 {
+    let per_sample = last_seconds / last_count.max(1) as f64;
+    let ideal = if per_sample > 0.0 {
+        (TARGET_BATCH_SECONDS / per_sample).floor()
+    } else {
+        f64::INFINITY
+    };
+    let grown = (last_count as f64 * 4.0).min(ideal).max(1.0);
+    (grown.min(remaining as f64) as u32).max(1).min(remaining)
+}
+
+/// Render `spp` samples of a `width` x `height` image with kernel
+/// `kernel_name`, which follows the binding table above.
+pub fn render_film(
+    ctx: &Context,
+    kernel_name: &str,
+    scene: &SceneBytes<'_>,
+    width: u32,
+    height: u32,
+    spp: u32,
+    progress: &dyn Fn(u32, u32),
+) -> Result<FilmRender, GpuError> {
+    if width == 0 || height == 0 {
+        return Err(GpuError::Invalid(format!(
+            "image size {width}x{height}: both must be at least 1"
+        )));
+    }
+    let setup_start = Instant::now();
+    let pixels = width as u64 * height as u64;
+    let storage =
+        |name: &str, bytes: &[u8]| Buffer::from_slice(ctx, name, BufferKind::Storage, bytes);
+    let params = Buffer::from_slice(ctx, "params", BufferKind::Uniform, scene.params)?;
+    let triangles = storage("triangles", scene.triangles)?;
+    let nodes = storage("bvh nodes", scene.bvh_nodes)?;
+    let shading = storage("shading", scene.shading)?;
+    let materials = storage("materials", scene.materials)?;
+    let emitters = storage("emitters", scene.emitters)?;
+    let lights = storage("lights", scene.lights)?;
+    let accum = Buffer::new(
+        ctx,
+        &format!("accumulation film ({width}x{height} pixels, 32 bytes each)"),
+        BufferKind::Storage,
+        pixels * 32,
+    )?;
+    let rays = Buffer::new(
+        ctx,
+        &format!("ray counts ({width}x{height} pixels)"),
+        BufferKind::Storage,
+        pixels * 4,
+    )?;
+
+    let mut bindings = vec![BufferKind::Uniform];
+    bindings.extend([BufferKind::Storage; 8]);
+    let mut kernel = Kernel::with_bindings(ctx, kernel_name, &bindings, 8)?;
+    kernel.bind(&[
+        &params, &triangles, &nodes, &shading, &materials, &emitters, &lights, &accum, &rays,
+    ])?;
+    let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
+
+    // Drivers compile the pipeline at its first dispatch (lavapipe: LLVM,
+    // 0.1-0.5 s cold): do that in setup with an empty batch on one group,
+    // so it neither counts as render time nor skews the first batch size.
+    kernel.dispatch(bytemuck::bytes_of(&SamplePush::default()), [1, 1, 1])?;
+    // Zero the film after the warm-up, whatever the kernel wrote.
+    accum.fill_zero()?;
+    rays.fill_zero()?;
+    let timer = Timer::new(ctx)?;
+    let setup_seconds = setup_start.elapsed().as_secs_f64();
+
+    let mut done = 0u32;
+    let mut batch = 1u32;
+    let mut batches = Vec::new();
+    let mut render_seconds = 0.0;
+    let wall = Instant::now();
+    while done < spp {
+        let count = batch.min(spp - done);
+        let push = SamplePush {
+            sample_start: done,
+            sample_count: count,
+        };
+        let t = Instant::now();
+        let mut recorded = Ok(());
+        ctx.submit_and_wait(|cmd| unsafe {
+            if let Some(timer) = &timer {
+                ctx.device.cmd_reset_query_pool(cmd, timer.pool, 0, 2);
+                ctx.device.cmd_write_timestamp(
+                    cmd,
+                    vk::PipelineStageFlags::TOP_OF_PIPE,
+                    timer.pool,
+                    0,
+                );
+            }
+            recorded = kernel.record_dispatch(cmd, bytemuck::bytes_of(&push), grid);
+            if let Some(timer) = &timer {
+                ctx.device.cmd_write_timestamp(
+                    cmd,
+                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                    timer.pool,
+                    1,
+                );
+            }
+        })?;
+        recorded?;
+        let wall_batch = t.elapsed().as_secs_f64();
+        let seconds = match &timer {
+            Some(timer) => timer.seconds()?,
+            None => wall_batch,
+        };
+        render_seconds += seconds;
+        done += count;
+        batches.push(count);
+        progress(done, spp);
+        // Size from wall time: it is what a watchdog and a progress bar see.
+        batch = next_batch(count, wall_batch, spp.saturating_sub(done).max(1));
+    }
+    if timer.is_none() {
+        render_seconds = wall.elapsed().as_secs_f64();
+    }
+
+    let sums: Vec<[f32; 4]> = accum.read()?;
+    let counts: Vec<u32> = rays.read()?;
+    let n = pixels as usize;
+    let film = Film {
+        width,
+        height,
+        spp,
+        sum: (0..n)
+            .map(|i| Vec3::from_slice(&sums[2 * i][..3]))
+            .collect(),
+        sum_sq: (0..n)
+            .map(|i| Vec3::from_slice(&sums[2 * i + 1][..3]))
+            .collect(),
+    };
+    let stats = RenderStats {
+        rays: counts.iter().map(|&c| c as u64).sum(),
+        render_seconds,
+    };
+    Ok(FilmRender {
+        film,
+        stats,
+        setup_seconds,
+        batches,
+        timestamped: timer.is_some(),
+    })
+}

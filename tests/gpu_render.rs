@@ -1,0 +1,114 @@
+//! The renderer's host side with a stand-in kernel that follows the path
+//! tracer's binding table (shaders/tests/render_plumbing.comp), so the film
+//! is known exactly: bindings, uploads, batching, accumulation, readback.
+
+mod common;
+
+use glint::gpu::render::{SceneBytes, next_batch, render_film};
+
+fn f32s(v: &[f32]) -> &[u8] {
+    bytemuck::cast_slice(v)
+}
+
+#[test]
+fn film_accumulates_every_sample_once_across_batches() {
+    let ctx = common::context();
+    // Not multiples of the 8x8 workgroup: exercises the bounds check.
+    let (w, h, spp) = (13u32, 7u32, 37u32);
+    let mut params = vec![0u32; 36];
+    params[20] = w;
+    params[21] = h;
+    params[22] = spp;
+    let tri = [0.5f32, 0.0, 0.0, 0.0];
+    let node = [0.0f32, 0.25, 0.0, 0.0];
+    let shading = [0.0f32, 0.0, 0.125, 0.0];
+    let material = [0.0f32, 0.0, 0.0, 1.0];
+    let emitter = [2.0f32, 0.0, 0.0, 0.0];
+    let light = [0.0f32, 3.0, 0.0, 0.0];
+    let scene = SceneBytes {
+        params: bytemuck::cast_slice(&params),
+        triangles: f32s(&tri),
+        bvh_nodes: f32s(&node),
+        shading: f32s(&shading),
+        materials: f32s(&material),
+        emitters: f32s(&emitter),
+        lights: f32s(&light),
+    };
+    let calls = std::cell::RefCell::new(Vec::new());
+    let r = render_film(&ctx, "tests/render_plumbing", &scene, w, h, spp, &|d, t| {
+        calls.borrow_mut().push((d, t))
+    })
+    .unwrap();
+    assert_eq!(r.batches.iter().sum::<u32>(), spp);
+    let calls = calls.into_inner();
+    assert_eq!(calls.len(), r.batches.len());
+    assert_eq!(calls.last(), Some(&(spp, spp)));
+    assert!(calls.windows(2).all(|p| p[0].0 < p[1].0));
+
+    assert_eq!((r.film.width, r.film.height, r.film.spp), (w, h, spp));
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let base = [x as f64 + 0.75, y as f64 + 1.125, 5.0];
+            let mut sum = [0.0f64; 3];
+            let mut sq = [0.0f64; 3];
+            for s in 0..spp {
+                for c in 0..3 {
+                    let v = base[c] + if c == 2 { s as f64 } else { 0.0 };
+                    sum[c] += v;
+                    sq[c] += v * v;
+                }
+            }
+            let got = r.film.sum[i].to_array();
+            let got_sq = r.film.sum_sq[i].to_array();
+            for c in 0..3 {
+                assert!(
+                    (got[c] as f64 - sum[c]).abs() <= 1e-5 * sum[c].abs().max(1.0),
+                    "pixel {x},{y} sum {got:?} vs {sum:?}"
+                );
+                assert!(
+                    (got_sq[c] as f64 - sq[c]).abs() <= 1e-5 * sq[c].abs().max(1.0),
+                    "pixel {x},{y} sum_sq {got_sq:?} vs {sq:?}"
+                );
+            }
+        }
+    }
+    assert_eq!(r.stats.rays, 3 * spp as u64 * (w * h) as u64);
+    assert!(r.stats.render_seconds > 0.0 && r.stats.render_seconds.is_finite());
+}
+
+#[test]
+fn empty_scene_arrays_and_tiny_images_render() {
+    let ctx = common::context();
+    let mut params = vec![0u32; 36];
+    params[20] = 1;
+    params[21] = 1;
+    let scene = SceneBytes {
+        params: bytemuck::cast_slice(&params),
+        triangles: &[],
+        bvh_nodes: &[],
+        shading: &[],
+        materials: &[],
+        emitters: &[],
+        lights: &[],
+    };
+    let r = render_film(&ctx, "tests/render_plumbing", &scene, 1, 1, 1, &|_, _| {}).unwrap();
+    assert_eq!(r.film.sum.len(), 1);
+    // Empty arrays read as zeros: the pixel saw only its coordinates (0, 0).
+    assert_eq!(r.film.sum[0].to_array(), [0.0, 0.0, 0.0]);
+    assert_eq!(r.stats.rays, 3);
+    assert!(render_film(&ctx, "tests/render_plumbing", &scene, 0, 4, 1, &|_, _| {}).is_err());
+}
+
+#[test]
+fn batch_sizes_follow_measured_time() {
+    // 1 sample took 10 ms: grow at most 4x.
+    assert_eq!(next_batch(1, 0.01, 1000), 4);
+    // 4 samples took 0.1 s: 0.025 s each, 10 fit in 0.25 s.
+    assert_eq!(next_batch(4, 0.1, 1000), 10);
+    // Slow samples: never below one.
+    assert_eq!(next_batch(1, 5.0, 1000), 1);
+    // Never past what remains.
+    assert_eq!(next_batch(64, 0.001, 3), 3);
+    assert_eq!(next_batch(8, 0.0, 100), 32);
+}
