@@ -2,9 +2,9 @@
 //! the film's own variance (`compare::compare_to_reference`), not a
 //! hand-tuned epsilon.
 
-mod common;
+mod render_common;
 
-use common::*;
+use render_common::*;
 use glam::{Vec2, Vec3};
 use glint_cpu::bsdf::{Bsdf, Roughness};
 use glint_cpu::camera::PinholeCamera;

@@ -3,9 +3,9 @@
 //! comparison itself (it passes on independent renders and catches a 3%
 //! bias).
 
-mod common;
+mod render_common;
 
-use common::*;
+use render_common::*;
 use glint_cpu::compare::compare_films;
 
 const SIZE: u32 = 32;
