@@ -1,0 +1,174 @@
+//! Dielectric interfaces: smooth (delta reflection + refraction) or GGX
+//! rough (Walter et al. 2007), following pbrt-v4's `DielectricBxDF`. The
+//! outside is +z; `eta` = n_inside / n_outside. Transmission carries the
+//! radiance scaling 1 / eta_rel^2 (eta_rel = eta_t / eta_i as the path
+//! tracer crosses from wo's side to wi's side): Veach 1997, sec. 5.2.
+
+use glam::{Vec2, Vec3};
+
+use super::conductor::rough_alphas;
+use super::fresnel::{fresnel_dielectric, refract};
+use super::microfacet::{ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect};
+use super::{BsdfSample, Roughness, Shadowing};
+
+/// Whether the interface is rendered as the smooth (delta) model: a small
+/// alpha, or eta = 1 where the rough transmission lobe collapses to the
+/// straight-through direction (pbrt-v4 does the same).
+pub fn dielectric_is_smooth(eta: f32, r: &Roughness) -> bool {
+    r.is_smooth() || eta == 1.0
+}
+
+/// The generalised half vector of Walter 2007 eq. 16, face-forwarded to
+/// +z, with eta_rel (1 for reflection); None when degenerate or when a
+/// direction sees the back of the microfacet (Walter's condition
+/// chi+(v . m / v . n)).
+fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool, f32)> {
+    let co = wo.z;
+    let ci = wi.z;
+    if co == 0.0 || ci == 0.0 {
+        return None;
+    }
+    let reflect = co * ci > 0.0;
+    let etap = if reflect {
+        1.0
+    } else if co > 0.0 {
+        eta
+    } else {
+        1.0 / eta
+    };
+    let h = wi * etap + wo;
+    let len2 = h.length_squared();
+    if !(len2 > 1e-12) {
+        return None;
+    }
+    let mut wm = h / len2.sqrt();
+    if wm.z < 0.0 {
+        wm = -wm;
+    }
+    if wm.dot(wi) * ci <= 0.0 || wm.dot(wo) * co <= 0.0 {
+        return None;
+    }
+    Some((wm, etap, reflect, len2))
+}
+
+pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
+    if dielectric_is_smooth(eta, r) {
+        return Vec3::ZERO;
+    }
+    let Some((wm, etap, reflect, _)) = half_vector(eta, wo, wi) else {
+        return Vec3::ZERO;
+    };
+    let (ax, ay) = rough_alphas(r);
+    let separable = r.shadowing == Shadowing::Separable;
+    let d = ggx_d(wm, ax, ay);
+    let v = ggx_visibility(wo, wi, ax, ay, separable);
+    let f = fresnel_dielectric(wo.dot(wm), eta);
+    if reflect {
+        // Walter 2007 eq. 20 with V = G / (4 |co| |ci|).
+        return Vec3::splat(d * f * v);
+    }
+    // Walter 2007 eq. 21 (G / (|ci| |co|) = 4 V), in pbrt-v4's form with
+    // the denominator (wi.wm + wo.wm / etap)^2, then the radiance scaling.
+    let dot_i = wi.dot(wm);
+    let dot_o = wo.dot(wm);
+    let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+    if !(denom > 0.0) {
+        return Vec3::ZERO;
+    }
+    let ft = d * (1.0 - f) * 4.0 * v * (dot_i * dot_o).abs() / denom;
+    Vec3::splat(ft / (etap * etap))
+}
+
+pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
+    if dielectric_is_smooth(eta, r) {
+        return 0.0;
+    }
+    let Some((wm, etap, reflect, _)) = half_vector(eta, wo, wi) else {
+        return 0.0;
+    };
+    let (ax, ay) = rough_alphas(r);
+    let dot_o = wo.dot(wm);
+    let dot_i = wi.dot(wm);
+    let pr = fresnel_dielectric(dot_o, eta);
+    let pt = 1.0 - pr;
+    let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
+    if reflect {
+        // Walter 2007 eq. 14.
+        pdf_wm / (4.0 * dot_o.abs()) * pr
+    } else {
+        // Walter 2007 eq. 17: dwm/dwi = |wi.wm| / (wi.wm + wo.wm / etap)^2.
+        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        if !(denom > 0.0) {
+            return 0.0;
+        }
+        pdf_wm * (dot_i.abs() / denom) * pt
+    }
+}
+
+pub fn dielectric_sample(
+    eta: f32,
+    r: &Roughness,
+    wo: Vec3,
+    uc: f32,
+    u: Vec2,
+) -> Option<BsdfSample> {
+    if wo.z == 0.0 {
+        return None;
+    }
+    if dielectric_is_smooth(eta, r) {
+        // Choose reflection with probability F: the weights F / pr = 1 and
+        // (1 - F) / pt / etap^2 = 1 / etap^2.
+        let pr = fresnel_dielectric(wo.z, eta);
+        if uc < pr {
+            return Some(BsdfSample {
+                wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                weight: Vec3::ONE,
+                pdf: pr,
+                delta: true,
+                eta: 1.0,
+            });
+        }
+        let (wi, etap) = refract(wo, Vec3::Z, eta)?;
+        if wi.z == 0.0 {
+            return None;
+        }
+        return Some(BsdfSample {
+            wi,
+            weight: Vec3::splat(1.0 / (etap * etap)),
+            pdf: 1.0 - pr,
+            delta: true,
+            eta: etap,
+        });
+    }
+    let (ax, ay) = rough_alphas(r);
+    let wm = ggx_sample_visible(wo, ax, ay, u);
+    // Choose R or T by the Fresnel term of the sampled microfacet.
+    let pr = fresnel_dielectric(wo.dot(wm), eta);
+    let (wi, eta_rel) = if uc < pr {
+        let wi = reflect(wo, wm);
+        if wi.z * wo.z <= 0.0 {
+            return None;
+        }
+        (wi, 1.0)
+    } else {
+        let (wi, etap) = refract(wo, wm, eta)?;
+        if wi.z * wo.z >= 0.0 {
+            return None;
+        }
+        (wi, etap)
+    };
+    // Weight from eval and pdf at the sampled direction (consistency with
+    // what the integrator's MIS sees).
+    let pdf = dielectric_pdf(eta, r, wo, wi);
+    if !(pdf > 0.0) || !pdf.is_finite() {
+        return None;
+    }
+    let f = dielectric_eval(eta, r, wo, wi);
+    Some(BsdfSample {
+        wi,
+        weight: f * (wi.z.abs() / pdf),
+        pdf,
+        delta: false,
+        eta: eta_rel,
+    })
+}

@@ -1,0 +1,371 @@
+//! Binned SAH construction (Wald 2007, "On fast construction of SAH-based
+//! bounding volume hierarchies"), flattened into tinybvh's node layout.
+
+use glam::Vec3;
+
+use super::{BvhNode, MAX_DEPTH, MAX_LEAF_SIZE};
+use crate::scene::Triangle;
+
+/// Bins per axis over the centroid bounds. Wald reports 8-16 bins lose next to
+/// nothing against a full sweep; 16 costs little at our sizes.
+const BINS: usize = 16;
+/// SAH constants as tinybvh uses them: one traversal step costs as much as one
+/// triangle test.
+const C_TRAV: f32 = 1.0;
+const C_ISECT: f32 = 1.0;
+
+#[derive(Clone, Copy, Debug)]
+struct Aabb {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Aabb {
+    const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    fn grow(&mut self, b: &Aabb) {
+        self.min = self.min.min(b.min);
+        self.max = self.max.max(b.max);
+    }
+
+    fn grow_point(&mut self, p: Vec3) {
+        self.min = self.min.min(p);
+        self.max = self.max.max(p);
+    }
+
+    /// Half the surface area: the SAH only needs ratios. 0 for an empty box.
+    fn half_area(&self) -> f32 {
+        let e = self.max - self.min;
+        if e.x < 0.0 || e.y < 0.0 || e.z < 0.0 {
+            return 0.0;
+        }
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+}
+
+/// Per-triangle data the builder reads: bounds and centroid (of the bounds,
+/// as Wald bins them).
+struct Prim {
+    bounds: Aabb,
+    centroid: Vec3,
+}
+
+/// A node waiting to be split: triangles `order[first..first + count]`.
+struct Task {
+    node: usize,
+    first: usize,
+    count: usize,
+    depth: usize,
+}
+
+pub(super) fn build(tris: &[Triangle]) -> (Vec<BvhNode>, Vec<u32>) {
+    build_capped(tris, MAX_DEPTH)
+}
+
+/// Every leaf ends at depth <= max(max_depth, ceil(log2 n)).
+fn build_capped(tris: &[Triangle], max_depth: usize) -> (Vec<BvhNode>, Vec<u32>) {
+    if tris.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let prims: Vec<Prim> = tris
+        .iter()
+        .map(|t| {
+            let mut bounds = Aabb::EMPTY;
+            for p in t.vertices() {
+                bounds.grow_point(p);
+            }
+            // The loader rejects non-finite positions; should one get here,
+            // it is binned as a point at the origin so it cannot poison the
+            // bounds of its neighbours (the triangle test never hits it).
+            if !(bounds.min.is_finite() && bounds.max.is_finite()) {
+                bounds = Aabb {
+                    min: Vec3::ZERO,
+                    max: Vec3::ZERO,
+                };
+            }
+            Prim {
+                centroid: 0.5 * (bounds.min + bounds.max),
+                bounds,
+            }
+        })
+        .collect();
+    let mut order: Vec<u32> = (0..tris.len() as u32).collect();
+    // A binary tree with at least one triangle per leaf has at most 2n - 1 nodes.
+    let mut nodes = Vec::with_capacity(2 * tris.len() - 1);
+    nodes.push(BvhNode::default());
+
+    // Depth-first, left child first: a subtree's nodes stay close in memory.
+    let mut tasks = vec![Task {
+        node: 0,
+        first: 0,
+        count: tris.len(),
+        depth: 0,
+    }];
+    while let Some(task) = tasks.pop() {
+        let range = task.first..task.first + task.count;
+        let mut bounds = Aabb::EMPTY;
+        let mut centroids = Aabb::EMPTY;
+        for &i in &order[range.clone()] {
+            let p = &prims[i as usize];
+            bounds.grow(&p.bounds);
+            centroids.grow_point(p.centroid);
+        }
+        let node = &mut nodes[task.node];
+        node.aabb_min = bounds.min.into();
+        node.aabb_max = bounds.max.into();
+
+        let split = choose_split(
+            &prims,
+            &order[range.clone()],
+            &bounds,
+            &centroids,
+            task.depth,
+            max_depth,
+        );
+        let left_count = match split {
+            None => {
+                node.left_or_first = task.first as u32;
+                node.tri_count = task.count as u32;
+                continue;
+            }
+            Some(Split::Sah { axis, plane }) => {
+                partition(&prims, &mut order[range], axis, plane, &centroids)
+            }
+            Some(Split::Median { axis }) => {
+                median(&prims, &mut order[range], axis);
+                task.count / 2
+            }
+        };
+        debug_assert!(left_count > 0 && left_count < task.count);
+        let left = nodes.len();
+        nodes[task.node].left_or_first = left as u32;
+        nodes[task.node].tri_count = 0;
+        nodes.push(BvhNode::default());
+        nodes.push(BvhNode::default());
+        tasks.push(Task {
+            node: left + 1,
+            first: task.first + left_count,
+            count: task.count - left_count,
+            depth: task.depth + 1,
+        });
+        tasks.push(Task {
+            node: left,
+            first: task.first,
+            count: left_count,
+            depth: task.depth + 1,
+        });
+    }
+    (nodes, order)
+}
+
+enum Split {
+    /// Left: triangles whose centroid falls in bins `0..=plane` along `axis`.
+    Sah { axis: usize, plane: usize },
+    /// Left: the `count / 2` triangles with the smallest centroids along `axis`.
+    Median { axis: usize },
+}
+
+fn ceil_log2(n: usize) -> usize {
+    (usize::BITS - (n.max(1) - 1).leading_zeros()) as usize
+}
+
+/// `None` makes a leaf.
+fn choose_split(
+    prims: &[Prim],
+    idx: &[u32],
+    bounds: &Aabb,
+    centroids: &Aabb,
+    depth: usize,
+    max_depth: usize,
+) -> Option<Split> {
+    let count = idx.len();
+    if count <= 1 {
+        return None;
+    }
+    let extent = centroids.max - centroids.min;
+    let widest = if extent.x >= extent.y && extent.x >= extent.z {
+        0
+    } else if extent.y >= extent.z {
+        1
+    } else {
+        2
+    };
+    // Depth guard: a median split halves the count, so from here every leaf
+    // ends at depth <= depth + ceil(log2 count). SAH splits are allowed only
+    // while that sum stays below MAX_DEPTH; each SAH split raises the depth by
+    // one and never raises ceil(log2 count), so the sum never exceeds
+    // max_depth anywhere in the tree.
+    if depth + ceil_log2(count) >= max_depth {
+        return (count > MAX_LEAF_SIZE).then_some(Split::Median { axis: widest });
+    }
+
+    let mut best: Option<(f32, usize, usize)> = None;
+    for axis in 0..3 {
+        let lo = centroids.min[axis];
+        let ext = extent[axis];
+        // Skips flat (and non-finite) centroid extents: nothing to bin.
+        if !(ext > 0.0 && ext.is_finite()) {
+            continue;
+        }
+        let scale = BINS as f32 / ext;
+        let mut bin_bounds = [Aabb::EMPTY; BINS];
+        let mut bin_count = [0usize; BINS];
+        for &i in idx {
+            let p = &prims[i as usize];
+            let b = bin_of(p.centroid[axis], lo, scale);
+            bin_bounds[b].grow(&p.bounds);
+            bin_count[b] += 1;
+        }
+        // Sweep from the right: cost of the right side of plane i (bins > i).
+        let mut right_cost = [0.0f32; BINS];
+        let mut acc = Aabb::EMPTY;
+        let mut n = 0;
+        for plane in (0..BINS - 1).rev() {
+            acc.grow(&bin_bounds[plane + 1]);
+            n += bin_count[plane + 1];
+            right_cost[plane] = if n > 0 {
+                acc.half_area() * n as f32
+            } else {
+                f32::NAN
+            };
+        }
+        let mut acc = Aabb::EMPTY;
+        let mut n = 0;
+        for plane in 0..BINS - 1 {
+            acc.grow(&bin_bounds[plane]);
+            n += bin_count[plane];
+            if n == 0 || n == count {
+                continue;
+            }
+            let cost = acc.half_area() * n as f32 + right_cost[plane];
+            if best.is_none_or(|(c, _, _)| cost < c) {
+                best = Some((cost, axis, plane));
+            }
+        }
+    }
+
+    match best {
+        Some((cost, axis, plane)) => {
+            // SAH (Wald 2007, eq. 1): C = C_trav + C_isect (A_L N_L + A_R N_R) / A.
+            let parent = bounds.half_area();
+            let split_cost = if parent > 0.0 {
+                C_TRAV + C_ISECT * cost / parent
+            } else {
+                f32::INFINITY
+            };
+            let leaf_cost = C_ISECT * count as f32;
+            if split_cost < leaf_cost || count > MAX_LEAF_SIZE {
+                Some(Split::Sah { axis, plane })
+            } else {
+                None
+            }
+        }
+        // All centroids coincide (or are not finite): SAH cannot separate
+        // them, so only the leaf-size cap forces a split, by count.
+        None => (count > MAX_LEAF_SIZE).then_some(Split::Median { axis: widest }),
+    }
+}
+
+/// The bin of a centroid coordinate. Float-to-int casts saturate (NaN -> 0),
+/// so this is in range whatever the input.
+fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
+    (((c - lo) * scale) as usize).min(BINS - 1)
+}
+
+/// Moves the triangles left of the plane to the front; returns how many.
+fn partition(
+    prims: &[Prim],
+    idx: &mut [u32],
+    axis: usize,
+    plane: usize,
+    centroids: &Aabb,
+) -> usize {
+    let lo = centroids.min[axis];
+    let scale = BINS as f32 / (centroids.max[axis] - lo);
+    let is_left = |i: u32| bin_of(prims[i as usize].centroid[axis], lo, scale) <= plane;
+    let mut l = 0;
+    let mut r = idx.len();
+    while l < r {
+        if is_left(idx[l]) {
+            l += 1;
+        } else {
+            r -= 1;
+            idx.swap(l, r);
+        }
+    }
+    l
+}
+
+/// Puts the `len / 2` smallest centroids along `axis` first. Ties are broken
+/// by triangle index, so even all-equal centroids split in a defined way.
+fn median(prims: &[Prim], idx: &mut [u32], axis: usize) {
+    let mid = idx.len() / 2;
+    idx.select_nth_unstable_by(mid, |&a, &b| {
+        let ca = prims[a as usize].centroid[axis];
+        let cb = prims[b as usize].centroid[axis];
+        ca.total_cmp(&cb).then(a.cmp(&b))
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ceil_log2_values() {
+        assert_eq!([1, 2, 3, 4, 5, 8, 9].map(ceil_log2), [0, 1, 2, 2, 3, 3, 4]);
+    }
+
+    fn depth(nodes: &[BvhNode], i: usize) -> usize {
+        let n = &nodes[i];
+        if n.tri_count > 0 {
+            0
+        } else {
+            let l = n.left_or_first as usize;
+            1 + depth(nodes, l).max(depth(nodes, l + 1))
+        }
+    }
+
+    /// A chain SAH builds 19 deep: a cap of 12 must hold it to 12, and
+    /// still put every triangle in a leaf of at most MAX_LEAF_SIZE.
+    #[test]
+    fn depth_guard_caps_depth() {
+        let tris: Vec<Triangle> = (0..400)
+            .map(|i| {
+                let x = 1.1f32.powi(i);
+                Triangle {
+                    p0: [x, 0.0, 0.0],
+                    p1: [x, 1.0, 0.0],
+                    p2: [x, 0.0, 1.0],
+                    ..Default::default()
+                }
+            })
+            .collect();
+        let (free, _) = build_capped(&tris, MAX_DEPTH);
+        assert!(
+            depth(&free, 0) > 12,
+            "the chain is not deep enough to test the guard"
+        );
+        let (capped, order) = build_capped(&tris, 12);
+        assert!(depth(&capped, 0) <= 12);
+        let mut seen = vec![0; tris.len()];
+        for n in capped.iter().filter(|n| n.tri_count > 0) {
+            assert!(n.tri_count as usize <= MAX_LEAF_SIZE);
+            for k in n.left_or_first..n.left_or_first + n.tri_count {
+                seen[order[k as usize] as usize] += 1;
+            }
+        }
+        assert!(seen.iter().all(|&s| s == 1));
+    }
+
+    #[test]
+    fn bin_of_stays_in_range() {
+        assert_eq!(bin_of(f32::NAN, 0.0, 1.0), 0);
+        assert_eq!(bin_of(-5.0, 0.0, 1.0), 0);
+        assert_eq!(bin_of(1.0, 0.0, BINS as f32), BINS - 1);
+        assert_eq!(bin_of(f32::INFINITY, 0.0, 1.0), BINS - 1);
+    }
+}

@@ -1,0 +1,268 @@
+//! Ray queries: robust slab test, watertight triangle test, stack traversal.
+//! `shaders/bvh.glsl` mirrors every function here under the same name.
+
+use glam::Vec3;
+
+use super::{BvhNode, Hit, Ray, STACK_SIZE};
+use crate::scene::Triangle;
+
+/// Ize 2013 ("Robust BVH ray traversal", JCGT 2(2)), as pbrt-v3 applies it:
+/// scaling the far slab distance by 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps)
+/// with eps = 2^-24, makes the rounded slab test conservative, so a box is
+/// never missed when a triangle inside it is hit.
+pub const SLAB_PAD: f32 = {
+    let eps = f32::EPSILON * 0.5;
+    1.0 + 2.0 * (3.0 * eps / (1.0 - 3.0 * eps))
+};
+
+/// Per-ray constants of the slab and watertight triangle tests.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PreparedRay {
+    pub o: Vec3,
+    pub d: Vec3,
+    /// 1 / d, with zero (and tiny) components replaced by +-1e30: finite, so
+    /// the slab test never forms 0 * inf = NaN (tinybvh's `safercp`).
+    pub inv_d: Vec3,
+    /// Woop et al. 2013, fig. 1: kz is the dominant axis of d; kx, ky follow
+    /// it cyclically, swapped when d[kz] < 0 to keep the winding.
+    pub kx: usize,
+    pub ky: usize,
+    pub kz: usize,
+    /// Shear constants (Sx, Sy, Sz) = (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz]).
+    pub shear: Vec3,
+}
+
+fn safe_rcp(x: f32) -> f32 {
+    if x.abs() >= 1e-30 {
+        1.0 / x
+    } else {
+        1e30f32.copysign(x)
+    }
+}
+
+impl PreparedRay {
+    /// `prepare_ray` in GLSL.
+    pub fn new(o: Vec3, d: Vec3) -> PreparedRay {
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        PreparedRay {
+            o,
+            d,
+            inv_d: Vec3::new(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z)),
+            kx,
+            ky,
+            kz,
+            shear: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+        }
+    }
+}
+
+/// Entry distance of the ray into the box, clamped to >= 0, or +inf when the
+/// ray misses it within [0, tmax].
+pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32 {
+    let t1 = (bmin - r.o) * r.inv_d;
+    let t2 = (bmax - r.o) * r.inv_d;
+    let tnear = t1.min(t2).max_element().max(0.0);
+    // The pad also widens tmax (the best hit so far): a triangle's computed
+    // t and its box's computed entry distance round independently, and a box
+    // entered a few ulps "after" the current best may still hold a hit a few
+    // ulps before it (rays through shared vertices). Too wide only costs a
+    // triangle test; too narrow would lose the closest hit.
+    let tfar = t1.max(t2).min_element().min(tmax) * SLAB_PAD;
+    if tnear <= tfar { tnear } else { f32::INFINITY }
+}
+
+/// Watertight ray/triangle intersection (Woop, Benthin, Wald 2013, JCGT 2(1),
+/// section 3 and appendix A). Returns (t, u, v) for a hit with 0 < t < tmax,
+/// p = (1 - u - v) p0 + u p1 + v p2; both faces hit.
+///
+/// Why it is watertight: the vertices are translated to the ray origin and
+/// sheared so the ray is the +z axis; each vertex's 2D coordinates depend on
+/// the vertex alone, and an edge's 2D edge function is computed from its two
+/// vertices only, so the two triangles sharing an edge get exactly negated
+/// values (IEEE products commute and a - b = -(b - a)). Zero counts as inside
+/// for both, so a ray through an edge hits at least one of its triangles. The
+/// paper's double-precision recomputation when an edge function is exactly 0
+/// only decides which of the two is hit, and is left out so the GPU (no fp64
+/// required) computes the same thing.
+pub fn intersect_triangle(r: &PreparedRay, tri: &Triangle, tmax: f32) -> Option<(f32, f32, f32)> {
+    let a = Vec3::from(tri.p0) - r.o;
+    let b = Vec3::from(tri.p1) - r.o;
+    let c = Vec3::from(tri.p2) - r.o;
+    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+    let (sx, sy, sz) = (r.shear.x, r.shear.y, r.shear.z);
+    let ax = a[kx] - sx * a[kz];
+    let ay = a[ky] - sy * a[kz];
+    let bx = b[kx] - sx * b[kz];
+    let by = b[ky] - sy * b[kz];
+    let cx = c[kx] - sx * c[kz];
+    let cy = c[ky] - sy * c[kz];
+    // Scaled barycentrics: the 2D edge functions opposite A, B and C.
+    let u = cx * by - cy * bx;
+    let v = ax * cy - ay * cx;
+    let w = bx * ay - by * ax;
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
+    if det == 0.0 {
+        return None;
+    }
+    let az = sz * a[kz];
+    let bz = sz * b[kz];
+    let cz = sz * c[kz];
+    let t = (u * az + v * bz + w * cz) / det;
+    // Written so that NaN (from non-finite input) is rejected too.
+    if t > 0.0 && t < tmax {
+        Some((t, v / det, w / det))
+    } else {
+        None
+    }
+}
+
+fn node_box(n: &BvhNode) -> (Vec3, Vec3) {
+    (n.aabb_min.into(), n.aabb_max.into())
+}
+
+/// Closest hit: front-to-back (nearer child first, the other pushed), the
+/// search interval shrinking to the best hit so far (tinybvh's `Intersect`).
+pub(super) fn intersect(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> Option<Hit> {
+    if nodes.is_empty() {
+        return None;
+    }
+    let r = PreparedRay::new(ray.o, ray.d);
+    let (bmin, bmax) = node_box(&nodes[0]);
+    if intersect_aabb(&r, bmin, bmax, ray.tmax) == f32::INFINITY {
+        return None;
+    }
+    let mut best = Hit {
+        t: ray.tmax,
+        tri: u32::MAX,
+        u: 0.0,
+        v: 0.0,
+    };
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 0;
+    let mut node = 0usize;
+    loop {
+        let n = &nodes[node];
+        if n.is_leaf() {
+            let first = n.left_or_first as usize;
+            let leaf = &tris[first..first + n.tri_count as usize];
+            for (i, tri) in (first..).zip(leaf) {
+                if let Some((t, u, v)) = intersect_triangle(&r, tri, best.t) {
+                    best = Hit {
+                        t,
+                        tri: i as u32,
+                        u,
+                        v,
+                    };
+                }
+            }
+        } else {
+            let mut c1 = n.left_or_first as usize;
+            let mut c2 = c1 + 1;
+            let (min1, max1) = node_box(&nodes[c1]);
+            let (min2, max2) = node_box(&nodes[c2]);
+            let mut d1 = intersect_aabb(&r, min1, max1, best.t);
+            let mut d2 = intersect_aabb(&r, min2, max2, best.t);
+            if d1 > d2 {
+                std::mem::swap(&mut d1, &mut d2);
+                std::mem::swap(&mut c1, &mut c2);
+            }
+            if d1 != f32::INFINITY {
+                if d2 != f32::INFINITY {
+                    stack[sp] = c2 as u32;
+                    sp += 1;
+                }
+                node = c1;
+                continue;
+            }
+        }
+        if sp == 0 {
+            break;
+        }
+        sp -= 1;
+        node = stack[sp] as usize;
+    }
+    (best.tri != u32::MAX).then_some(best)
+}
+
+/// Any hit: the first triangle hit in (0, tmax) ends the search; children in
+/// stored order.
+pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool {
+    if nodes.is_empty() {
+        return false;
+    }
+    let r = PreparedRay::new(ray.o, ray.d);
+    let (bmin, bmax) = node_box(&nodes[0]);
+    if intersect_aabb(&r, bmin, bmax, ray.tmax) == f32::INFINITY {
+        return false;
+    }
+    let mut stack = [0u32; STACK_SIZE];
+    let mut sp = 0;
+    let mut node = 0usize;
+    loop {
+        let n = &nodes[node];
+        if n.is_leaf() {
+            let first = n.left_or_first as usize;
+            let leaf = &tris[first..first + n.tri_count as usize];
+            if leaf
+                .iter()
+                .any(|tri| intersect_triangle(&r, tri, ray.tmax).is_some())
+            {
+                return true;
+            }
+        } else {
+            let c1 = n.left_or_first as usize;
+            let c2 = c1 + 1;
+            let (min1, max1) = node_box(&nodes[c1]);
+            let (min2, max2) = node_box(&nodes[c2]);
+            let hit1 = intersect_aabb(&r, min1, max1, ray.tmax) != f32::INFINITY;
+            let hit2 = intersect_aabb(&r, min2, max2, ray.tmax) != f32::INFINITY;
+            if hit1 || hit2 {
+                if hit1 && hit2 {
+                    stack[sp] = c2 as u32;
+                    sp += 1;
+                }
+                node = if hit1 { c1 } else { c2 };
+                continue;
+            }
+        }
+        if sp == 0 {
+            return false;
+        }
+        sp -= 1;
+        node = stack[sp] as usize;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// shaders/bvh.glsl spells the pad as raw bits: keep them in step.
+    #[test]
+    fn slab_pad_matches_glsl_bits() {
+        assert_eq!(SLAB_PAD.to_bits(), 0x3f80_0003);
+    }
+
+    #[test]
+    fn safe_rcp_is_finite_and_signed() {
+        assert_eq!(safe_rcp(0.0), 1e30);
+        assert_eq!(safe_rcp(-0.0), -1e30);
+        assert_eq!(safe_rcp(2.0), 0.5);
+        assert!(safe_rcp(-1e-38).is_finite() && safe_rcp(-1e-38) < 0.0);
+    }
+}

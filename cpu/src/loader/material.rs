@@ -1,0 +1,369 @@
+//! glTF materials to glint's [`Material`]: `extras.bsdf` (Mitsuba 3 names and
+//! parameters) when present, else the glTF metallic-roughness model mapped
+//! onto the same BSDFs (see the contract's "Materials" section).
+
+use glam::Vec3;
+use serde_json::{Map, Value};
+
+use crate::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_ior, named_metal};
+use crate::scene::Material;
+
+/// Mitsuba 3's default GGX alpha for `roughconductor` and `roughdielectric`
+/// when neither `alpha` nor `alpha_u`/`alpha_v` is given.
+pub const DEFAULT_ALPHA: f32 = 0.1;
+/// Mitsuba 3's `dielectric` defaults: BK7 inside, air outside.
+pub const DEFAULT_INT_IOR: f32 = 1.5046;
+pub const DEFAULT_EXT_IOR: f32 = 1.000277;
+/// Mitsuba 3's default `diffuse` reflectance.
+pub const DEFAULT_REFLECTANCE: f32 = 0.5;
+/// KHR_materials_ior's default index.
+pub const GLTF_DEFAULT_IOR: f32 = 1.5;
+/// F0 is clamped below 1 so k = 2 sqrt(F0 / (1 - F0)) stays finite.
+pub const MAX_F0: f32 = 0.999;
+
+/// The conductor whose Fresnel reflectance at normal incidence is exactly
+/// `f0` per channel: with eta = 1, R(0) = ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2)
+/// = k^2 / (4 + k^2), which equals F0 for k = 2 sqrt(F0 / (1 - F0)).
+pub fn conductor_from_f0(f0: Vec3, roughness: Roughness) -> ConductorParams {
+    let f0 = f0.clamp(Vec3::ZERO, Vec3::splat(MAX_F0));
+    ConductorParams {
+        eta: Vec3::ONE,
+        k: 2.0 * (f0 / (Vec3::ONE - f0)).powf(0.5),
+        specular_reflectance: Vec3::ONE,
+        roughness,
+    }
+}
+
+/// The glTF default material (glTF 2.0 spec, section 3.9.6: baseColor 1,
+/// metallic 1, roughness 1, no emission, single-sided) as glint maps it: a
+/// white-F0 GGX conductor with alpha 1. Primitives without a material use it.
+pub fn gltf_default_material() -> Material {
+    Material {
+        name: "glTF default material".into(),
+        bsdf: Bsdf::Conductor(conductor_from_f0(Vec3::ONE, isotropic(1.0))),
+        emission: Vec3::ZERO,
+        double_sided: false,
+    }
+}
+
+fn isotropic(alpha: f32) -> Roughness {
+    Roughness {
+        alpha_u: alpha,
+        alpha_v: alpha,
+        shadowing: Shadowing::Correlated,
+    }
+}
+
+/// Map one glTF material.
+pub fn convert(m: &gltf::Material) -> Result<Material, String> {
+    let label = match m.name() {
+        Some(n) => format!("material {} ('{n}')", m.index().unwrap_or(0)),
+        None => format!("material {}", m.index().unwrap_or(0)),
+    };
+    convert_inner(m).map_err(|e| format!("{label}: {e}"))
+}
+
+fn convert_inner(m: &gltf::Material) -> Result<Material, String> {
+    let extras = match m.extras() {
+        Some(raw) => {
+            Some(serde_json::from_str::<Value>(raw.get()).map_err(|e| format!("extras: {e}"))?)
+        }
+        None => None,
+    };
+    let bsdf = match extras.as_ref().and_then(|e| e.get("bsdf")) {
+        Some(b) => bsdf_from_extras(b).map_err(|e| format!("extras.bsdf: {e}"))?,
+        None => bsdf_from_gltf(m)?,
+    };
+    let factor = Vec3::from(m.emissive_factor());
+    check_range(factor, 0.0, 1.0, "emissiveFactor")?;
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    if !(strength.is_finite() && strength >= 0.0) {
+        return Err(format!(
+            "emissiveStrength must be finite and >= 0, got {strength}"
+        ));
+    }
+    Ok(Material {
+        name: m.name().unwrap_or_default().to_string(),
+        bsdf,
+        emission: factor * strength,
+        double_sided: m.double_sided(),
+    })
+}
+
+fn check_range(v: Vec3, lo: f32, hi: f32, what: &str) -> Result<(), String> {
+    if v.is_finite() && v.cmpge(Vec3::splat(lo)).all() && v.cmple(Vec3::splat(hi)).all() {
+        Ok(())
+    } else {
+        Err(format!("{what} must lie in [{lo}, {hi}], got {v}"))
+    }
+}
+
+fn check_unit(x: f32, what: &str) -> Result<f32, String> {
+    if (0.0..=1.0).contains(&x) {
+        Ok(x)
+    } else {
+        Err(format!("{what} must lie in [0, 1], got {x}"))
+    }
+}
+
+/// The contract's core-glTF mapping: transmission first, then metal, else
+/// diffuse. Textures are ignored; their factors are kept.
+fn bsdf_from_gltf(m: &gltf::Material) -> Result<Bsdf, String> {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _alpha] = pbr.base_color_factor();
+    let base = Vec3::new(r, g, b);
+    check_range(base, 0.0, 1.0, "baseColorFactor")?;
+    let metallic = check_unit(pbr.metallic_factor(), "metallicFactor")?;
+    let roughness = check_unit(pbr.roughness_factor(), "roughnessFactor")?;
+    // Perceptual roughness to GGX alpha, as the glTF BRDF appendix defines it.
+    let alpha = roughness * roughness;
+    let transmission = match m.transmission() {
+        Some(t) => check_unit(t.transmission_factor(), "transmissionFactor")?,
+        None => 0.0,
+    };
+    if transmission > 0.0 {
+        let ior = m.ior().unwrap_or(GLTF_DEFAULT_IOR);
+        if !(ior.is_finite() && ior >= 1.0) {
+            return Err(format!(
+                "KHR_materials_ior ior must be finite and >= 1, got {ior}"
+            ));
+        }
+        return Ok(Bsdf::Dielectric {
+            eta: ior,
+            roughness: isotropic(alpha),
+        });
+    }
+    if metallic > 0.0 {
+        let conductor = conductor_from_f0(base, isotropic(alpha));
+        return Ok(if metallic >= 1.0 {
+            Bsdf::Conductor(conductor)
+        } else {
+            Bsdf::Metallic {
+                metallic,
+                base,
+                conductor,
+            }
+        });
+    }
+    Ok(Bsdf::Diffuse { reflectance: base })
+}
+
+const TYPES: &str = "diffuse, conductor, roughconductor, dielectric or roughdielectric";
+const ROUGH_KEYS: &[&str] = &["alpha", "alpha_u", "alpha_v", "distribution", "shadowing"];
+
+/// Parse `extras.bsdf` with Mitsuba 3's plugin names and parameters. Like
+/// Mitsuba, a parameter the type does not take is an error (it catches typos).
+pub fn bsdf_from_extras(v: &Value) -> Result<Bsdf, String> {
+    let obj = v.as_object().ok_or("must be an object with a \"type\"")?;
+    let ty = match obj.get("type") {
+        Some(Value::String(s)) => s.as_str(),
+        Some(other) => return Err(format!("\"type\" must be a string, got {other}")),
+        None => return Err("has no \"type\"".into()),
+    };
+    let (own, rough): (&[&str], bool) = match ty {
+        "diffuse" => (&["reflectance"], false),
+        "conductor" => (&["eta", "k", "material", "specular_reflectance"], false),
+        "roughconductor" => (&["eta", "k", "material", "specular_reflectance"], true),
+        "dielectric" => (&["int_ior", "ext_ior"], false),
+        "roughdielectric" => (&["int_ior", "ext_ior"], true),
+        _ => return Err(format!("unknown BSDF type \"{ty}\" (expected {TYPES})")),
+    };
+    for key in obj.keys() {
+        let known = key == "type"
+            || own.contains(&key.as_str())
+            || (rough && ROUGH_KEYS.contains(&key.as_str()));
+        if !known {
+            let mut all: Vec<&str> = own.to_vec();
+            if rough {
+                all.extend_from_slice(ROUGH_KEYS);
+            }
+            return Err(format!(
+                "\"{ty}\" takes no parameter \"{key}\" (it takes {})",
+                all.join(", ")
+            ));
+        }
+    }
+    let roughness = if rough {
+        parse_roughness(obj)?
+    } else {
+        Roughness::SMOOTH
+    };
+    match ty {
+        "diffuse" => Ok(Bsdf::Diffuse {
+            reflectance: rgb(obj, "reflectance", 0.0, 1.0)?
+                .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
+        }),
+        "conductor" | "roughconductor" => Ok(Bsdf::Conductor(parse_conductor(obj, roughness)?)),
+        _ => {
+            let int_ior = ior(obj, "int_ior")?.unwrap_or(DEFAULT_INT_IOR);
+            let ext_ior = ior(obj, "ext_ior")?.unwrap_or(DEFAULT_EXT_IOR);
+            Ok(Bsdf::Dielectric {
+                eta: int_ior / ext_ior,
+                roughness,
+            })
+        }
+    }
+}
+
+fn parse_conductor(
+    obj: &Map<String, Value>,
+    roughness: Roughness,
+) -> Result<ConductorParams, String> {
+    let eta = rgb(obj, "eta", 0.0, f32::INFINITY)?;
+    let k = rgb(obj, "k", 0.0, f32::INFINITY)?;
+    let material = match obj.get("material") {
+        None => None,
+        Some(Value::String(s)) => Some(s.as_str()),
+        Some(other) => return Err(format!("\"material\" must be a metal name, got {other}")),
+    };
+    let (eta, k) = match (material, eta, k) {
+        (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+            return Err("give either \"material\" or \"eta\" and \"k\", not both".into());
+        }
+        (Some(name), None, None) => metal(name)?,
+        (None, Some(eta), Some(k)) => (eta, k),
+        (None, Some(_), None) | (None, None, Some(_)) => {
+            return Err("\"eta\" and \"k\" must be given together".into());
+        }
+        // Mitsuba 3's default `material` is "none": a perfect mirror.
+        (None, None, None) => metal("none")?,
+    };
+    if (eta.cmpeq(Vec3::ZERO) & k.cmpeq(Vec3::ZERO)).any() {
+        return Err("\"eta\" and \"k\" are both 0 in some channel (no such conductor)".into());
+    }
+    Ok(ConductorParams {
+        eta,
+        k,
+        specular_reflectance: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+        roughness,
+    })
+}
+
+/// A named metal's (eta, k). "none" is Mitsuba's ideal mirror: the purely
+/// imaginary index eta = 0, k = 1 has |r| = 1 at every angle.
+fn metal(name: &str) -> Result<(Vec3, Vec3), String> {
+    if name.eq_ignore_ascii_case("none") {
+        return Ok((Vec3::ZERO, Vec3::ONE));
+    }
+    named_metal(name).ok_or_else(|| format!("unknown metal \"{name}\""))
+}
+
+fn parse_roughness(obj: &Map<String, Value>) -> Result<Roughness, String> {
+    if let Some(d) = obj.get("distribution") {
+        match d.as_str() {
+            Some(s) if s.eq_ignore_ascii_case("ggx") => {}
+            _ => {
+                return Err(format!(
+                    "\"distribution\" must be \"ggx\" (the only one glint has), got {d}"
+                ));
+            }
+        }
+    }
+    let shadowing = match obj.get("shadowing") {
+        None => Shadowing::Correlated,
+        Some(v) => match v.as_str() {
+            Some("correlated") => Shadowing::Correlated,
+            Some("separable") => Shadowing::Separable,
+            _ => {
+                return Err(format!(
+                    "\"shadowing\" must be \"correlated\" or \"separable\", got {v}"
+                ));
+            }
+        },
+    };
+    let a = |key| number(obj, key, 0.0, f32::INFINITY);
+    let (alpha_u, alpha_v) = match (a("alpha")?, a("alpha_u")?, a("alpha_v")?) {
+        (Some(a), None, None) => (a, a),
+        (None, Some(u), Some(v)) => (u, v),
+        (None, None, None) => (DEFAULT_ALPHA, DEFAULT_ALPHA),
+        (Some(_), _, _) => {
+            return Err("give either \"alpha\" or \"alpha_u\" and \"alpha_v\", not both".into());
+        }
+        _ => return Err("\"alpha_u\" and \"alpha_v\" must be given together".into()),
+    };
+    Ok(Roughness {
+        alpha_u,
+        alpha_v,
+        shadowing,
+    })
+}
+
+fn number(obj: &Map<String, Value>, key: &str, lo: f32, hi: f32) -> Result<Option<f32>, String> {
+    match obj.get(key) {
+        None => Ok(None),
+        Some(v) => {
+            let x = v
+                .as_f64()
+                .ok_or_else(|| format!("\"{key}\" must be a number, got {v}"))?
+                as f32;
+            if x.is_finite() && x >= lo && x <= hi {
+                Ok(Some(x))
+            } else {
+                Err(format!(
+                    "\"{key}\" must be a finite number in [{lo}, {hi}], got {v}"
+                ))
+            }
+        }
+    }
+}
+
+/// An RGB parameter: `[r, g, b]`, or one number for grey (as Mitsuba accepts).
+fn rgb(obj: &Map<String, Value>, key: &str, lo: f32, hi: f32) -> Result<Option<Vec3>, String> {
+    let v = match obj.get(key) {
+        None => return Ok(None),
+        Some(v) => v,
+    };
+    let c = match v {
+        Value::Number(n) => Vec3::splat(n.as_f64().unwrap_or(f64::NAN) as f32),
+        Value::Array(a) if a.len() == 3 => {
+            let mut c = [0.0f32; 3];
+            for (ci, x) in c.iter_mut().zip(a) {
+                *ci = x
+                    .as_f64()
+                    .ok_or_else(|| format!("\"{key}\" must hold numbers, got {v}"))?
+                    as f32;
+            }
+            Vec3::from(c)
+        }
+        Value::Array(a) => {
+            return Err(format!(
+                "\"{key}\" must be [r, g, b] (3 numbers), got {} values",
+                a.len()
+            ));
+        }
+        _ => return Err(format!("\"{key}\" must be [r, g, b] or a number, got {v}")),
+    };
+    if c.is_finite() && c.cmpge(Vec3::splat(lo)).all() && c.cmple(Vec3::splat(hi)).all() {
+        Ok(Some(c))
+    } else {
+        let range = if hi.is_finite() {
+            format!("in [{lo}, {hi}]")
+        } else {
+            format!(">= {lo}")
+        };
+        Err(format!(
+            "\"{key}\" values must be finite and {range}, got {v}"
+        ))
+    }
+}
+
+/// An index of refraction: a positive number or a name from `named_ior`.
+fn ior(obj: &Map<String, Value>, key: &str) -> Result<Option<f32>, String> {
+    match obj.get(key) {
+        None => Ok(None),
+        Some(Value::String(name)) => named_ior(name)
+            .map(Some)
+            .ok_or_else(|| format!("unknown IOR name \"{name}\" for \"{key}\"")),
+        Some(v) => {
+            let x = v
+                .as_f64()
+                .ok_or_else(|| format!("\"{key}\" must be a number or a name, got {v}"))?
+                as f32;
+            if x.is_finite() && x > 0.0 {
+                Ok(Some(x))
+            } else {
+                Err(format!("\"{key}\" must be a finite number > 0, got {v}"))
+            }
+        }
+    }
+}

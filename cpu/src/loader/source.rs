@@ -1,0 +1,332 @@
+//! Reading a glTF file into a validated document and its buffers.
+//!
+//! Everything here distrusts its input: the GLB container is split by hand
+//! (the `gltf` crate's GLB reader allocates whatever length the header claims
+//! and subtracts without checking), buffers are decoded here (data URIs,
+//! relative files, the GLB BIN chunk) and each is checked against the
+//! `byteLength` the document declares.
+
+use std::path::Path;
+
+use gltf::Document;
+
+/// The most bytes glint reads from one file (the .gltf/.glb or one external
+/// buffer): GLB lengths are 32-bit anyway, and a larger file is not a scene
+/// this renderer can hold.
+pub const MAX_FILE_BYTES: u64 = 2 << 30;
+
+/// Extensions a file may list in `extensionsRequired`: the ones glint
+/// implements. An optional extension glint does not know is ignored, as glTF
+/// asks; a required one is an error.
+pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_emissive_strength",
+];
+
+/// A validated document with its buffers' bytes, indexed like `buffers`.
+pub struct Source {
+    pub doc: Document,
+    pub buffers: Vec<Vec<u8>>,
+}
+
+/// Read `path` (either container), validate it and load its buffers.
+pub fn read(path: &Path) -> Result<Source, String> {
+    let bytes = read_file(path)?;
+    let (json, bin) = if bytes.starts_with(b"glTF") {
+        split_glb(&bytes)?
+    } else {
+        (&bytes[..], None)
+    };
+    // A UTF-8 byte order mark is not JSON; glTF says loaders may skip it.
+    let json = json.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(json);
+    let root: gltf::json::Root = gltf::json::deserialize::from_slice(json).map_err(|e| {
+        if e.is_syntax() || e.is_eof() {
+            return format!("not a glTF file: JSON {e}");
+        }
+        // glTF 1.0 documents fail to deserialise as 2.0: say why.
+        let version = serde_json::from_slice::<serde_json::Value>(json)
+            .ok()
+            .and_then(|v| v.get("asset")?.get("version")?.as_str().map(str::to_string));
+        match version {
+            Some(v) if !v.starts_with("2.") => unsupported_version(&v),
+            _ => format!("not a valid glTF document: {e}"),
+        }
+    })?;
+    if !root.asset.version.starts_with("2.") {
+        return Err(unsupported_version(&root.asset.version));
+    }
+    check_required_extensions(&root)?;
+    validate(&root)?;
+    let doc = Document::from_json_without_validation(root);
+    let base = path.parent().unwrap_or(Path::new("."));
+    let buffers = load_buffers(&doc, base, bin)?;
+    Ok(Source { doc, buffers })
+}
+
+fn unsupported_version(v: &str) -> String {
+    format!("glTF version {v} is not supported (glTF 2.0 only)")
+}
+
+fn read_file(path: &Path) -> Result<Vec<u8>, String> {
+    let meta = std::fs::metadata(path).map_err(|e| format!("cannot open: {e}"))?;
+    if !meta.is_file() {
+        return Err("not a file".into());
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(format!(
+            "file is {} bytes; glint reads files up to {MAX_FILE_BYTES} bytes",
+            meta.len()
+        ));
+    }
+    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
+}
+
+fn le_u32(b: &[u8], at: usize) -> Option<u32> {
+    Some(u32::from_le_bytes(b.get(at..at + 4)?.try_into().ok()?))
+}
+
+/// Split a GLB container (glTF 2.0 spec, section 4.4) into its JSON chunk and
+/// optional BIN chunk, checking every length against the bytes present.
+fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    let truncated = || {
+        format!(
+            "truncated GLB: {} bytes, shorter than its header",
+            bytes.len()
+        )
+    };
+    let version = le_u32(bytes, 4).ok_or_else(truncated)?;
+    let length = le_u32(bytes, 8).ok_or_else(truncated)? as usize;
+    if version != 2 {
+        return Err(format!(
+            "GLB version {version} is not supported (glTF 2.0 only)"
+        ));
+    }
+    if length > bytes.len() {
+        return Err(format!(
+            "truncated GLB: header says {length} bytes, the file has {}",
+            bytes.len()
+        ));
+    }
+    if length < 20 {
+        return Err(format!(
+            "malformed GLB: total length {length} leaves no room for a JSON chunk"
+        ));
+    }
+    let mut chunks = Vec::new();
+    let mut at = 12usize;
+    while at < length {
+        let (Some(len), Some(kind)) = (le_u32(bytes, at), le_u32(bytes, at + 4)) else {
+            return Err(format!(
+                "truncated GLB: chunk header at byte {at} is cut off"
+            ));
+        };
+        let start = at + 8;
+        let end = start + len as usize;
+        if end > length {
+            return Err(format!(
+                "truncated GLB: chunk at byte {at} claims {len} bytes, only {} remain",
+                length - start.min(length)
+            ));
+        }
+        chunks.push((kind, &bytes[start..end]));
+        // Chunks are 4-byte aligned; unaligned ones are tolerated.
+        at = end.next_multiple_of(4);
+    }
+    const JSON: u32 = 0x4E4F_534A;
+    const BIN: u32 = 0x004E_4942;
+    match chunks.first() {
+        Some(&(JSON, json)) => {
+            // The spec allows one BIN chunk, right after JSON; other chunk
+            // types must be ignored.
+            let bin = chunks.get(1).filter(|c| c.0 == BIN).map(|c| c.1);
+            Ok((json, bin))
+        }
+        _ => Err("malformed GLB: the first chunk is not JSON".into()),
+    }
+}
+
+fn check_required_extensions(root: &gltf::json::Root) -> Result<(), String> {
+    let unsupported: Vec<&str> = root
+        .extensions_required
+        .iter()
+        .map(String::as_str)
+        .filter(|e| !SUPPORTED_REQUIRED_EXTENSIONS.contains(e))
+        .collect();
+    if unsupported.is_empty() {
+        Ok(())
+    } else {
+        Err(format!(
+            "requires unsupported extension(s) {} (glint supports {})",
+            unsupported.join(", "),
+            SUPPORTED_REQUIRED_EXTENSIONS.join(", ")
+        ))
+    }
+}
+
+/// The `gltf` crate's structural validation (every index in range, every
+/// enum value known), less one rule: POSITION accessors' `min`/`max`, which
+/// glTF requires but glint never reads, so a file missing (or garbling) them
+/// still loads.
+fn validate(root: &gltf::json::Root) -> Result<(), String> {
+    use gltf::json::validation::{Checked, Error, Validate};
+    // The crate's primitive hook indexes `accessors[POSITION]` unchecked:
+    // check that index first so a bad one is an error, not a panic.
+    for (i, mesh) in root.meshes.iter().enumerate() {
+        for (j, prim) in mesh.primitives.iter().enumerate() {
+            let pos = prim
+                .attributes
+                .get(&Checked::Valid(gltf::Semantic::Positions));
+            if let Some(a) = pos.filter(|a| a.value() >= root.accessors.len()) {
+                return Err(format!(
+                    "invalid glTF: meshes[{i}].primitives[{j}].attributes[\"POSITION\"]: accessor {} does not exist",
+                    a.value()
+                ));
+            }
+        }
+    }
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path().as_str().to_string();
+        let bounds = path.ends_with(".min") || path.ends_with(".max");
+        if !(bounds && matches!(error, Error::Missing | Error::Invalid)) {
+            errors.push(format!("{path}: {error}"));
+        }
+    });
+    if errors.is_empty() {
+        return Ok(());
+    }
+    let more = if errors.len() > 4 {
+        format!(" (and {} more)", errors.len() - 4)
+    } else {
+        String::new()
+    };
+    errors.truncate(4);
+    Err(format!("invalid glTF: {}{more}", errors.join("; ")))
+}
+
+fn load_buffers(doc: &Document, base: &Path, bin: Option<&[u8]>) -> Result<Vec<Vec<u8>>, String> {
+    let mut out = Vec::new();
+    for (i, buffer) in doc.as_json().buffers.iter().enumerate() {
+        let data = match &buffer.uri {
+            None if i == 0 => bin
+                .ok_or("buffer 0 has no uri and the file has no GLB BIN chunk")?
+                .to_vec(),
+            None => {
+                return Err(format!(
+                    "buffer {i} has no uri (only buffer 0 may use the GLB BIN chunk)"
+                ));
+            }
+            Some(uri) => read_uri(uri, base).map_err(|e| format!("buffer {i}: {e}"))?,
+        };
+        let declared = buffer.byte_length.0;
+        if (data.len() as u64) < declared {
+            return Err(format!(
+                "buffer {i} declares {declared} bytes but holds only {}",
+                data.len()
+            ));
+        }
+        out.push(data);
+    }
+    Ok(out)
+}
+
+fn read_uri(uri: &str, base: &Path) -> Result<Vec<u8>, String> {
+    if let Some(rest) = uri.strip_prefix("data:") {
+        let (_, payload) = rest
+            .split_once(";base64,")
+            .ok_or("data URI is not base64-encoded")?;
+        return decode_base64(payload).map_err(|e| format!("data URI does not decode: {e}"));
+    }
+    if uri.contains(':') {
+        let scheme = uri.split(':').next().unwrap_or_default();
+        return Err(format!(
+            "URI scheme '{scheme}:' is not supported (relative paths and data URIs are)"
+        ));
+    }
+    let rel = percent_decode(uri).ok_or_else(|| format!("URI '{uri}' has a bad %-escape"))?;
+    let file = base.join(rel);
+    read_file(&file).map_err(|e| format!("{}: {e}", file.display()))
+}
+
+/// Decode `%XX` escapes (RFC 3986), as glTF URIs are URI-encoded.
+fn percent_decode(s: &str) -> Option<String> {
+    let b = s.as_bytes();
+    let mut out = Vec::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i] == b'%' {
+            let hex = std::str::from_utf8(b.get(i + 1..i + 3)?).ok()?;
+            out.push(u8::from_str_radix(hex, 16).ok()?);
+            i += 3;
+        } else {
+            out.push(b[i]);
+            i += 1;
+        }
+    }
+    String::from_utf8(out).ok()
+}
+
+/// Standard base64 (RFC 4648 section 4), padding optional.
+pub fn decode_base64(s: &str) -> Result<Vec<u8>, String> {
+    let s = s.trim_end_matches('=');
+    let mut out = Vec::with_capacity(s.len() / 4 * 3 + 3);
+    let (mut acc, mut bits) = (0u32, 0u32);
+    for (i, c) in s.bytes().enumerate() {
+        let v = match c {
+            b'A'..=b'Z' => c - b'A',
+            b'a'..=b'z' => c - b'a' + 26,
+            b'0'..=b'9' => c - b'0' + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => {
+                return Err(format!(
+                    "invalid base64 character {:?} at offset {i}",
+                    c as char
+                ));
+            }
+        };
+        acc = (acc << 6) | v as u32;
+        bits += 6;
+        if bits >= 8 {
+            bits -= 8;
+            out.push((acc >> bits) as u8);
+            acc &= (1 << bits) - 1;
+        }
+    }
+    if bits >= 6 {
+        return Err("base64 length is not valid (one character too many)".into());
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_round_trips_known_vectors() {
+        // RFC 4648 section 10 test vectors.
+        for (enc, dec) in [
+            ("", ""),
+            ("Zg==", "f"),
+            ("Zm8=", "fo"),
+            ("Zm9v", "foo"),
+            ("Zm9vYg==", "foob"),
+            ("Zm9vYmE=", "fooba"),
+            ("Zm9vYmFy", "foobar"),
+        ] {
+            assert_eq!(decode_base64(enc).unwrap(), dec.as_bytes());
+        }
+        assert!(decode_base64("Zm9v!").is_err());
+        assert!(decode_base64("Z").is_err());
+    }
+
+    #[test]
+    fn percent_escapes_decode() {
+        assert_eq!(percent_decode("a%20b.bin").unwrap(), "a b.bin");
+        assert!(percent_decode("a%2").is_none());
+        assert!(percent_decode("%FF").is_none());
+    }
+}

@@ -1,0 +1,932 @@
+//! BVH tests: structure invariants, differential closest/any-hit against brute
+//! force (tinybvh's test), watertightness on closed meshes and the bunny.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::time::Instant;
+
+use glam::{Mat4, Vec3};
+use glint_cpu::bvh::{MAX_DEPTH, MAX_LEAF_SIZE, PreparedRay, STACK_SIZE, intersect_triangle};
+use glint_cpu::{Bvh, Hit, Ray, Triangle};
+use rayon::prelude::*;
+
+/// SplitMix64: a small, seedable generator, so each test has its own stream.
+struct Rng(u64);
+
+impl Rng {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn f(&mut self) -> f32 {
+        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+    fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f()
+    }
+    fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n as u64) as usize
+    }
+    fn vec_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+        Vec3::new(
+            self.range(lo.x, hi.x),
+            self.range(lo.y, hi.y),
+            self.range(lo.z, hi.z),
+        )
+    }
+    fn unit(&mut self) -> Vec3 {
+        let z = self.range(-1.0, 1.0);
+        let phi = self.range(0.0, std::f32::consts::TAU);
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+}
+
+fn tri(p0: Vec3, p1: Vec3, p2: Vec3) -> Triangle {
+    Triangle {
+        p0: p0.into(),
+        p1: p1.into(),
+        p2: p2.into(),
+        ..Default::default()
+    }
+}
+
+/// Builds and applies the order, as `Scene::build_bvh` does.
+fn build(input: &[Triangle]) -> (Bvh, Vec<Triangle>, Vec<u32>) {
+    let (bvh, order) = Bvh::build(input);
+    let tris = order.iter().map(|&i| input[i as usize]).collect();
+    (bvh, tris, order)
+}
+
+/// The reference: every triangle, lowest index wins exact ties.
+fn brute_closest(tris: &[Triangle], ray: &Ray) -> Option<Hit> {
+    let r = PreparedRay::new(ray.o, ray.d);
+    let mut best: Option<Hit> = None;
+    for (i, t) in tris.iter().enumerate() {
+        let tmax = best.map_or(ray.tmax, |h| h.t);
+        if let Some((t, u, v)) = intersect_triangle(&r, t, tmax) {
+            best = Some(Hit {
+                t,
+                tri: i as u32,
+                u,
+                v,
+            });
+        }
+    }
+    best
+}
+
+fn bounds_of(tris: &[Triangle]) -> (Vec3, Vec3) {
+    let mut lo = Vec3::splat(f32::INFINITY);
+    let mut hi = Vec3::splat(f32::NEG_INFINITY);
+    for t in tris {
+        for p in t.vertices() {
+            if p.is_finite() {
+                lo = lo.min(p);
+                hi = hi.max(p);
+            }
+        }
+    }
+    (lo, hi)
+}
+
+/// Checks the layout every consumer relies on; returns (leaves, depth).
+fn check_structure(bvh: &Bvh, tris: &[Triangle], order: &[u32]) -> (usize, usize) {
+    let n = tris.len();
+    let mut seen = vec![false; n];
+    for &i in order {
+        assert!(
+            !std::mem::replace(&mut seen[i as usize], true),
+            "order is not a permutation"
+        );
+    }
+    assert!(seen.iter().all(|&s| s), "order is not a permutation");
+    if n == 0 {
+        assert!(bvh.nodes.is_empty());
+        return (0, 0);
+    }
+    let nodes = &bvh.nodes;
+    let mut covered = vec![0u32; n];
+    let mut visited = vec![false; nodes.len()];
+    let mut leaves = 0;
+    let mut depth = 0;
+    let mut stack = vec![(0usize, 0usize)];
+    while let Some((i, d)) = stack.pop() {
+        assert!(
+            !std::mem::replace(&mut visited[i], true),
+            "node {i} reached twice"
+        );
+        depth = depth.max(d);
+        let node = &nodes[i];
+        let (lo, hi) = (Vec3::from(node.aabb_min), Vec3::from(node.aabb_max));
+        if node.is_leaf() {
+            leaves += 1;
+            assert!(
+                node.tri_count as usize <= MAX_LEAF_SIZE,
+                "leaf of {}",
+                node.tri_count
+            );
+            let first = node.left_or_first as usize;
+            for t in first..first + node.tri_count as usize {
+                covered[t] += 1;
+                // Non-finite triangles are binned as a point at the origin.
+                let finite = tris[t].vertices().iter().all(|p| p.is_finite());
+                for p in tris[t].vertices() {
+                    if finite {
+                        assert!(
+                            p.cmpge(lo).all() && p.cmple(hi).all(),
+                            "triangle outside its leaf"
+                        );
+                    }
+                }
+            }
+        } else {
+            let l = node.left_or_first as usize;
+            assert!(l > i && l + 1 < nodes.len(), "children of {i} out of range");
+            for c in [l, l + 1] {
+                let ch = &nodes[c];
+                assert!(
+                    Vec3::from(ch.aabb_min).cmpge(lo).all()
+                        && Vec3::from(ch.aabb_max).cmple(hi).all(),
+                    "child {c} outside parent {i}"
+                );
+                stack.push((c, d + 1));
+            }
+        }
+    }
+    assert!(visited.iter().all(|&v| v), "unreachable nodes");
+    assert!(
+        covered.iter().all(|&c| c == 1),
+        "a triangle is not in exactly one leaf"
+    );
+    assert_eq!(nodes.len(), 2 * leaves - 1);
+    assert!(
+        depth <= MAX_DEPTH && MAX_DEPTH < STACK_SIZE,
+        "depth {depth}"
+    );
+    assert_eq!(bvh.depth(), depth);
+    (leaves, depth)
+}
+
+/// Random rays in the style of tinybvh's test: origins inside and around the
+/// bounds, most aimed at a random point of a random triangle (so they hit),
+/// some with one or two zero direction components, some unnormalised, some
+/// with a tmax short of the aimed point.
+fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
+    let (lo, hi) = bounds_of(tris);
+    let size = hi - lo;
+    (0..count)
+        .map(|_| {
+            let o = if rng.f() < 0.5 {
+                rng.vec_in(lo, hi)
+            } else {
+                rng.vec_in(lo - size, hi + size)
+            };
+            let aimed = rng.f() < 0.7;
+            let mut d = if aimed {
+                let t = &tris[rng.below(tris.len())];
+                let [a, b, c] = t.vertices();
+                let (mut u, mut v) = (rng.f(), rng.f());
+                if u + v > 1.0 {
+                    (u, v) = (1.0 - u, 1.0 - v);
+                }
+                (a + u * (b - a) + v * (c - a)) - o
+            } else {
+                rng.unit()
+            };
+            let zeros = rng.f();
+            if zeros < 0.1 {
+                d[rng.below(3)] = 0.0;
+            } else if zeros < 0.15 {
+                let keep = rng.below(3);
+                for k in 0..3 {
+                    if k != keep {
+                        d[k] = 0.0;
+                    }
+                }
+            }
+            if d == Vec3::ZERO || !d.is_finite() {
+                d = Vec3::X;
+            }
+            // Unnormalised directions change the units of t: still exact.
+            d = if rng.f() < 0.3 {
+                d * rng.range(0.1, 10.0)
+            } else {
+                d.normalize()
+            };
+            let tmax = match rng.below(4) {
+                0 => rng.range(0.0, 1.5) * (size.length() / d.length()),
+                _ => f32::INFINITY,
+            };
+            Ray { o, d, tmax }
+        })
+        .collect()
+}
+
+#[derive(Default, Debug)]
+struct Diff {
+    rays: usize,
+    hits: usize,
+    /// Different triangle at an equal distance (coplanar or shared edges).
+    tie_swaps: usize,
+    /// Different triangle, distances within the tolerance but not equal.
+    near_swaps: usize,
+}
+
+/// BVH vs brute force on every ray: same triangle (or a tie within 2e-5
+/// relative), same occlusion, and barycentrics that rebuild the hit point.
+fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
+    let (bvh, tris, order) = build(input);
+    check_structure(&bvh, &tris, &order);
+    let results: Vec<Diff> = rays
+        .par_chunks(256)
+        .map(|chunk| {
+            let mut diff = Diff::default();
+            for ray in chunk {
+                diff.rays += 1;
+                let got = bvh.intersect(&tris, ray);
+                let want = brute_closest(&tris, ray);
+                let occluded = bvh.occluded(&tris, ray);
+                match (got, want) {
+                    (None, None) => {}
+                    (Some(g), Some(w)) => {
+                        diff.hits += 1;
+                        if g.tri != w.tri {
+                            let rel = (g.t - w.t).abs() / w.t.abs().max(f32::MIN_POSITIVE);
+                            assert!(rel <= 2e-5, "{name}: {ray:?}: bvh {g:?} brute {w:?}");
+                            if g.t == w.t {
+                                diff.tie_swaps += 1;
+                            } else {
+                                diff.near_swaps += 1;
+                            }
+                        } else {
+                            assert_eq!(g, w, "{name}: {ray:?}");
+                        }
+                        let [a, b, c] = tris[g.tri as usize].vertices();
+                        let p = (1.0 - g.u - g.v) * a + g.u * b + g.v * c;
+                        let q = ray.o + g.t * ray.d;
+                        let scale = a
+                            .abs()
+                            .max(b.abs())
+                            .max(c.abs())
+                            .max(ray.o.abs())
+                            .max((g.t * ray.d).abs())
+                            .max_element();
+                        // Barycentrics of a near-zero-area sliver (the
+                        // nasty soup's collinear triangles) are ill-conditioned:
+                        // check the well-shaped ones.
+                        let edge2 = (b - a).length_squared().max((c - a).length_squared());
+                        let well_shaped = (b - a).cross(c - a).length() > 1e-3 * edge2;
+                        assert!(
+                            !well_shaped || (p - q).abs().max_element() <= 1e-4 * scale.max(1.0),
+                            "{name}: barycentrics rebuild {p} but the ray is at {q}"
+                        );
+                    }
+                    _ => panic!("{name}: {ray:?}: bvh {got:?} brute {want:?}"),
+                }
+                // Any-hit must agree with closest-hit, except a hit within
+                // rounding of tmax, where the box test may decide either way.
+                if occluded != want.is_some() {
+                    let near_tmax = |t: f32| (t - ray.tmax).abs() <= 1e-5 * ray.tmax;
+                    let any = brute_any_t(&tris, ray);
+                    assert!(
+                        any.is_some_and(near_tmax),
+                        "{name}: occluded {occluded} but closest {want:?} for {ray:?}"
+                    );
+                }
+            }
+            diff
+        })
+        .collect();
+    let mut total = Diff::default();
+    for d in results {
+        total.rays += d.rays;
+        total.hits += d.hits;
+        total.tie_swaps += d.tie_swaps;
+        total.near_swaps += d.near_swaps;
+    }
+    eprintln!(
+        "{name}: {} triangles, {} nodes, {total:?}",
+        input.len(),
+        bvh.nodes.len()
+    );
+    total
+}
+
+fn brute_any_t(tris: &[Triangle], ray: &Ray) -> Option<f32> {
+    let r = PreparedRay::new(ray.o, ray.d);
+    tris.iter()
+        .find_map(|t| intersect_triangle(&r, t, ray.tmax).map(|h| h.0))
+}
+
+fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let c = rng.vec_in(Vec3::ZERO, Vec3::ONE);
+            tri(
+                c + size * rng.unit(),
+                c + size * rng.unit(),
+                c + size * rng.unit(),
+            )
+        })
+        .collect()
+}
+
+/// A soup of the awkward cases: exact duplicates, zero-area triangles
+/// (repeated and collinear vertices), axis-aligned triangles sharing planes.
+fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
+    let mut tris = random_soup(rng, 400, 0.05);
+    for i in 0..100 {
+        let t = tris[i];
+        tris.push(t);
+    }
+    for _ in 0..100 {
+        let a = rng.vec_in(Vec3::ZERO, Vec3::ONE);
+        let b = rng.vec_in(Vec3::ZERO, Vec3::ONE);
+        tris.push(tri(a, a, b));
+        tris.push(tri(a, 0.5 * (a + b), b));
+        tris.push(tri(a, a, a));
+    }
+    for i in 0..8 {
+        for j in 0..8 {
+            let (x, y) = (i as f32 / 8.0, j as f32 / 8.0);
+            let s = 1.0 / 8.0;
+            let z = 0.5;
+            tris.push(tri(
+                Vec3::new(x, y, z),
+                Vec3::new(x + s, y, z),
+                Vec3::new(x, y + s, z),
+            ));
+            tris.push(tri(
+                Vec3::new(x + s, y, 0.25),
+                Vec3::new(x + s, y + s, 0.25),
+                Vec3::new(x, y + s, 0.25),
+            ));
+        }
+    }
+    tris
+}
+
+fn bunny() -> Vec<Triangle> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/assets/bunny.glb");
+    let path = if path.exists() {
+        path
+    } else {
+        Path::new("/work/shared/assets/bunny.glb").to_path_buf()
+    };
+    let (doc, buffers, _) = gltf::import(&path).expect("bunny.glb");
+    let mut out = Vec::new();
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .expect("a scene");
+    let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if let Some(mesh) = node.mesh() {
+            for prim in mesh.primitives() {
+                let reader = prim.reader(|b| Some(&buffers[b.index()]));
+                let pos: Vec<Vec3> = reader
+                    .read_positions()
+                    .expect("positions")
+                    .map(|p| m.transform_point3(Vec3::from(p)))
+                    .collect();
+                let idx: Vec<u32> = match reader.read_indices() {
+                    Some(i) => i.into_u32().collect(),
+                    None => (0..pos.len() as u32).collect(),
+                };
+                for f in idx.chunks_exact(3) {
+                    out.push(tri(
+                        pos[f[0] as usize],
+                        pos[f[1] as usize],
+                        pos[f[2] as usize],
+                    ));
+                }
+            }
+        }
+        stack.extend(node.children().map(|c| (c, m)));
+    }
+    out
+}
+
+#[test]
+fn empty_scene_misses() {
+    let (bvh, order) = Bvh::build(&[]);
+    assert!(bvh.nodes.is_empty() && order.is_empty());
+    assert_eq!(bvh.depth(), 0);
+    let ray = Ray {
+        o: Vec3::ZERO,
+        d: Vec3::X,
+        tmax: f32::INFINITY,
+    };
+    assert_eq!(bvh.intersect(&[], &ray), None);
+    assert!(!bvh.occluded(&[], &ray));
+}
+
+#[test]
+fn single_triangle() {
+    let t = tri(
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(1.0, 0.0, 1.0),
+        Vec3::new(0.0, 1.0, 1.0),
+    );
+    let (bvh, tris, order) = build(&[t]);
+    assert_eq!(order, vec![0]);
+    assert_eq!(bvh.nodes.len(), 1);
+    check_structure(&bvh, &tris, &order);
+    let ray = |o: Vec3, d: Vec3, tmax: f32| Ray { o, d, tmax };
+    let h = bvh
+        .intersect(
+            &tris,
+            &ray(Vec3::new(0.25, 0.5, 0.0), Vec3::Z, f32::INFINITY),
+        )
+        .unwrap();
+    assert_eq!((h.t, h.tri), (1.0, 0));
+    assert!(
+        (h.u - 0.25).abs() < 1e-6 && (h.v - 0.5).abs() < 1e-6,
+        "{h:?}"
+    );
+    // From behind, both faces are hit.
+    let h = bvh
+        .intersect(
+            &tris,
+            &ray(Vec3::new(0.25, 0.25, 3.0), -Vec3::Z, f32::INFINITY),
+        )
+        .unwrap();
+    assert_eq!(h.t, 2.0);
+    // (0, tmax) is open at both ends.
+    assert!(
+        bvh.intersect(&tris, &ray(Vec3::new(0.25, 0.25, 0.0), Vec3::Z, 1.0))
+            .is_none()
+    );
+    assert!(!bvh.occluded(&tris, &ray(Vec3::new(0.25, 0.25, 0.0), Vec3::Z, 1.0)));
+    assert!(bvh.occluded(&tris, &ray(Vec3::new(0.25, 0.25, 0.0), Vec3::Z, 1.0001)));
+    assert!(
+        bvh.intersect(&tris, &ray(Vec3::new(0.25, 0.25, 1.0), Vec3::Z, 5.0))
+            .is_none()
+    );
+    // Outside the triangle, and pointing away.
+    assert!(
+        bvh.intersect(&tris, &ray(Vec3::new(0.75, 0.75, 0.0), Vec3::Z, 5.0))
+            .is_none()
+    );
+    assert!(
+        bvh.intersect(&tris, &ray(Vec3::new(0.25, 0.25, 0.0), -Vec3::Z, 5.0))
+            .is_none()
+    );
+    // In the triangle's plane: no hit (det = 0).
+    assert!(
+        bvh.intersect(&tris, &ray(Vec3::new(-1.0, 0.25, 1.0), Vec3::X, 5.0))
+            .is_none()
+    );
+}
+
+/// The triangle test alone against a double-precision Moller-Trumbore on
+/// well-conditioned cases: t and the barycentric convention.
+#[test]
+fn triangle_test_matches_f64_reference() {
+    let mut rng = Rng(7);
+    let mut checked = 0;
+    for _ in 0..20_000 {
+        let t = random_soup(&mut rng, 1, 0.5)[0];
+        let o = rng.vec_in(Vec3::splat(-2.0), Vec3::splat(3.0));
+        // Aim near the triangle, a little past its edges, so about half hit.
+        let [p0, p1, p2] = t.vertices();
+        let (s, r) = (rng.range(-0.2, 1.2), rng.range(-0.2, 1.2));
+        let d = (p0 + s * (p1 - p0) + r * (p2 - p0) - o).normalize();
+        let [a, b, c] = t.vertices().map(|p| p.as_dvec3());
+        let (od, dd) = (o.as_dvec3(), d.as_dvec3());
+        let (e1, e2) = (b - a, c - a);
+        let pv = dd.cross(e2);
+        let det = e1.dot(pv);
+        // Skip grazing rays: their t is ill-conditioned in any precision.
+        if det.abs() < 0.05 * e1.cross(e2).length() {
+            continue;
+        }
+        let tv = od - a;
+        let u = tv.dot(pv) / det;
+        let qv = tv.cross(e1);
+        let v = dd.dot(qv) / det;
+        let tt = e2.dot(qv) / det;
+        let inside = u > 1e-4 && v > 1e-4 && u + v < 1.0 - 1e-4 && tt > 1e-4;
+        let outside = u < -1e-4 || v < -1e-4 || u + v > 1.0 + 1e-4 || tt < -1e-4;
+        let got = intersect_triangle(&PreparedRay::new(o, d), &t, f32::INFINITY);
+        if inside {
+            let (gt, gu, gv) = got.expect("missed a clear hit");
+            assert!(
+                (gt as f64 - tt).abs() <= 1e-4 * tt.max(1.0),
+                "t {gt} vs {tt}"
+            );
+            assert!((gu as f64 - u).abs() < 1e-4 && (gv as f64 - v).abs() < 1e-4);
+            checked += 1;
+        } else if outside {
+            assert!(got.is_none(), "hit a clear miss");
+        }
+    }
+    assert!(checked > 1000, "only {checked} hits checked");
+}
+
+#[test]
+fn differential_random_soups() {
+    let mut rng = Rng(1);
+    let small = random_soup(&mut rng, 3000, 0.04);
+    let slivers = random_soup(&mut rng, 300, 0.6);
+    let nasty = nasty_soup(&mut rng);
+    let mut total = Diff::default();
+    for (name, soup) in [("small", small), ("slivers", slivers), ("nasty", nasty)] {
+        let rays = random_rays(&soup, 7000, &mut rng);
+        let d = differential(name, &soup, &rays);
+        total.rays += d.rays;
+        total.hits += d.hits;
+        total.near_swaps += d.near_swaps;
+    }
+    assert!(total.rays >= 20_000);
+    // The rays must mostly hit, or the comparison proves little.
+    assert!(total.hits * 2 > total.rays, "{total:?}");
+    // A different triangle at a different (if close) distance means the BVH
+    // culled the closest one: only rounding at box faces may do that.
+    assert!(total.near_swaps * 10_000 <= total.rays, "{total:?}");
+}
+
+#[test]
+fn degenerate_inputs_build_and_traverse() {
+    let mut rng = Rng(3);
+    // Identical centroids: SAH cannot split; the leaf cap must still be kept.
+    let t = tri(Vec3::ZERO, Vec3::X, Vec3::Y);
+    let same = vec![t; 5000];
+    let (bvh, tris, order) = build(&same);
+    check_structure(&bvh, &tris, &order);
+    let h = bvh
+        .intersect(
+            &tris,
+            &Ray {
+                o: Vec3::new(0.2, 0.2, -1.0),
+                d: Vec3::Z,
+                tmax: f32::INFINITY,
+            },
+        )
+        .unwrap();
+    assert_eq!(h.t, 1.0);
+
+    // Geometrically spaced triangles over 16 decades: SAH peels them off a
+    // few at a time (the depth guard itself is tested in bvh::build, with a
+    // lower cap, since f32's range cannot make a chain deeper than ~20 here).
+    let chain: Vec<Triangle> = (0..400)
+        .map(|i| {
+            let x = 1.1f32.powi(i);
+            tri(
+                Vec3::new(x, 0.0, 0.0),
+                Vec3::new(x, 1.0, 0.0),
+                Vec3::new(x, 0.0, 1.0),
+            )
+        })
+        .collect();
+    let rays = random_rays(&chain, 2000, &mut rng);
+    differential("chain", &chain, &rays);
+
+    // Non-finite positions (the loader rejects them): no panic, never hit,
+    // and the finite triangles are still found.
+    let mut soup = random_soup(&mut rng, 500, 0.05);
+    let finite = soup.clone();
+    let rays = random_rays(&finite, 2000, &mut rng);
+    for i in 0..50 {
+        let mut t = soup[i];
+        t.p1[i % 3] = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY][i % 3];
+        soup.push(t);
+    }
+    let (bvh, tris, order) = build(&soup);
+    check_structure(&bvh, &tris, &order);
+    let (fb, ftris, _) = build(&finite);
+    for ray in &rays {
+        let got = bvh.intersect(&tris, ray);
+        let want = fb.intersect(&ftris, ray);
+        assert_eq!(got.map(|h| h.t), want.map(|h| h.t), "{ray:?}");
+        if let Some(h) = got {
+            assert!(
+                tris[h.tri as usize]
+                    .vertices()
+                    .iter()
+                    .all(|p| p.is_finite())
+            );
+        }
+    }
+}
+
+#[test]
+fn build_is_deterministic() {
+    let mut rng = Rng(11);
+    let soup = random_soup(&mut rng, 5000, 0.03);
+    let (a, oa) = Bvh::build(&soup);
+    let (b, ob) = Bvh::build(&soup);
+    assert_eq!(a.nodes, b.nodes);
+    assert_eq!(oa, ob);
+}
+
+/// A closed icosphere: shared vertices are bit-identical between triangles.
+fn icosphere(center: Vec3, radius: f32, levels: u32) -> Vec<Triangle> {
+    let t = (1.0 + 5f32.sqrt()) / 2.0;
+    let mut verts: Vec<Vec3> = [
+        (-1.0, t, 0.0),
+        (1.0, t, 0.0),
+        (-1.0, -t, 0.0),
+        (1.0, -t, 0.0),
+        (0.0, -1.0, t),
+        (0.0, 1.0, t),
+        (0.0, -1.0, -t),
+        (0.0, 1.0, -t),
+        (t, 0.0, -1.0),
+        (t, 0.0, 1.0),
+        (-t, 0.0, -1.0),
+        (-t, 0.0, 1.0),
+    ]
+    .iter()
+    .map(|&(x, y, z)| Vec3::new(x, y, z).normalize())
+    .collect();
+    let mut faces: Vec<[usize; 3]> = vec![
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ];
+    for _ in 0..levels {
+        let mut mid: HashMap<(usize, usize), usize> = HashMap::new();
+        let mut midpoint = |a: usize, b: usize, verts: &mut Vec<Vec3>| {
+            *mid.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                verts.push((0.5 * (verts[a] + verts[b])).normalize());
+                verts.len() - 1
+            })
+        };
+        faces = faces
+            .iter()
+            .flat_map(|&[a, b, c]| {
+                let ab = midpoint(a, b, &mut verts);
+                let bc = midpoint(b, c, &mut verts);
+                let ca = midpoint(c, a, &mut verts);
+                [[a, ab, ca], [b, bc, ab], [c, ca, bc], [ab, bc, ca]]
+            })
+            .collect();
+    }
+    let world: Vec<Vec3> = verts.iter().map(|&v| center + radius * v).collect();
+    faces
+        .iter()
+        .map(|&[a, b, c]| tri(world[a], world[b], world[c]))
+        .collect()
+}
+
+/// The surface of [-1, 1]^3 as an n x n grid per face, every grid coordinate
+/// computed by one expression so shared vertices are bit-identical.
+fn grid_cube(n: usize) -> Vec<Triangle> {
+    let coord = |i: usize| -1.0 + 2.0 * i as f32 / n as f32;
+    let mut tris = Vec::new();
+    for axis in 0..3 {
+        for side in [-1.0f32, 1.0] {
+            let p = |i: usize, j: usize| {
+                let mut v = [0.0f32; 3];
+                v[axis] = side;
+                v[(axis + 1) % 3] = coord(i);
+                v[(axis + 2) % 3] = coord(j);
+                Vec3::from(v)
+            };
+            for i in 0..n {
+                for j in 0..n {
+                    tris.push(tri(p(i, j), p(i + 1, j), p(i + 1, j + 1)));
+                    tris.push(tri(p(i, j), p(i + 1, j + 1), p(i, j + 1)));
+                }
+            }
+        }
+    }
+    tris
+}
+
+/// Unique vertices and edges of a mesh (by exact position).
+fn edges_and_vertices(tris: &[Triangle]) -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
+    let key = |p: Vec3| p.to_array().map(f32::to_bits);
+    let mut verts = HashMap::new();
+    let mut edges = HashMap::new();
+    for t in tris {
+        let v = t.vertices();
+        for k in 0..3 {
+            verts.insert(key(v[k]), v[k]);
+            let (a, b) = (v[k], v[(k + 1) % 3]);
+            let (a, b) = if key(a) < key(b) { (a, b) } else { (b, a) };
+            edges.insert((key(a), key(b)), (a, b));
+        }
+    }
+    let mut verts: Vec<_> = verts.into_iter().collect();
+    verts.sort_by_key(|(k, _)| *k);
+    let mut edges: Vec<_> = edges.into_iter().collect();
+    edges.sort_by_key(|(k, _)| *k);
+    (
+        verts.into_iter().map(|x| x.1).collect(),
+        edges.into_iter().map(|x| x.1).collect(),
+    )
+}
+
+/// Rays from inside a closed mesh towards its vertices, edge points (ends,
+/// midpoints, random points) and, for the cube, axis-aligned rays through
+/// grid lines: every one must hit. Returns the number of rays.
+fn assert_no_leaks(name: &str, mesh: &[Triangle], origins: &[Vec3], rng: &mut Rng) -> usize {
+    let (bvh, tris, _) = build(mesh);
+    let (verts, edges) = edges_and_vertices(mesh);
+    let mut targets = verts.clone();
+    for &(a, b) in &edges {
+        targets.push(0.5 * (a + b));
+        targets.push(a.lerp(b, rng.f()));
+    }
+    let mut leaks = 0;
+    let mut rays = 0;
+    for &o in origins {
+        for &p in &targets {
+            for d in [p - o, (p - o).normalize()] {
+                let ray = Ray {
+                    o,
+                    d,
+                    tmax: f32::INFINITY,
+                };
+                rays += 1;
+                let hit = bvh.intersect(&tris, &ray);
+                if hit.is_none() || !bvh.occluded(&tris, &ray) {
+                    leaks += 1;
+                } else if let Some(h) = hit {
+                    // Many triangles meet at the aimed point: a near tie.
+                    let want = brute_closest(&tris, &ray).unwrap();
+                    assert!((h.t - want.t).abs() <= 2e-5 * want.t, "{name}: {ray:?}");
+                }
+            }
+        }
+    }
+    assert_eq!(leaks, 0, "{name}: {leaks} of {rays} rays leaked");
+    rays
+}
+
+#[test]
+fn watertight_closed_meshes() {
+    let mut rng = Rng(5);
+    // Off-grid centre and radius so coordinates are not round numbers.
+    let c = Vec3::new(0.31, -1.73, 2.09);
+    let sphere = icosphere(c, 3.3, 3);
+    let mut origins = vec![c];
+    origins.extend((0..6).map(|_| c + 1.5 * rng.unit()));
+    let n = assert_no_leaks("icosphere", &sphere, &origins, &mut rng);
+
+    let cube = grid_cube(8);
+    let mut origins = vec![Vec3::ZERO, Vec3::new(0.25, -0.5, 0.125)];
+    origins.extend((0..4).map(|_| 0.9 * rng.unit()));
+    let m = assert_no_leaks("cube", &cube, &origins, &mut rng);
+
+    // Axis-aligned rays (two zero direction components) exactly along the
+    // grid lines, from inside: they cross the faces at edges and vertices of
+    // the grid and run inside flat (zero-thickness) boxes.
+    let (bvh, tris, _) = build(&cube);
+    let coord = |i: usize| -1.0 + 2.0 * i as f32 / 8.0;
+    let mut leaks = 0;
+    let mut axis_rays = 0;
+    for axis in 0..3 {
+        for i in 0..=8 {
+            for j in 0..=8 {
+                for k in [1usize, 4, 7] {
+                    for sign in [-1.0f32, 1.0] {
+                        let mut o = [0.0f32; 3];
+                        o[axis] = coord(k) * 0.5;
+                        o[(axis + 1) % 3] = coord(i) * if i == 0 || i == 8 { 0.999 } else { 1.0 };
+                        o[(axis + 2) % 3] = coord(j) * if j == 0 || j == 8 { 0.999 } else { 1.0 };
+                        let mut d = Vec3::ZERO;
+                        d[axis] = sign;
+                        let ray = Ray {
+                            o: Vec3::from(o),
+                            d,
+                            tmax: f32::INFINITY,
+                        };
+                        axis_rays += 1;
+                        match bvh.intersect(&tris, &ray) {
+                            Some(h) if bvh.occluded(&tris, &ray) => {
+                                assert!(
+                                    (h.t - (1.0 - sign * o[axis])).abs() < 1e-6,
+                                    "{ray:?} {h:?}"
+                                );
+                            }
+                            _ => leaks += 1,
+                        }
+                    }
+                }
+            }
+        }
+    }
+    assert_eq!(
+        leaks, 0,
+        "cube: {leaks} of {axis_rays} axis-aligned rays leaked"
+    );
+    eprintln!("watertight: {n} icosphere rays, {m} + {axis_rays} cube rays, no leaks");
+}
+
+/// The bunny is not closed, so rays aim from outside at points on its interior
+/// edges where the two triangles lie on opposite sides of the edge as seen
+/// along the ray: the surface covers that point, so the ray must hit at or
+/// before it.
+fn bunny_edge_leaks(
+    input: &[Triangle],
+    bvh: &Bvh,
+    tris: &[Triangle],
+    rng: &mut Rng,
+) -> (usize, usize) {
+    let key = |p: Vec3| p.to_array().map(f32::to_bits);
+    let mut edge_tris: HashMap<([u32; 3], [u32; 3]), Vec<usize>> = HashMap::new();
+    for (i, t) in input.iter().enumerate() {
+        let v = t.vertices();
+        for k in 0..3 {
+            let (a, b) = (key(v[k]), key(v[(k + 1) % 3]));
+            edge_tris.entry((a.min(b), a.max(b))).or_default().push(i);
+        }
+    }
+    let mut interior: Vec<_> = edge_tris
+        .into_iter()
+        .filter(|(_, ts)| ts.len() == 2)
+        .map(|(k, ts)| (k, [ts[0], ts[1]]))
+        .collect();
+    interior.sort();
+    let (lo, hi) = bounds_of(input);
+    let (center, radius) = (0.5 * (lo + hi), (hi - lo).length());
+    let (mut rays, mut leaks) = (0, 0);
+    while rays < 20_000 {
+        let ((ka, kb), [t1, t2]) = interior[rng.below(interior.len())];
+        let a = Vec3::from(ka.map(f32::from_bits));
+        let b = Vec3::from(kb.map(f32::from_bits));
+        let p = a.lerp(b, rng.range(0.05, 0.95));
+        let o = center + radius * rng.unit();
+        let d = p - o;
+        // The third vertices must lie on opposite sides of the plane through
+        // the edge and the ray, with a margin against rounding.
+        let side = |t: usize| {
+            let third = input[t]
+                .vertices()
+                .into_iter()
+                .find(|&v| key(v) != ka && key(v) != kb)
+                .unwrap();
+            let n = (b - a).cross(d).normalize();
+            n.dot(third - a) / (third - a).length()
+        };
+        let (s1, s2) = (side(t1), side(t2));
+        if !(s1 * s2 < 0.0 && s1.abs() > 0.05 && s2.abs() > 0.05) {
+            continue;
+        }
+        rays += 1;
+        let ray = Ray {
+            o,
+            d,
+            tmax: f32::INFINITY,
+        };
+        match bvh.intersect(tris, &ray) {
+            Some(h) if h.t <= 1.0 + 1e-4 => {}
+            _ => leaks += 1,
+        }
+    }
+    (rays, leaks)
+}
+
+#[test]
+fn bunny_build_differential_and_watertight() {
+    let input = bunny();
+    assert_eq!(input.len(), 69_451);
+    let start = Instant::now();
+    let (bvh, order) = Bvh::build(&input);
+    let build_s = start.elapsed().as_secs_f64();
+    let tris: Vec<Triangle> = order.iter().map(|&i| input[i as usize]).collect();
+    let (leaves, depth) = check_structure(&bvh, &tris, &order);
+    eprintln!(
+        "bunny: build {:.1} ms, {} nodes, {leaves} leaves, depth {depth}",
+        build_s * 1e3,
+        bvh.nodes.len()
+    );
+
+    let mut rng = Rng(2);
+    let (rays, leaks) = bunny_edge_leaks(&input, &bvh, &tris, &mut rng);
+    assert_eq!(leaks, 0, "bunny: {leaks} of {rays} edge rays leaked");
+
+    // Brute force costs 69k triangle tests a ray: 3,000 rays keep this test
+    // to a few seconds; the soups above take the 20,000-ray load, and the GPU
+    // kernel test compares 10^5 bunny rays against this traversal.
+    let rays = random_rays(&input, 3_000, &mut rng);
+    let d = differential("bunny", &input, &rays);
+    assert!(d.hits * 2 > d.rays, "{d:?}");
+    assert!(d.near_swaps * 10_000 <= d.rays, "{d:?}");
+}

@@ -1,0 +1,239 @@
+// BVH traversal: the GLSL mirror of glint_cpu::bvh (cpu/src/bvh/traverse.rs),
+// function for function under the same names, so a CPU/GPU difference can be
+// pinned to one of them by a kernel test (shaders/tests/bvh_test.comp).
+//
+// The including kernel must, BEFORE including this file, declare
+//   - a buffer array `BvhNode bvh_nodes[]` (include "bvh_types.glsl" first),
+//   - a buffer array `Triangle triangles[]`, in the BVH's leaf order,
+//   - `#define BVH_NODE_COUNT <expression>`: the number of nodes; 0 for an
+//     empty scene (Vulkan buffers cannot be empty, so the array's length
+//     cannot say so), and then every query misses.
+#ifndef GLINT_BVH_GLSL
+#define GLINT_BVH_GLSL
+
+#include "bvh_types.glsl"
+
+struct Hit {
+    float t;
+    // Index into triangles[].
+    uint tri;
+    // Barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
+    float u;
+    float v;
+};
+
+// Entries of the traversal stack: glint_cpu::bvh::STACK_SIZE. The builder
+// keeps every leaf at depth <= MAX_DEPTH (48) and front-to-back traversal
+// pushes at most one node per level, so it cannot overflow.
+#define BVH_STACK_SIZE 64
+#define BVH_INF uintBitsToFloat(0x7f800000u)
+#define BVH_NO_HIT 0xffffffffu
+// glint_cpu::bvh::SLAB_PAD = 1 + 2 gamma(3) rounded to f32: 1 + 3 * 2^-23
+// (Ize 2013, "Robust BVH ray traversal"; pbrt-v3's Bounds3::IntersectP).
+#define BVH_SLAB_PAD uintBitsToFloat(0x3f800003u)
+
+// Per-ray constants of the slab and watertight triangle tests.
+struct PreparedRay {
+    vec3 o;
+    vec3 d;
+    // 1 / d with zero (and tiny) components replaced by +-1e30, so the slab
+    // test never forms 0 * inf = NaN (tinybvh's safercp).
+    vec3 inv_d;
+    // Woop et al. 2013: kz is the dominant axis of d, kx and ky follow it
+    // cyclically, swapped when d[kz] < 0 to keep the winding.
+    int kx;
+    int ky;
+    int kz;
+    // (d[kx] / d[kz], d[ky] / d[kz], 1 / d[kz]).
+    vec3 shear;
+};
+
+float safe_rcp(float x) {
+    if (abs(x) >= 1e-30) {
+        return 1.0 / x;
+    }
+    // copysign(1e30, x), -0 included.
+    return uintBitsToFloat(floatBitsToUint(1e30) | (floatBitsToUint(x) & 0x80000000u));
+}
+
+PreparedRay prepare_ray(vec3 o, vec3 d) {
+    PreparedRay r;
+    r.o = o;
+    r.d = d;
+    r.inv_d = vec3(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z));
+    vec3 a = abs(d);
+    int kz = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
+    int kx = (kz + 1) % 3;
+    int ky = (kx + 1) % 3;
+    if (d[kz] < 0.0) {
+        int tmp = kx;
+        kx = ky;
+        ky = tmp;
+    }
+    r.kx = kx;
+    r.ky = ky;
+    r.kz = kz;
+    r.shear = vec3(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]);
+    return r;
+}
+
+// Entry distance of the ray into the box, clamped to >= 0, or BVH_INF when
+// it misses the box within [0, tmax]. The pad widens both the far slab
+// distance and tmax (the best hit so far): box and triangle distances round
+// independently, and too wide only costs a triangle test.
+float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
+    vec3 t1 = (bmin - r.o) * r.inv_d;
+    vec3 t2 = (bmax - r.o) * r.inv_d;
+    vec3 tlo = min(t1, t2);
+    vec3 thi = max(t1, t2);
+    float tnear = max(max(max(tlo.x, tlo.y), tlo.z), 0.0);
+    float tfar = min(min(min(thi.x, thi.y), thi.z), tmax) * BVH_SLAB_PAD;
+    return tnear <= tfar ? tnear : BVH_INF;
+}
+
+// Watertight ray/triangle intersection (Woop, Benthin, Wald 2013, JCGT 2(1)).
+// A hit with 0 < t < tmax writes t and the barycentrics u, v; both faces hit.
+// `precise` forbids FMA contraction: the two triangles sharing an edge must
+// compute exactly negated edge functions from bit-identical sheared vertices,
+// which is what makes the test watertight.
+bool intersect_triangle(PreparedRay r, Triangle tri, float tmax, out float t, out float u,
+                        out float v) {
+    t = 0.0;
+    u = 0.0;
+    v = 0.0;
+    precise vec3 a = tri.p0.xyz - r.o;
+    precise vec3 b = tri.p1.xyz - r.o;
+    precise vec3 c = tri.p2.xyz - r.o;
+    precise float ax = a[r.kx] - r.shear.x * a[r.kz];
+    precise float ay = a[r.ky] - r.shear.y * a[r.kz];
+    precise float bx = b[r.kx] - r.shear.x * b[r.kz];
+    precise float by = b[r.ky] - r.shear.y * b[r.kz];
+    precise float cx = c[r.kx] - r.shear.x * c[r.kz];
+    precise float cy = c[r.ky] - r.shear.y * c[r.kz];
+    // Scaled barycentrics: the 2D edge functions opposite A, B and C.
+    precise float eu = cx * by - cy * bx;
+    precise float ev = ax * cy - ay * cx;
+    precise float ew = bx * ay - by * ax;
+    if ((eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0)) {
+        return false;
+    }
+    precise float det = eu + ev + ew;
+    if (det == 0.0) {
+        return false;
+    }
+    precise float az = r.shear.z * a[r.kz];
+    precise float bz = r.shear.z * b[r.kz];
+    precise float cz = r.shear.z * c[r.kz];
+    precise float tt = (eu * az + ev * bz + ew * cz) / det;
+    // Also rejects NaN.
+    if (!(tt > 0.0 && tt < tmax)) {
+        return false;
+    }
+    t = tt;
+    u = ev / det;
+    v = ew / det;
+    return true;
+}
+
+// Closest hit in (0, tmax): front-to-back, nearer child first and the other
+// pushed, the interval shrinking to the best hit so far.
+bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
+    hit = Hit(tmax, BVH_NO_HIT, 0.0, 0.0);
+    if (uint(BVH_NODE_COUNT) == 0u) {
+        return false;
+    }
+    PreparedRay r = prepare_ray(o, d);
+    if (intersect_aabb(r, bvh_nodes[0].min_left.xyz, bvh_nodes[0].max_count.xyz, tmax) == BVH_INF) {
+        return false;
+    }
+    uint stack[BVH_STACK_SIZE];
+    uint sp = 0u;
+    uint node = 0u;
+    while (true) {
+        uint first = floatBitsToUint(bvh_nodes[node].min_left.w);
+        uint count = floatBitsToUint(bvh_nodes[node].max_count.w);
+        if (count > 0u) {
+            for (uint i = first; i < first + count; i++) {
+                float t, u, v;
+                if (intersect_triangle(r, triangles[i], hit.t, t, u, v)) {
+                    hit = Hit(t, i, u, v);
+                }
+            }
+        } else {
+            uint c1 = first;
+            uint c2 = first + 1u;
+            float d1 = intersect_aabb(r, bvh_nodes[c1].min_left.xyz, bvh_nodes[c1].max_count.xyz, hit.t);
+            float d2 = intersect_aabb(r, bvh_nodes[c2].min_left.xyz, bvh_nodes[c2].max_count.xyz, hit.t);
+            if (d1 > d2) {
+                float td = d1;
+                d1 = d2;
+                d2 = td;
+                uint tc = c1;
+                c1 = c2;
+                c2 = tc;
+            }
+            if (d1 != BVH_INF) {
+                if (d2 != BVH_INF) {
+                    stack[sp] = c2;
+                    sp++;
+                }
+                node = c1;
+                continue;
+            }
+        }
+        if (sp == 0u) {
+            break;
+        }
+        sp--;
+        node = stack[sp];
+    }
+    return hit.tri != BVH_NO_HIT;
+}
+
+// Any hit in (0, tmax): the first triangle hit ends the search; children in
+// stored order.
+bool bvh_occluded(vec3 o, vec3 d, float tmax) {
+    if (uint(BVH_NODE_COUNT) == 0u) {
+        return false;
+    }
+    PreparedRay r = prepare_ray(o, d);
+    if (intersect_aabb(r, bvh_nodes[0].min_left.xyz, bvh_nodes[0].max_count.xyz, tmax) == BVH_INF) {
+        return false;
+    }
+    uint stack[BVH_STACK_SIZE];
+    uint sp = 0u;
+    uint node = 0u;
+    while (true) {
+        uint first = floatBitsToUint(bvh_nodes[node].min_left.w);
+        uint count = floatBitsToUint(bvh_nodes[node].max_count.w);
+        if (count > 0u) {
+            for (uint i = first; i < first + count; i++) {
+                float t, u, v;
+                if (intersect_triangle(r, triangles[i], tmax, t, u, v)) {
+                    return true;
+                }
+            }
+        } else {
+            uint c1 = first;
+            uint c2 = first + 1u;
+            bool hit1 = intersect_aabb(r, bvh_nodes[c1].min_left.xyz, bvh_nodes[c1].max_count.xyz, tmax) != BVH_INF;
+            bool hit2 = intersect_aabb(r, bvh_nodes[c2].min_left.xyz, bvh_nodes[c2].max_count.xyz, tmax) != BVH_INF;
+            if (hit1 || hit2) {
+                if (hit1 && hit2) {
+                    stack[sp] = c2;
+                    sp++;
+                }
+                node = hit1 ? c1 : c2;
+                continue;
+            }
+        }
+        if (sp == 0u) {
+            return false;
+        }
+        sp--;
+        node = stack[sp];
+    }
+    return false;
+}
+
+#endif

@@ -1,0 +1,25 @@
+// The scene structs BVH traversal reads, mirrors of glint_cpu::bvh::BvhNode
+// (32 B) and glint_cpu::scene::Triangle (48 B) in std430. Kept apart from
+// bvh.glsl so a kernel can declare its buffers of these types first, then
+// include bvh.glsl (which needs those buffers).
+#ifndef GLINT_BVH_TYPES_GLSL
+#define GLINT_BVH_TYPES_GLSL
+
+// tinybvh's node: min_left = (aabb_min, left_or_first), max_count =
+// (aabb_max, tri_count), the integers read with floatBitsToUint. Leaf when
+// tri_count > 0: triangles [left_or_first, left_or_first + tri_count);
+// interior: children left_or_first and left_or_first + 1. Node 0 is the root.
+struct BvhNode {
+    vec4 min_left;
+    vec4 max_count;
+};
+
+// World-space vertices; .w of p0, p1, p2 hold the material index, the
+// emitter index (0xffffffff: none) and the flags (floatBitsToUint).
+struct Triangle {
+    vec4 p0;
+    vec4 p1;
+    vec4 p2;
+};
+
+#endif
