@@ -163,39 +163,13 @@ impl Drop for Outputs {
     }
 }
 
-/// Pick the camera: an index if the text is a number in range, else a name.
+/// Pick the camera (the loader's rule: a name first, then an index).
 fn resolve_camera(scene: &Scene, path: &Path, camera: Option<&str>) -> Result<usize> {
-    let Some(c) = camera else { return Ok(0) };
-    if let Ok(i) = c.parse::<usize>()
-        && i < scene.cameras.len()
-    {
-        return Ok(i);
+    match camera {
+        None => Ok(0),
+        Some(c) => glint::cpu::loader::select_camera(scene, c)
+            .map_err(|e| anyhow!("{}: {e}", path.display())),
     }
-    if let Some(i) = scene
-        .cameras
-        .iter()
-        .position(|cam| cam.name.as_deref() == Some(c))
-    {
-        return Ok(i);
-    }
-    let names: Vec<String> = scene
-        .cameras
-        .iter()
-        .enumerate()
-        .map(|(i, cam)| match &cam.name {
-            Some(n) => format!("{i} \"{n}\""),
-            None => i.to_string(),
-        })
-        .collect();
-    bail!(
-        "{}: no camera \"{c}\" (cameras: {})",
-        path.display(),
-        if names.is_empty() {
-            "none".into()
-        } else {
-            names.join(", ")
-        }
-    )
 }
 
 /// The image size: both given, or one given and the other from the

@@ -62,24 +62,7 @@ impl PinholeCamera {
 pub fn scene_camera(scene: &Scene, index: usize) -> Camera {
     match scene.cameras.get(index) {
         Some(c) => c.clone(),
-        None => framing_camera(scene),
-    }
-}
-
-/// A camera framing the scene's bounds from +Z, looking down -Z, 45 degree
-/// vertical field of view, far enough back that the bounding sphere fits.
-/// Used when the scene has no camera of its own.
-pub fn framing_camera(scene: &Scene) -> Camera {
-    let (lo, hi) = scene.bounds();
-    let centre = 0.5 * (lo + hi);
-    let radius = (0.5 * (hi - lo).length()).max(1e-3);
-    let yfov = std::f32::consts::FRAC_PI_4;
-    let dist = radius / (0.5 * yfov).sin();
-    Camera {
-        name: None,
-        to_world: glam::Mat4::from_translation(centre + Vec3::Z * dist),
-        yfov,
-        aspect_ratio: None,
+        None => crate::loader::default_camera(scene),
     }
 }
 
