@@ -4,12 +4,12 @@
 
 mod render_common;
 
-use render_common::*;
 use glam::{Vec2, Vec3};
 use glint_cpu::bsdf::{Bsdf, Roughness};
 use glint_cpu::camera::PinholeCamera;
 use glint_cpu::compare::{compare_to_constant, compare_to_reference};
 use glint_cpu::{Material, PunctualLight, Scene};
+use render_common::*;
 
 const SIZE: u32 = 32;
 

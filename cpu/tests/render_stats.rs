@@ -5,8 +5,8 @@
 
 mod render_common;
 
-use render_common::*;
 use glint_cpu::compare::compare_films;
+use render_common::*;
 
 const SIZE: u32 = 32;
 
