@@ -225,3 +225,67 @@ pub fn temp_path_for(path: &Path) -> PathBuf {
         .unwrap_or_default();
     path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_oetf_and_clamping() {
+        assert_eq!(srgb_encode_u8(0.0), 0);
+        assert_eq!(srgb_encode_u8(1.0), 255);
+        assert_eq!(srgb_encode_u8(7.5), 255);
+        assert_eq!(srgb_encode_u8(-1.0), 0);
+        assert_eq!(srgb_encode_u8(f32::NAN), 0);
+        // Linear segment: 12.92 x 0.003 x 255 = 9.88.
+        assert_eq!(srgb_encode_u8(0.003), 10);
+        // Power segment: 1.055 x 0.5^(1/2.4) - 0.055 = 0.7354 -> 187.5.
+        assert_eq!(srgb_encode_u8(0.5), 188);
+        assert_eq!(srgb_encode_u8(0.18), 118);
+    }
+
+    #[test]
+    fn mean_and_variance_of_the_mean() {
+        let mut f = Film::new(1, 1);
+        for v in [1.0f32, 2.0, 3.0, 6.0] {
+            f.sum[0] += Vec3::splat(v);
+            f.sum_sq[0] += Vec3::splat(v * v);
+        }
+        f.spp = 4;
+        assert_eq!(f.mean(0), Vec3::splat(3.0));
+        // Sample variance 14/3, of the mean 14/12.
+        assert!((f.variance_of_mean(0).x - 14.0 / 12.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn images_are_written_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("glint-film-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut f = Film::new(3, 2);
+        f.spp = 1;
+        f.sum[4] = Vec3::new(0.25, 2.0, 1e-3);
+        let exr = dir.join("a.exr");
+        f.write_image(&exr).unwrap();
+        let img = image::open(&exr).unwrap().into_rgb32f();
+        assert_eq!((img.width(), img.height()), (3, 2));
+        assert_eq!(img.get_pixel(1, 1).0, [0.25, 2.0, 1e-3]);
+        let png = dir.join("a.png");
+        f.write_image(&png).unwrap();
+        assert_eq!(
+            image::open(&png).unwrap().to_rgb8().get_pixel(1, 1).0,
+            [137, 255, 3]
+        );
+        assert!(matches!(
+            f.write_image(&dir.join("a.tiff")),
+            Err(ImageWriteError::Format { .. })
+        ));
+        assert!(f.write_image(&dir.join("missing/a.png")).is_err());
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.exr", "a.png"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
