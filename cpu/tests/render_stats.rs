@@ -5,6 +5,9 @@
 
 mod render_common;
 
+use glam::Vec3;
+use glint_cpu::Material;
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::compare::compare_films;
 use render_common::*;
 
@@ -39,6 +42,43 @@ fn next_event_estimation_with_mis_agrees_with_bsdf_sampling_alone() {
     let without = render_no_nee(&s, &opts(SIZE, 256, 2, 24));
     let r = compare_films(&with, &without).unwrap();
     assert!(r.pass, "depth 2: {r}");
+}
+
+#[test]
+fn mis_agrees_on_glossy_and_transmissive_surfaces() {
+    // The sphere as a rough conductor (a GGX pdf, not a cosine) and as a
+    // rough dielectric (transmission: the background is sampled over the
+    // whole sphere there): light sampling + MIS against BSDF sampling alone.
+    let (eta, k) = named_metal("Cu").unwrap();
+    let rough = Roughness {
+        alpha_u: 0.3,
+        alpha_v: 0.15,
+        shadowing: Shadowing::Correlated,
+    };
+    let materials = [
+        Bsdf::Conductor(ConductorParams {
+            eta,
+            k,
+            specular_reflectance: Vec3::ONE,
+            roughness: rough,
+        }),
+        Bsdf::Dielectric {
+            eta: 1.5,
+            roughness: rough,
+        },
+    ];
+    for (i, bsdf) in materials.into_iter().enumerate() {
+        let s = lit_room(vec![Material {
+            name: "sphere".into(),
+            bsdf,
+            emission: Vec3::ZERO,
+            double_sided: false,
+        }]);
+        let with = render(&s, &opts(SIZE, 64, -1, 41 + i as u64));
+        let without = render_no_nee(&s, &opts(SIZE, 256, -1, 51 + i as u64));
+        let r = compare_films(&with, &without).unwrap();
+        assert!(r.pass, "{bsdf:?}: {r}");
+    }
 }
 
 #[test]
