@@ -187,6 +187,21 @@ fn renders_png_and_exr_with_stats() {
         String::from_utf8_lossy(&out.stderr)
     );
     assert_eq!(image::open(&again).unwrap().into_rgb32f(), hdr);
+    // The camera by name and by index is the same camera; another seed
+    // gives another image.
+    for (camera, seed, same) in [("main", "0", true), ("0", "0", true), ("0", "9", false)] {
+        let out = glint()
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&again)
+            .args(["--backend", "cpu", "--spp", "4", "--width", "48"])
+            .args(["--camera", camera, "--seed", seed])
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert_eq!(image::open(&again).unwrap().into_rgb32f() == hdr, same, "{camera} {seed}");
+    }
     let _ = std::fs::remove_dir_all(&dir);
 }
 
