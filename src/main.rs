@@ -14,7 +14,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::Parser;
 use indicatif::{ProgressBar, ProgressStyle};
 
-use cli::{Backend, Cli, Command, RenderArgs};
+use cli::{Backend, Cli, Command, CompareArgs, RenderArgs, SceneArgs};
 use glint::cpu::film::{OutputFormat, temp_path_for};
 use glint::cpu::{Film, RenderOptions, Scene};
 use stats::{Stats, cpu_device_name};
@@ -71,6 +71,7 @@ fn main() -> ExitCode {
     // reported by the hook above, and ends here with status 101.
     let result = match cli.command {
         Command::Render(args) => std::panic::catch_unwind(|| run_render(&args)),
+        Command::Compare(args) => std::panic::catch_unwind(|| run_compare(&args)),
     };
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,
@@ -174,7 +175,7 @@ fn resolve_camera(scene: &Scene, path: &Path, camera: Option<&str>) -> Result<us
 
 /// The image size: both given, or one given and the other from the
 /// camera's aspect ratio (glTF `aspectRatio`, else 1:1), or 512 wide.
-fn image_size(args: &RenderArgs, aspect: f32) -> Result<(u32, u32)> {
+fn image_size(args: &SceneArgs, aspect: f32) -> Result<(u32, u32)> {
     let check = |name: &str, v: u32| -> Result<u32> {
         if (1..=MAX_SIZE).contains(&v) {
             Ok(v)
@@ -210,9 +211,9 @@ fn progress_bar() -> Option<ProgressBar> {
     Some(pb)
 }
 
-fn run_render(args: &RenderArgs) -> Result<()> {
-    let setup_start = Instant::now();
-    // Parameters first: nothing is read or created for a bad command line.
+/// Parameter checks that need no file: nothing is read or created for a
+/// bad command line.
+fn check_params(args: &SceneArgs) -> Result<()> {
     if args.spp == 0 {
         bail!("--spp must be at least 1");
     }
@@ -222,37 +223,14 @@ fn run_render(args: &RenderArgs) -> Result<()> {
             args.max_depth
         );
     }
-    let mut formats = Vec::new();
-    for o in &args.outputs {
-        match OutputFormat::from_path(o) {
-            Some(f) => formats.push(f),
-            None => bail!(
-                "{}: unsupported output format (use .exr or .png)",
-                o.display()
-            ),
-        }
-    }
-    if let Some(s) = &args.stats
-        && args.outputs.contains(s)
-    {
-        bail!("{}: given both as an image and as --stats", s.display());
-    }
+    Ok(())
+}
+
+/// Load the scene and settle the render options (camera, image size).
+fn load_scene(args: &SceneArgs) -> Result<(Scene, RenderOptions)> {
     if !args.scene.is_file() {
         bail!("{}: no such file", args.scene.display());
     }
-
-    let mut outputs = Outputs::new();
-    let image_slots: Vec<usize> = args
-        .outputs
-        .iter()
-        .map(|o| outputs.reserve(o))
-        .collect::<Result<_>>()?;
-    let stats_slot = args
-        .stats
-        .as_ref()
-        .map(|s| outputs.reserve(s))
-        .transpose()?;
-
     let scene = glint::cpu::loader::load(&args.scene)?;
     let camera = resolve_camera(&scene, &args.scene, args.camera.as_deref())?;
     let aspect = scene
@@ -272,81 +250,135 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     };
     glint::cpu::integrator::validate_options(&scene, &opts)
         .map_err(|e| anyhow!("{}: {e}", args.scene.display()))?;
+    Ok((scene, opts))
+}
 
+/// A finished render on either backend.
+struct BackendRender {
+    film: Film,
+    rays: u64,
+    render_seconds: f64,
+    /// Backend set-up after loading (device, pipelines, upload; CPU: lights).
+    setup_seconds: f64,
+    device: String,
+    driver: Option<String>,
+    threads: Option<usize>,
+}
+
+fn render_on(
+    backend: Backend,
+    args: &SceneArgs,
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> Result<BackendRender> {
     let pb = progress_bar();
-    let (film, rays, render_seconds, setup_seconds, device, driver, threads) = match args.backend {
+    let progress = |done: u32, total: u32| {
+        if let Some(pb) = &pb {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        }
+    };
+    let r = match backend {
         Backend::Cpu => {
-            let pt = glint::cpu::PathTracer::new(&scene, &opts)
+            let start = Instant::now();
+            let pt = glint::cpu::PathTracer::new(scene, opts)
                 .map_err(|e| anyhow!("{}: {e}", args.scene.display()))?;
-            let setup = setup_start.elapsed().as_secs_f64();
-            let progress = |done: u32, total: u32| {
-                if let Some(pb) = &pb {
-                    pb.set_length(total as u64);
-                    pb.set_position(done as u64);
-                }
-            };
+            let setup_seconds = start.elapsed().as_secs_f64();
             let (film, st) = pt.render(opts.spp, &progress);
             let threads = rayon::current_num_threads();
-            (
+            BackendRender {
                 film,
-                st.rays,
-                st.render_seconds,
-                setup,
-                cpu_device_name(threads),
-                None,
-                Some(threads),
-            )
+                rays: st.rays,
+                render_seconds: st.render_seconds,
+                setup_seconds,
+                device: cpu_device_name(threads),
+                driver: None,
+                threads: Some(threads),
+            }
         }
         Backend::Gpu => {
-            let load_seconds = setup_start.elapsed().as_secs_f64();
-            let progress = |done: u32, total: u32| {
-                if let Some(pb) = &pb {
-                    pb.set_length(total as u64);
-                    pb.set_position(done as u64);
-                }
-            };
-            let r = glint::gpu::render(&scene, &opts, args.device.as_deref(), &progress)
+            let r = glint::gpu::render(scene, opts, args.device.as_deref(), &progress)
                 .map_err(|e| anyhow!("{}: GPU backend: {e}", args.scene.display()))?;
-            (
-                r.film,
-                r.stats.rays,
-                r.stats.render_seconds,
-                load_seconds + r.setup_seconds,
-                r.device,
-                Some(r.driver),
-                None,
-            )
+            BackendRender {
+                film: r.film,
+                rays: r.stats.rays,
+                render_seconds: r.stats.render_seconds,
+                setup_seconds: r.setup_seconds,
+                device: r.device,
+                driver: Some(r.driver),
+                threads: None,
+            }
         }
     };
     if let Some(pb) = pb {
         pb.finish_and_clear();
     }
+    Ok(r)
+}
+
+fn run_render(args: &RenderArgs) -> Result<()> {
+    let start = Instant::now();
+    check_params(&args.scene)?;
+    let mut formats = Vec::new();
+    for o in &args.outputs {
+        match OutputFormat::from_path(o) {
+            Some(f) => formats.push(f),
+            None => bail!(
+                "{}: unsupported output format (use .exr or .png)",
+                o.display()
+            ),
+        }
+    }
+    if let Some(s) = &args.stats
+        && args.outputs.contains(s)
+    {
+        bail!("{}: given both as an image and as --stats", s.display());
+    }
+    if !args.scene.scene.is_file() {
+        bail!("{}: no such file", args.scene.scene.display());
+    }
+
+    let mut outputs = Outputs::new();
+    let image_slots: Vec<usize> = args
+        .outputs
+        .iter()
+        .map(|o| outputs.reserve(o))
+        .collect::<Result<_>>()?;
+    let stats_slot = args
+        .stats
+        .as_ref()
+        .map(|s| outputs.reserve(s))
+        .transpose()?;
+
+    let (scene, opts) = load_scene(&args.scene)?;
+    let load_seconds = start.elapsed().as_secs_f64();
+    let r = render_on(args.backend, &args.scene, &scene, &opts)?;
 
     for (&slot, &format) in image_slots.iter().zip(&formats) {
-        outputs.write(slot, |w| encode(&film, w, format))?;
+        outputs.write(slot, |w| encode(&r.film, w, format))?;
     }
     if let Some(slot) = stats_slot {
         let st = Stats {
             backend: args.backend.name(),
-            device,
-            driver,
-            scene: args.scene.display().to_string(),
-            width,
-            height,
-            spp: args.spp,
-            max_depth: args.max_depth,
-            seed: args.seed,
+            device: r.device,
+            driver: r.driver,
+            scene: args.scene.scene.display().to_string(),
+            width: opts.width,
+            height: opts.height,
+            spp: opts.spp,
+            max_depth: opts.max_depth,
+            seed: opts.seed,
             camera: scene
                 .cameras
-                .get(camera)
-                .map(|c| c.name.clone().unwrap_or_else(|| camera.to_string())),
+                .get(opts.camera)
+                .map(|c| c.name.clone().unwrap_or_else(|| opts.camera.to_string())),
             triangles: scene.triangles.len(),
             emitters: scene.emitter_triangles().len(),
             lights: scene.lights.len(),
-            threads,
-            setup_seconds,
-            render_seconds,
-            rays,
+            threads: r.threads,
+            setup_seconds: load_seconds + r.setup_seconds,
+            render_seconds: r.render_seconds,
+            rays: r.rays,
         };
         outputs.write(slot, |w| {
             serde_json::to_writer_pretty(&mut *w, &st.to_json())?;
@@ -356,6 +388,37 @@ fn run_render(args: &RenderArgs) -> Result<()> {
         })?;
     }
     outputs.commit()
+}
+
+/// `glint compare`: both backends on one scene, the statistical test of
+/// glint_cpu::compare, one line of verdict on stdout.
+fn run_compare(args: &CompareArgs) -> Result<()> {
+    check_params(&args.scene)?;
+    if !(args.alpha > 0.0 && args.alpha < 1.0) {
+        bail!("--alpha {} is out of range (0, 1)", args.alpha);
+    }
+    if args.scene.spp < 2 {
+        bail!("--spp must be at least 2 to estimate the variance");
+    }
+    let (scene, opts) = load_scene(&args.scene)?;
+    let gpu = render_on(Backend::Gpu, &args.scene, &scene, &opts)?;
+    let cpu = render_on(Backend::Cpu, &args.scene, &scene, &opts)?;
+    let report =
+        glint::cpu::compare::compare_films_masked(&gpu.film, &cpu.film, &|_, _| true, args.alpha)
+            .map_err(|e| anyhow!("{}: {e}", args.scene.scene.display()))?;
+    println!(
+        "{}: gpu ({}) vs cpu: {report}",
+        args.scene.scene.display(),
+        gpu.device
+    );
+    if report.pass {
+        Ok(())
+    } else {
+        bail!(
+            "{}: the backends differ (see the report above)",
+            args.scene.scene.display()
+        )
+    }
 }
 
 fn encode(

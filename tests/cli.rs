@@ -199,8 +199,16 @@ fn renders_png_and_exr_with_stats() {
             .args(["--camera", camera, "--seed", seed])
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-        assert_eq!(image::open(&again).unwrap().into_rgb32f() == hdr, same, "{camera} {seed}");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            image::open(&again).unwrap().into_rgb32f() == hdr,
+            same,
+            "{camera} {seed}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
@@ -332,6 +340,20 @@ fn bad_inputs_fail_with_one_line_and_no_output() {
         ),
         (vec![s(&scene)], "output"),
     ];
+    // The compare verb validates the same way.
+    for (args, needle) in [
+        (vec!["--spp", "1"], "spp"),
+        (vec!["--alpha", "2"], "alpha"),
+        (vec!["--max-depth", "-5"], "max-depth"),
+    ] {
+        let out = glint()
+            .arg("compare")
+            .arg(&scene)
+            .args(args)
+            .output()
+            .unwrap();
+        assert_one_line_error(&out, needle);
+    }
     for (args, needle) in cases {
         let mut full = vec!["render".to_string()];
         full.extend(args.iter().cloned());
