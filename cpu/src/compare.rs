@@ -23,8 +23,12 @@
 //!    - global: the count of |z| above the two-sided 1% threshold must be
 //!      consistent with Binomial(N, 0.01) at alpha/2 (a mild bias spread
 //!      over the image, which no single block shows).
-//!    With a correct renderer the images pass with probability about
-//!    1 - alpha (the z's are only approximately normal at low spp).
+//!
+//! With a correct renderer the images pass with probability about
+//! 1 - alpha (the z's are only approximately normal at low spp).
+
+// `!(a <= b)` on floats is meant: it is true for NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 use glam::Vec3;
 

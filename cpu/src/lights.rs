@@ -18,6 +18,9 @@
 //! Every light sample draws exactly four uniform numbers (category, index,
 //! 2D position), whatever is chosen, so the GPU consumes the same stream.
 
+// `!(x > 0.0)` on floats is meant: it rejects NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::mem::{offset_of, size_of};
 
 use bytemuck::{Pod, Zeroable};

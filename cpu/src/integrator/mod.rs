@@ -29,6 +29,9 @@
 //!   the interpolated normal pretends is not there (Veach 1996's
 //!   shading-normal asymmetry; pbrt-v3 sec. 16.1 discusses the same leak).
 
+// `!(x > 0.0)` on floats is meant: it rejects NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 mod gpu;
 
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -109,6 +112,9 @@ pub fn offset_origin(p: Vec3, ng: Vec3, w: Vec3, eps_abs: f32) -> Vec3 {
         p - ng * e
     }
 }
+
+/// One tile's output: its index, per-pixel (sum, sum_sq), rays traced.
+type TileResult = (u32, Vec<(Vec3, Vec3)>, u64);
 
 /// Everything one render needs, prepared once.
 pub struct PathTracer<'a> {
@@ -337,7 +343,7 @@ impl<'a> PathTracer<'a> {
         let tiles_y = h.div_ceil(TILE);
         let total = tiles_x * tiles_y;
         let done = AtomicU32::new(0);
-        let tiles: Vec<(u32, Vec<(Vec3, Vec3)>, u64)> = (0..total)
+        let tiles: Vec<TileResult> = (0..total)
             .into_par_iter()
             .map(|ti| {
                 let (x0, y0) = ((ti % tiles_x) * TILE, (ti / tiles_x) * TILE);
