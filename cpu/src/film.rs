@@ -3,6 +3,9 @@
 //! INTERFACE FIXED BY THE LEAD; owned by the integrator work (add image
 //! output, methods; keep these fields).
 
+use std::io::{Seek, Write};
+use std::path::{Path, PathBuf};
+
 use glam::Vec3;
 
 /// What `glint render` asks of either backend (the contract's options).
@@ -40,4 +43,249 @@ pub struct RenderStats {
     /// Rays traced (camera, continuation and shadow rays).
     pub rays: u64,
     pub render_seconds: f64,
+}
+
+impl RenderOptions {
+    /// The contract's defaults for a given image size: 64 spp, unbounded
+    /// depth, seed 0, the first camera.
+    pub fn new(width: u32, height: u32) -> Self {
+        Self {
+            width,
+            height,
+            spp: 64,
+            max_depth: -1,
+            seed: 0,
+            camera: 0,
+        }
+    }
+}
+
+/// The image formats `glint render` writes, chosen by file extension.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum OutputFormat {
+    /// Linear RGB radiance, 32-bit float, no tone mapping.
+    Exr,
+    /// 8-bit sRGB (the sRGB OETF), clamped to [0, 1].
+    Png,
+}
+
+impl OutputFormat {
+    /// From the extension (case-insensitive): `.exr` or `.png`.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "exr" => Some(Self::Exr),
+            "png" => Some(Self::Png),
+            _ => None,
+        }
+    }
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum ImageWriteError {
+    #[error("{path}: unsupported output format (use .exr or .png)")]
+    Format { path: PathBuf },
+    #[error("{path}: {message}")]
+    Io { path: PathBuf, message: String },
+}
+
+/// The sRGB OETF (IEC 61966-2-1) of a linear value clamped to [0, 1],
+/// quantised to 8 bits with rounding.
+pub fn srgb_encode_u8(linear: f32) -> u8 {
+    let c = if linear.is_nan() {
+        0.0
+    } else {
+        linear.clamp(0.0, 1.0)
+    };
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5).floor().clamp(0.0, 255.0) as u8
+}
+
+impl Film {
+    /// An empty film (no samples).
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            spp: 0,
+            sum: vec![Vec3::ZERO; n],
+            sum_sq: vec![Vec3::ZERO; n],
+        }
+    }
+
+    pub fn index(&self, x: u32, y: u32) -> usize {
+        y as usize * self.width as usize + x as usize
+    }
+
+    /// Per-pixel mean radiance (the image).
+    pub fn mean(&self, i: usize) -> Vec3 {
+        if self.spp == 0 {
+            Vec3::ZERO
+        } else {
+            self.sum[i] / self.spp as f32
+        }
+    }
+
+    /// Unbiased estimate of the variance of pixel i's mean:
+    /// (sum_sq - n mean^2) / (n (n - 1)), clamped at 0 against rounding.
+    /// Zero with fewer than two samples (unknown).
+    pub fn variance_of_mean(&self, i: usize) -> Vec3 {
+        let n = self.spp as f64;
+        if self.spp < 2 {
+            return Vec3::ZERO;
+        }
+        let s = self.sum[i].as_dvec3();
+        let s2 = self.sum_sq[i].as_dvec3();
+        let v = (s2 - s * s / n) / (n * (n - 1.0));
+        v.max(glam::DVec3::ZERO).as_vec3()
+    }
+
+    /// The image: per-pixel means, row-major, top row first.
+    pub fn means(&self) -> Vec<Vec3> {
+        (0..self.sum.len()).map(|i| self.mean(i)).collect()
+    }
+
+    /// Add another film's samples (same size) to this one.
+    pub fn accumulate(&mut self, other: &Film) {
+        assert_eq!((self.width, self.height), (other.width, other.height));
+        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
+            *a += *b;
+        }
+        for (a, b) in self.sum_sq.iter_mut().zip(&other.sum_sq) {
+            *a += *b;
+        }
+        self.spp += other.spp;
+    }
+
+    /// Encode the image in `format` into `w`.
+    pub fn encode<W: Write + Seek>(
+        &self,
+        w: &mut W,
+        format: OutputFormat,
+    ) -> image::ImageResult<()> {
+        let means = self.means();
+        match format {
+            OutputFormat::Exr => {
+                let data: Vec<f32> = means.iter().flat_map(|m| m.to_array()).collect();
+                let img = image::Rgb32FImage::from_raw(self.width, self.height, data)
+                    .expect("buffer sized from the film");
+                image::DynamicImage::ImageRgb32F(img).write_to(w, image::ImageFormat::OpenExr)
+            }
+            OutputFormat::Png => {
+                let data: Vec<u8> = means
+                    .iter()
+                    .flat_map(|m| m.to_array().map(srgb_encode_u8))
+                    .collect();
+                let img = image::RgbImage::from_raw(self.width, self.height, data)
+                    .expect("buffer sized from the film");
+                image::DynamicImage::ImageRgb8(img).write_to(w, image::ImageFormat::Png)
+            }
+        }
+    }
+
+    /// Write the image to `path` (format from its extension) through a
+    /// temporary file in the same directory, renamed over `path` only once
+    /// complete: no partial file is ever left under the final name, and the
+    /// temporary is removed on failure.
+    pub fn write_image(&self, path: &Path) -> Result<(), ImageWriteError> {
+        let format = OutputFormat::from_path(path).ok_or_else(|| ImageWriteError::Format {
+            path: path.to_path_buf(),
+        })?;
+        let io = |e: &dyn std::fmt::Display| ImageWriteError::Io {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        };
+        let tmp = temp_path_for(path);
+        let result = (|| {
+            let file = std::fs::File::create(&tmp).map_err(|e| io(&e))?;
+            let mut w = std::io::BufWriter::new(file);
+            self.encode(&mut w, format).map_err(|e| io(&e))?;
+            let file = w.into_inner().map_err(|e| io(&e.error().to_string()))?;
+            file.sync_all().map_err(|e| io(&e))?;
+            std::fs::rename(&tmp, path).map_err(|e| io(&e))
+        })();
+        if result.is_err() {
+            let _ = std::fs::remove_file(&tmp);
+        }
+        result
+    }
+}
+
+/// `DIR/.NAME.tmp-PID`: beside the final file (so the rename stays on one
+/// file system) and hidden.
+pub fn temp_path_for(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_oetf_and_clamping() {
+        assert_eq!(srgb_encode_u8(0.0), 0);
+        assert_eq!(srgb_encode_u8(1.0), 255);
+        assert_eq!(srgb_encode_u8(7.5), 255);
+        assert_eq!(srgb_encode_u8(-1.0), 0);
+        assert_eq!(srgb_encode_u8(f32::NAN), 0);
+        // Linear segment: 12.92 x 0.003 x 255 = 9.88.
+        assert_eq!(srgb_encode_u8(0.003), 10);
+        // Power segment: 1.055 x 0.5^(1/2.4) - 0.055 = 0.7354 -> 187.5.
+        assert_eq!(srgb_encode_u8(0.5), 188);
+        assert_eq!(srgb_encode_u8(0.18), 118);
+    }
+
+    #[test]
+    fn mean_and_variance_of_the_mean() {
+        let mut f = Film::new(1, 1);
+        for v in [1.0f32, 2.0, 3.0, 6.0] {
+            f.sum[0] += Vec3::splat(v);
+            f.sum_sq[0] += Vec3::splat(v * v);
+        }
+        f.spp = 4;
+        assert_eq!(f.mean(0), Vec3::splat(3.0));
+        // Sample variance 14/3, of the mean 14/12.
+        assert!((f.variance_of_mean(0).x - 14.0 / 12.0).abs() < 1e-5);
+    }
+
+    #[test]
+    fn images_are_written_whole_or_not_at_all() {
+        let dir = std::env::temp_dir().join(format!("glint-film-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut f = Film::new(3, 2);
+        f.spp = 1;
+        f.sum[4] = Vec3::new(0.25, 2.0, 1e-3);
+        let exr = dir.join("a.exr");
+        f.write_image(&exr).unwrap();
+        let img = image::open(&exr).unwrap().into_rgb32f();
+        assert_eq!((img.width(), img.height()), (3, 2));
+        assert_eq!(img.get_pixel(1, 1).0, [0.25, 2.0, 1e-3]);
+        let png = dir.join("a.png");
+        f.write_image(&png).unwrap();
+        assert_eq!(
+            image::open(&png).unwrap().to_rgb8().get_pixel(1, 1).0,
+            [137, 255, 3]
+        );
+        assert!(matches!(
+            f.write_image(&dir.join("a.tiff")),
+            Err(ImageWriteError::Format { .. })
+        ));
+        assert!(f.write_image(&dir.join("missing/a.png")).is_err());
+        let mut names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        names.sort();
+        assert_eq!(names, ["a.exr", "a.png"]);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

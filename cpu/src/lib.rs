@@ -6,15 +6,21 @@
 
 pub mod bsdf;
 pub mod bvh;
+pub mod camera;
+pub mod compare;
 pub mod film;
 pub mod frame;
+pub mod integrator;
+pub mod lights;
 pub mod loader;
+pub mod sampling;
 pub mod scene;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, BvhNode, Hit, Ray};
-pub use film::{Film, RenderOptions, RenderStats};
+pub use film::{Film, OutputFormat, RenderOptions, RenderStats};
 pub use frame::Frame;
+pub use integrator::{PathTracer, RenderError, render};
 pub use scene::{
     Camera, GpuMaterial, Material, NO_LIGHT, PunctualLight, Scene, TRI_DOUBLE_SIDED, Triangle,
     TriangleShading,

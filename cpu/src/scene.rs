@@ -203,7 +203,7 @@ pub struct Scene {
     pub shading: Vec<TriangleShading>,
     pub materials: Vec<Material>,
     pub lights: Vec<PunctualLight>,
-    /// Cameras of the default scene in document order of their nodes.
+    /// Cameras of the default scene, in depth-first node order.
     pub cameras: Vec<Camera>,
     /// `scene.extras.background`: constant radiance (default black).
     pub background: Vec3,

@@ -483,6 +483,21 @@ fn single_triangle() {
         bvh.intersect(&tris, &ray(Vec3::new(-1.0, 0.25, 1.0), Vec3::X, 5.0))
             .is_none()
     );
+    // Axis-aligned rays whose origin lies exactly on the box's faces (zero
+    // direction components: the slab test must not form 0 * inf = NaN),
+    // through the triangle's edges and a vertex, which count as inside.
+    for (o, d, t) in [
+        (Vec3::new(0.0, 0.25, 0.0), Vec3::Z, 1.0),
+        (Vec3::new(0.25, 0.0, 0.0), Vec3::Z, 1.0),
+        (Vec3::new(0.0, 0.0, 0.0), Vec3::Z, 1.0),
+        (Vec3::new(0.0, 1.0, 2.0), -Vec3::Z, 1.0),
+        (Vec3::new(1.0, 0.0, 3.0), -Vec3::Z, 2.0),
+        (Vec3::new(0.5, 0.5, 0.0), Vec3::Z, 1.0),
+    ] {
+        let r = ray(o, d, f32::INFINITY);
+        assert_eq!(bvh.intersect(&tris, &r).map(|h| h.t), Some(t), "{r:?}");
+        assert!(bvh.occluded(&tris, &r), "{r:?}");
+    }
 }
 
 /// The triangle test alone against a double-precision Moller-Trumbore on

@@ -313,6 +313,17 @@ fn extras_diffuse_and_conductors() {
     // Mitsuba's default material "none": eta 0, k 1, a perfect mirror.
     let Bsdf::Conductor(c) = b[7] else { panic!() };
     assert_eq!((c.eta, c.k), (Vec3::ZERO, Vec3::ONE));
+    for cos in [1.0f32, 0.5, 0.05] {
+        let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
+        let smp = b[7]
+            .sample(wo, 0.5, Vec2::splat(0.5))
+            .expect("mirror sample");
+        assert!(
+            close(smp.weight, Vec3::ONE),
+            "mirror reflects {} at cos {cos}",
+            smp.weight
+        );
+    }
 }
 
 #[test]
@@ -886,4 +897,45 @@ fn bunny_parses() {
     assert!(s.shading.iter().all(|sh| sh.n.iter().all(|n| n[3] == 1.0)));
     assert_eq!(s.materials.len(), 1);
     assert!(s.cameras.is_empty());
+}
+
+#[test]
+fn load_builds_the_bvh_and_keeps_emitters() {
+    for name in ["cornell.gltf", "bunny.glb"] {
+        let path = assets_dir().join(name);
+        let parsed = parse(&path).unwrap();
+        let (s, secs) = loader::load_timed(&path).unwrap_or_else(|e| panic!("{e}"));
+        eprintln!(
+            "{name}: {} triangles loaded (parse + BVH) in {secs:.3} s",
+            s.triangles.len()
+        );
+        assert!(!s.bvh.nodes.is_empty());
+        assert_eq!(s.triangles.len(), parsed.triangles.len());
+        assert_eq!(s.shading.len(), s.triangles.len());
+        // Reordered into leaf order, emitters renumbered 0.. in the new order.
+        let emitters = s.emitter_triangles();
+        assert_eq!(emitters.len(), parsed.emitter_triangles().len());
+        for (k, &t) in emitters.iter().enumerate() {
+            assert_eq!(s.triangles[t as usize].light, k as u32);
+        }
+        // The same multiset of triangles, each still with its own shading.
+        let key = |t: &glint_cpu::Triangle, sh: &glint_cpu::TriangleShading| {
+            format!("{:?}{:?}{}", t.vertices(), sh.n, t.material)
+        };
+        let mut a: Vec<String> = parsed
+            .triangles
+            .iter()
+            .zip(&parsed.shading)
+            .map(|(t, sh)| key(t, sh))
+            .collect();
+        let mut b: Vec<String> = s
+            .triangles
+            .iter()
+            .zip(&s.shading)
+            .map(|(t, sh)| key(t, sh))
+            .collect();
+        a.sort();
+        b.sort();
+        assert!(a == b, "{name}: load changed the triangle set");
+    }
 }

@@ -7,7 +7,8 @@ use glam::{Vec2, Vec3};
 
 use super::fresnel::fresnel_conductor;
 use super::microfacet::{
-    MIN_ALPHA, ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect,
+    MIN_ALPHA, ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility,
+    reflect_dir,
 };
 use super::{BsdfSample, ConductorParams, Roughness, Shadowing};
 
@@ -78,24 +79,31 @@ pub fn conductor_sample(c: &ConductorParams, wo: Vec3, u: Vec2) -> Option<BsdfSa
     }
     let (ax, ay) = rough_alphas(&c.roughness);
     let wm = ggx_sample_visible(wo_up, ax, ay, u);
-    let mut wi = reflect(wo_up, wm);
-    if wi.z <= 0.0 {
+    let dot = wo_up.dot(wm);
+    let mut wi = reflect_dir(wo_up, wm);
+    if wi.z <= 0.0 || dot <= 0.0 {
         return None;
     }
+    // pdf and weight from the sampled microfacet normal (pbrt-v4 does the
+    // same): recomputing the half vector from wo + wi is ill-conditioned
+    // for near-specular lobes at grazing angles, where wo and wi are
+    // nearly opposite in the plane and their sum loses most of its bits.
+    let pdf = ggx_pdf_visible(wo_up, wm, ax, ay) / (4.0 * dot);
+    let g1 = ggx_g1(wo_up, ax, ay);
+    if !(pdf > 0.0) || !pdf.is_finite() || !(g1 > 0.0) {
+        return None;
+    }
+    let separable = c.roughness.shadowing == Shadowing::Separable;
+    // f |cos_i| / pdf = F G2 / G1(wo) (Heitz 2018, eq. 19): D and the
+    // reflection Jacobian cancel.
+    let f = fresnel_conductor(dot, c.eta, c.k) * c.specular_reflectance;
+    let weight = f * (ggx_g2(wo_up, wi, ax, ay, separable) / g1);
     if flip {
         wi.z = -wi.z;
     }
-    // Re-evaluate f and pdf at the sampled direction: the weight is then
-    // exactly f |cos| / pdf as eval and pdf compute them (the MIS weights
-    // of the integrator rely on that consistency).
-    let pdf = conductor_pdf(c, wo, wi);
-    if !(pdf > 0.0) || !pdf.is_finite() {
-        return None;
-    }
-    let f = conductor_eval(c, wo, wi);
     Some(BsdfSample {
         wi,
-        weight: f * (wi.z.abs() / pdf),
+        weight,
         pdf,
         delta: false,
         eta: 1.0,

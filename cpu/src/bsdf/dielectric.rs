@@ -7,8 +7,10 @@
 use glam::{Vec2, Vec3};
 
 use super::conductor::rough_alphas;
-use super::fresnel::{fresnel_dielectric, refract};
-use super::microfacet::{ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect};
+use super::fresnel::{fresnel_dielectric, refract_dir};
+use super::microfacet::{
+    ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
+};
 use super::{BsdfSample, Roughness, Shadowing};
 
 /// Whether the interface is rendered as the smooth (delta) model: a small
@@ -22,14 +24,14 @@ pub fn dielectric_is_smooth(eta: f32, r: &Roughness) -> bool {
 /// +z, with eta_rel (1 for reflection); None when degenerate or when a
 /// direction sees the back of the microfacet (Walter's condition
 /// chi+(v . m / v . n)).
-fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool, f32)> {
+pub fn dielectric_half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool)> {
     let co = wo.z;
     let ci = wi.z;
     if co == 0.0 || ci == 0.0 {
         return None;
     }
-    let reflect = co * ci > 0.0;
-    let etap = if reflect {
+    let is_reflection = co * ci > 0.0;
+    let etap = if is_reflection {
         1.0
     } else if co > 0.0 {
         eta
@@ -48,14 +50,14 @@ fn half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool, f32)> {
     if wm.dot(wi) * ci <= 0.0 || wm.dot(wo) * co <= 0.0 {
         return None;
     }
-    Some((wm, etap, reflect, len2))
+    Some((wm, etap, is_reflection))
 }
 
 pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     if dielectric_is_smooth(eta, r) {
         return Vec3::ZERO;
     }
-    let Some((wm, etap, reflect, _)) = half_vector(eta, wo, wi) else {
+    let Some((wm, etap, is_reflection)) = dielectric_half_vector(eta, wo, wi) else {
         return Vec3::ZERO;
     };
     let (ax, ay) = rough_alphas(r);
@@ -63,7 +65,7 @@ pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     let d = ggx_d(wm, ax, ay);
     let v = ggx_visibility(wo, wi, ax, ay, separable);
     let f = fresnel_dielectric(wo.dot(wm), eta);
-    if reflect {
+    if is_reflection {
         // Walter 2007 eq. 20 with V = G / (4 |co| |ci|).
         return Vec3::splat(d * f * v);
     }
@@ -83,7 +85,7 @@ pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
     if dielectric_is_smooth(eta, r) {
         return 0.0;
     }
-    let Some((wm, etap, reflect, _)) = half_vector(eta, wo, wi) else {
+    let Some((wm, etap, is_reflection)) = dielectric_half_vector(eta, wo, wi) else {
         return 0.0;
     };
     let (ax, ay) = rough_alphas(r);
@@ -92,7 +94,7 @@ pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
     let pr = fresnel_dielectric(dot_o, eta);
     let pt = 1.0 - pr;
     let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
-    if reflect {
+    if is_reflection {
         // Walter 2007 eq. 14.
         pdf_wm / (4.0 * dot_o.abs()) * pr
     } else {
@@ -128,7 +130,7 @@ pub fn dielectric_sample(
                 eta: 1.0,
             });
         }
-        let (wi, etap) = refract(wo, Vec3::Z, eta)?;
+        let (wi, etap) = refract_dir(wo, Vec3::Z, eta)?;
         if wi.z == 0.0 {
             return None;
         }
@@ -142,31 +144,50 @@ pub fn dielectric_sample(
     }
     let (ax, ay) = rough_alphas(r);
     let wm = ggx_sample_visible(wo, ax, ay, u);
+    let dot_o = wo.dot(wm);
     // Choose R or T by the Fresnel term of the sampled microfacet.
-    let pr = fresnel_dielectric(wo.dot(wm), eta);
-    let (wi, eta_rel) = if uc < pr {
-        let wi = reflect(wo, wm);
+    let pr = fresnel_dielectric(dot_o, eta);
+    let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
+    let g1 = ggx_g1(wo, ax, ay);
+    if !(g1 > 0.0) {
+        return None;
+    }
+    let separable = r.shadowing == Shadowing::Separable;
+    // As for conductors, pdf and weight come from the sampled normal
+    // (well conditioned); the weights are f |cos_i| / pdf simplified:
+    // reflection F G2 / (G1 pr) = G2 / G1, transmission
+    // (1 - F) G2 / (G1 pt eta_rel^2) = G2 / (G1 eta_rel^2).
+    let (wi, pdf, weight, eta_rel) = if uc < pr {
+        let wi = reflect_dir(wo, wm);
         if wi.z * wo.z <= 0.0 {
             return None;
         }
-        (wi, 1.0)
+        let pdf = pdf_wm / (4.0 * dot_o.abs()) * pr;
+        (wi, pdf, ggx_g2(wo, wi, ax, ay, separable) / g1, 1.0)
     } else {
-        let (wi, etap) = refract(wo, wm, eta)?;
+        let (wi, etap) = refract_dir(wo, wm, eta)?;
         if wi.z * wo.z >= 0.0 {
             return None;
         }
-        (wi, etap)
+        let dot_i = wi.dot(wm);
+        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        if !(denom > 0.0) {
+            return None;
+        }
+        let pdf = pdf_wm * (dot_i.abs() / denom) * (1.0 - pr);
+        let w = ggx_g2(wo, wi, ax, ay, separable) / g1 / (etap * etap);
+        (wi, pdf, w, etap)
     };
-    // Weight from eval and pdf at the sampled direction (consistency with
-    // what the integrator's MIS sees).
-    let pdf = dielectric_pdf(eta, r, wo, wi);
     if !(pdf > 0.0) || !pdf.is_finite() {
         return None;
     }
-    let f = dielectric_eval(eta, r, wo, wi);
+    // Keep the support consistent with eval/pdf: where rounding makes the
+    // half vector rebuilt from (wo, wi) fail its back-facing test (grazing,
+    // near-specular), eval would return 0 for this direction.
+    dielectric_half_vector(eta, wo, wi)?;
     Some(BsdfSample {
         wi,
-        weight: f * (wi.z.abs() / pdf),
+        weight: Vec3::splat(weight),
         pdf,
         delta: false,
         eta: eta_rel,

@@ -96,7 +96,7 @@ pub fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
 /// Returns the transmitted direction (pointing away, on the other side) and
 /// the relative IOR eta_t / eta_i actually crossed, or `None` under total
 /// internal reflection. pbrt-v4's `Refract` with n = (0, 0, 1) or -n.
-pub fn refract(w: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
+pub fn refract_dir(w: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
     let mut cos_i = n.dot(w);
     let mut eta = eta;
     let mut n = n;

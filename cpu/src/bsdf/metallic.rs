@@ -27,7 +27,10 @@ pub fn metallic_sample(
     uc: f32,
     u: Vec2,
 ) -> Option<BsdfSample> {
-    let wi = if uc < m {
+    // The lobe that was sampled contributes its own (well-conditioned)
+    // pdf and f; the other lobe is evaluated at the sampled direction.
+    let (wi, pdf_c, f_c, pdf_d, f_d);
+    if uc < m {
         let s = conductor_sample(c, wo, u)?;
         if s.delta {
             // The delta lobe of the mixture: f = m F delta / |cos| picked
@@ -35,15 +38,24 @@ pub fn metallic_sample(
             // weight) and the discrete probability is m.
             return Some(BsdfSample { pdf: m, ..s });
         }
-        s.wi
+        wi = s.wi;
+        pdf_c = s.pdf;
+        f_c = s.weight * (s.pdf / wi.z.abs());
+        pdf_d = diffuse_pdf(wo, wi);
+        f_d = diffuse_eval(base, wo, wi);
     } else {
-        diffuse_sample(base, wo, u)?.wi
-    };
-    let pdf = metallic_pdf(m, c, wo, wi);
+        let s = diffuse_sample(base, wo, u)?;
+        wi = s.wi;
+        pdf_d = s.pdf;
+        f_d = diffuse_eval(base, wo, wi);
+        pdf_c = conductor_pdf(c, wo, wi);
+        f_c = conductor_eval(c, wo, wi);
+    }
+    let pdf = m * pdf_c + (1.0 - m) * pdf_d;
     if !(pdf > 0.0) || !pdf.is_finite() {
         return None;
     }
-    let f = metallic_eval(m, base, c, wo, wi);
+    let f = m * f_c + (1.0 - m) * f_d;
     Some(BsdfSample {
         wi,
         weight: f * (wi.z.abs() / pdf),

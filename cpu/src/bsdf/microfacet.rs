@@ -135,6 +135,6 @@ pub fn ggx_sample_visible(w: Vec3, ax: f32, ay: f32, u: Vec2) -> Vec3 {
 }
 
 /// Mirror w about the (unit) normal n.
-pub fn reflect(w: Vec3, n: Vec3) -> Vec3 {
+pub fn reflect_dir(w: Vec3, n: Vec3) -> Vec3 {
     -w + 2.0 * w.dot(n) * n
 }

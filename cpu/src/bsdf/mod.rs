@@ -10,6 +10,10 @@
 //! factor, so the BTDF obeys generalised reciprocity f(wo,wi)/eta_i^2 =
 //! f(wi,wo)/eta_o^2 rather than plain symmetry.
 
+// `!(x > 0.0)` is deliberate throughout: it is also true for NaN, and it
+// reads the same as the GLSL twin in shaders/bsdf.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use glam::{Vec2, Vec3};
 
 pub mod conductor;

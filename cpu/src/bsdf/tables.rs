@@ -62,6 +62,7 @@ pub(crate) fn ior(name: &str) -> Option<f32> {
 ///   table for Cr (omega_p = 10.75 eV, f0 = 0.168, Gamma0 = 0.047 eV, four
 ///   oscillators), eps(omega) evaluated at the three wavelengths and
 ///   n + i k = sqrt(eps).
+///
 /// The R column is ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2), the conductor
 /// Fresnel term at normal incidence (a test checks the code against it).
 const METALS: &[(&[&str], [f32; 3], [f32; 3])] = &[

@@ -414,7 +414,7 @@ pub fn delta_lobes(bsdf: &Bsdf, wo: Vec3) -> Vec<DeltaLobe> {
                 dir: mirror,
                 mass: f,
             }];
-            if let Some((wt, _)) = fresnel::refract(wo, Vec3::Z, *eta) {
+            if let Some((wt, _)) = fresnel::refract_dir(wo, Vec3::Z, *eta) {
                 v.push(DeltaLobe {
                     dir: wt,
                     mass: 1.0 - f,

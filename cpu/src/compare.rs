@@ -1,0 +1,463 @@
+//! Statistical comparison of noisy renders (Mitsuba 3's render tests and
+//! their variance images, done by blocks so two noisy images can be
+//! compared without a reference).
+//!
+//! The rule, for images A and B (or A against a constant):
+//! 1. Tile the image into 8x8 blocks (edge blocks keep what they have;
+//!    with a mask, only masked pixels count and empty blocks are skipped).
+//!    Per block and channel: the mean of the pixel means, and the variance
+//!    of that mean, sum(pixel variance of the mean) / n^2 (pixels are
+//!    independent; each pixel's variance comes from the film's own
+//!    sum/sum_sq).
+//! 2. Welch's z = (mean_A - mean_B) / sqrt(var_A + var_B + floor), the
+//!    floor (1e-5 x max(|mean_A|, |mean_B|))^2 standing for the f32
+//!    rounding of the sums (a noise-free region must match to 1e-5
+//!    relative). When one image has zero variance in a block and the other
+//!    not, the other's variance stands in for it (a deterministic region on
+//!    one side is compared at the noise level of the other); against an
+//!    exact reference (`compare_to_reference`) B's variance is truly zero.
+//! 3. Two one-sided tests share the overall significance `alpha` (default
+//!    1e-3) equally:
+//!    - local: any |z| above the Sidak-corrected two-sided threshold for N
+//!      tests at alpha/2 fails (a strongly wrong region);
+//!    - global: the count of |z| above the two-sided 1% threshold must be
+//!      consistent with Binomial(N, 0.01) at alpha/2 (a mild bias spread
+//!      over the image, which no single block shows).
+//!
+//! With a correct renderer the images pass with probability about
+//! 1 - alpha (the z's are only approximately normal at low spp).
+
+// `!(a <= b)` on floats is meant: it is true for NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use glam::Vec3;
+
+use crate::film::Film;
+
+/// Block edge in pixels.
+pub const BLOCK: u32 = 8;
+/// Default overall significance.
+pub const ALPHA: f64 = 1e-3;
+/// Per-test level of the global (counting) test.
+pub const P_GLOBAL: f64 = 0.01;
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum CompareError {
+    #[error("image sizes differ: {0}x{1} vs {2}x{3}")]
+    Size(u32, u32, u32, u32),
+    #[error("no samples to compare")]
+    Empty,
+}
+
+/// The outcome of a comparison, with what explains it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CompareReport {
+    /// Block-channel tests performed.
+    pub tests: usize,
+    /// Largest |z| and where: block (x, y) in block units, channel.
+    pub z_max: f64,
+    pub worst: (u32, u32, usize),
+    /// Sidak threshold of the local test.
+    pub z_local: f64,
+    /// Tests above the 1% threshold, and how many chance allows.
+    pub exceed_global: usize,
+    pub allowed_global: usize,
+    /// Mean relative difference over the compared pixels (for messages).
+    pub mean_a: Vec3,
+    pub mean_b: Vec3,
+    pub pass: bool,
+}
+
+impl std::fmt::Display for CompareReport {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}: {} block tests, max |z| {:.2} at block {:?} (local threshold {:.2}), \
+             {} above the 1% level (chance allows {}), means {:?} vs {:?}",
+            if self.pass { "pass" } else { "FAIL" },
+            self.tests,
+            self.z_max,
+            self.worst,
+            self.z_local,
+            self.exceed_global,
+            self.allowed_global,
+            self.mean_a.to_array(),
+            self.mean_b.to_array(),
+        )
+    }
+}
+
+/// Block means and variances of the mean of one film.
+struct Blocks {
+    bx: u32,
+    by: u32,
+    /// Per block: (mean, variance of the mean, pixel count); count 0 = skipped.
+    data: Vec<(Vec3, Vec3, u32)>,
+}
+
+fn blocks(film: &Film, mask: &dyn Fn(u32, u32) -> bool) -> Blocks {
+    let bx = film.width.div_ceil(BLOCK);
+    let by = film.height.div_ceil(BLOCK);
+    let mut acc = vec![(glam::DVec3::ZERO, glam::DVec3::ZERO, 0u32); (bx * by) as usize];
+    for y in 0..film.height {
+        for x in 0..film.width {
+            if !mask(x, y) {
+                continue;
+            }
+            let i = film.index(x, y);
+            let b = &mut acc[((y / BLOCK) * bx + x / BLOCK) as usize];
+            b.0 += film.mean(i).as_dvec3();
+            b.1 += film.variance_of_mean(i).as_dvec3();
+            b.2 += 1;
+        }
+    }
+    let data = acc
+        .into_iter()
+        .map(|(s, v, n)| {
+            if n == 0 {
+                (Vec3::ZERO, Vec3::ZERO, 0)
+            } else {
+                let n2 = n as f64 * n as f64;
+                ((s / n as f64).as_vec3(), (v / n2).as_vec3(), n)
+            }
+        })
+        .collect();
+    Blocks { bx, by, data }
+}
+
+/// Relative noise floor standing for the f32 rounding of the films' sums:
+/// means closer than this (relative) are never told apart.
+pub const ROUNDING_FLOOR: f64 = 1e-5;
+
+/// Welch's z with the zero-variance rules of the module notes. `b_exact`:
+/// B is a reference value, not a noisy image (its variance is truly zero).
+fn welch_z(ma: f64, va: f64, mb: f64, vb: f64, b_exact: bool) -> f64 {
+    let d = ma - mb;
+    let (va, vb) = match (va > 0.0, vb > 0.0 || b_exact) {
+        (false, true) if !b_exact => (vb, vb),
+        (true, false) => (va, va),
+        _ => (va, vb),
+    };
+    let floor = (ROUNDING_FLOOR * ma.abs().max(mb.abs())).powi(2);
+    let var = va + vb + floor;
+    if var > 0.0 {
+        d / var.sqrt()
+    } else if d == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// The inverse of the standard normal CDF (Acklam's rational
+/// approximation, relative error < 1.2e-9, one Halley step refining it).
+pub fn normal_quantile(p: f64) -> f64 {
+    assert!(p > 0.0 && p < 1.0);
+    const A: [f64; 6] = [
+        -3.969683028665376e+01,
+        2.209460984245205e+02,
+        -2.759285104469687e+02,
+        1.383_577_518_672_69e2,
+        -3.066479806614716e+01,
+        2.506628277459239e+00,
+    ];
+    const B: [f64; 5] = [
+        -5.447609879822406e+01,
+        1.615858368580409e+02,
+        -1.556989798598866e+02,
+        6.680131188771972e+01,
+        -1.328068155288572e+01,
+    ];
+    const C: [f64; 6] = [
+        -7.784894002430293e-03,
+        -3.223964580411365e-01,
+        -2.400758277161838e+00,
+        -2.549732539343734e+00,
+        4.374664141464968e+00,
+        2.938163982698783e+00,
+    ];
+    const D: [f64; 4] = [
+        7.784695709041462e-03,
+        3.224671290700398e-01,
+        2.445134137142996e+00,
+        3.754408661907416e+00,
+    ];
+    let p_low = 0.02425;
+    let tail = |q: f64| {
+        (((((C[0] * q + C[1]) * q + C[2]) * q + C[3]) * q + C[4]) * q + C[5])
+            / ((((D[0] * q + D[1]) * q + D[2]) * q + D[3]) * q + 1.0)
+    };
+    let x = if p < p_low {
+        tail((-2.0 * p.ln()).sqrt())
+    } else if p <= 1.0 - p_low {
+        let q = p - 0.5;
+        let r = q * q;
+        (((((A[0] * r + A[1]) * r + A[2]) * r + A[3]) * r + A[4]) * r + A[5]) * q
+            / (((((B[0] * r + B[1]) * r + B[2]) * r + B[3]) * r + B[4]) * r + 1.0)
+    } else {
+        -tail((-2.0 * (1.0 - p).ln()).sqrt())
+    };
+    // Halley refinement with erfc.
+    let e = 0.5 * erfc(-x / std::f64::consts::SQRT_2) - p;
+    let u = e * (2.0 * std::f64::consts::PI).sqrt() * (x * x / 2.0).exp();
+    x - u / (1.0 + x * u / 2.0)
+}
+
+/// Complementary error function (Numerical Recipes' erfcc, |error| < 1.2e-7),
+/// enough for the Halley step above.
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398
+                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
+    if x >= 0.0 { r } else { 2.0 - r }
+}
+
+/// Smallest k with P(Binomial(n, p) > k) <= alpha.
+pub fn binomial_upper_quantile(n: usize, p: f64, alpha: f64) -> usize {
+    let lq = (1.0 - p).ln();
+    let ratio = (p / (1.0 - p)).ln();
+    let mut log_pmf = n as f64 * lq;
+    let mut cdf = 0.0f64;
+    for k in 0..=n {
+        cdf += log_pmf.exp();
+        if 1.0 - cdf <= alpha {
+            return k;
+        }
+        log_pmf += ((n - k) as f64 / (k + 1) as f64).ln() + ratio;
+    }
+    n
+}
+
+fn decide(
+    zs: &[(f64, (u32, u32, usize))],
+    alpha: f64,
+    mean_a: Vec3,
+    mean_b: Vec3,
+) -> CompareReport {
+    let n = zs.len().max(1);
+    let a_local = 1.0 - (1.0 - alpha / 2.0).powf(1.0 / n as f64);
+    let z_local = normal_quantile(1.0 - a_local / 2.0);
+    let z_global = normal_quantile(1.0 - P_GLOBAL / 2.0);
+    let mut z_max = 0.0f64;
+    let mut worst = (0, 0, 0);
+    let mut exceed_global = 0;
+    for &(z, at) in zs {
+        let z = z.abs();
+        if z.is_nan() || z > z_max {
+            z_max = if z.is_nan() { f64::INFINITY } else { z };
+            worst = at;
+        }
+        if !(z <= z_global) {
+            exceed_global += 1;
+        }
+    }
+    let allowed_global = binomial_upper_quantile(zs.len(), P_GLOBAL, alpha / 2.0);
+    CompareReport {
+        tests: zs.len(),
+        z_max,
+        worst,
+        z_local,
+        exceed_global,
+        allowed_global,
+        mean_a,
+        mean_b,
+        pass: z_max <= z_local && exceed_global <= allowed_global,
+    }
+}
+
+fn overall_mean(b: &Blocks) -> Vec3 {
+    let mut s = glam::DVec3::ZERO;
+    let mut n = 0u64;
+    for &(m, _, c) in &b.data {
+        s += m.as_dvec3() * c as f64;
+        n += c as u64;
+    }
+    if n == 0 {
+        Vec3::ZERO
+    } else {
+        (s / n as f64).as_vec3()
+    }
+}
+
+/// Compare two renders of the same scene (see the module notes).
+pub fn compare_films(a: &Film, b: &Film) -> Result<CompareReport, CompareError> {
+    compare_films_masked(a, b, &|_, _| true, ALPHA)
+}
+
+/// [`compare_films`] over the pixels where `mask(x, y)`, at significance `alpha`.
+pub fn compare_films_masked(
+    a: &Film,
+    b: &Film,
+    mask: &dyn Fn(u32, u32) -> bool,
+    alpha: f64,
+) -> Result<CompareReport, CompareError> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(CompareError::Size(a.width, a.height, b.width, b.height));
+    }
+    if a.spp == 0 || b.spp == 0 {
+        return Err(CompareError::Empty);
+    }
+    let ba = blocks(a, mask);
+    let bb = blocks(b, mask);
+    let mut zs = Vec::new();
+    for by in 0..ba.by {
+        for bx in 0..ba.bx {
+            let i = (by * ba.bx + bx) as usize;
+            let (ma, va, n) = ba.data[i];
+            let (mb, vb, _) = bb.data[i];
+            if n == 0 {
+                continue;
+            }
+            for c in 0..3 {
+                let z = welch_z(
+                    ma[c] as f64,
+                    va[c] as f64,
+                    mb[c] as f64,
+                    vb[c] as f64,
+                    false,
+                );
+                zs.push((z, (bx, by, c)));
+            }
+        }
+    }
+    if zs.is_empty() {
+        return Err(CompareError::Empty);
+    }
+    Ok(decide(&zs, alpha, overall_mean(&ba), overall_mean(&bb)))
+}
+
+/// Test a render against a known constant radiance `value` over the pixels
+/// where `mask(x, y)`: the same rule with B exact (variance zero; a
+/// zero-variance block must then match to the rounding floor).
+pub fn compare_to_constant(
+    film: &Film,
+    value: Vec3,
+    mask: &dyn Fn(u32, u32) -> bool,
+) -> Result<CompareReport, CompareError> {
+    let reference = vec![value; film.sum.len()];
+    compare_to_reference(film, &reference, mask)
+}
+
+/// Test a render against exact per-pixel expected values (row-major, top
+/// row first), e.g. an analytic solution integrated over each pixel.
+pub fn compare_to_reference(
+    film: &Film,
+    reference: &[Vec3],
+    mask: &dyn Fn(u32, u32) -> bool,
+) -> Result<CompareReport, CompareError> {
+    if film.spp == 0 {
+        return Err(CompareError::Empty);
+    }
+    if reference.len() != film.sum.len() {
+        return Err(CompareError::Size(
+            film.width,
+            film.height,
+            reference.len() as u32,
+            1,
+        ));
+    }
+    let ba = blocks(film, mask);
+    let mut exact = Film::new(film.width, film.height);
+    exact.spp = 1;
+    exact.sum.copy_from_slice(reference);
+    let bb = blocks(&exact, mask);
+    let mut zs = Vec::new();
+    for by in 0..ba.by {
+        for bx in 0..ba.bx {
+            let i = (by * ba.bx + bx) as usize;
+            let (ma, va, n) = ba.data[i];
+            let (mb, _, _) = bb.data[i];
+            if n == 0 {
+                continue;
+            }
+            for c in 0..3 {
+                let z = welch_z(ma[c] as f64, va[c] as f64, mb[c] as f64, 0.0, true);
+                zs.push((z, (bx, by, c)));
+            }
+        }
+    }
+    if zs.is_empty() {
+        return Err(CompareError::Empty);
+    }
+    Ok(decide(&zs, ALPHA, overall_mean(&ba), overall_mean(&bb)))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_quantile_matches_tables() {
+        for (p, z) in [
+            (0.5, 0.0),
+            (0.975, 1.959963984540054),
+            (0.995, 2.5758293035489),
+            (1e-7, -5.199337582187471),
+            (0.1, -1.2815515655446004),
+        ] {
+            assert!(
+                (normal_quantile(p) - z).abs() < 1e-6,
+                "{p}: {}",
+                normal_quantile(p)
+            );
+        }
+    }
+
+    #[test]
+    fn binomial_quantile_is_a_tail_bound() {
+        // Binomial(100, 0.01): P(K > 4) = 0.00343, P(K > 5) = 0.000566.
+        assert_eq!(binomial_upper_quantile(100, 0.01, 5e-4), 6);
+        assert_eq!(binomial_upper_quantile(100, 0.01, 1e-3), 5);
+        assert_eq!(binomial_upper_quantile(100, 0.01, 4e-3), 4);
+        // Large n stays finite and near the mean plus a few sigma.
+        let k = binomial_upper_quantile(3_000_000, 0.01, 5e-4);
+        assert!(k > 30_000 && k < 30_800, "{k}");
+    }
+
+    fn film_from(f: impl Fn(u32, u32, u32) -> Vec3, w: u32, h: u32, spp: u32) -> Film {
+        let mut film = Film::new(w, h);
+        film.spp = spp;
+        for y in 0..h {
+            for x in 0..w {
+                let i = film.index(x, y);
+                for s in 0..spp {
+                    let v = f(x, y, s);
+                    film.sum[i] += v;
+                    film.sum_sq[i] += v * v;
+                }
+            }
+        }
+        film
+    }
+
+    #[test]
+    fn zero_variance_rules() {
+        let a = film_from(|_, _, _| Vec3::splat(0.5), 16, 16, 4);
+        assert!(compare_films(&a, &a).unwrap().pass);
+        assert!(
+            compare_to_constant(&a, Vec3::splat(0.5), &|_, _| true)
+                .unwrap()
+                .pass
+        );
+        assert!(
+            !compare_to_constant(&a, Vec3::splat(0.51), &|_, _| true)
+                .unwrap()
+                .pass
+        );
+        let b = film_from(|_, _, _| Vec3::splat(0.6), 16, 16, 4);
+        assert!(!compare_films(&a, &b).unwrap().pass);
+        assert_eq!(
+            compare_films(&a, &Film::new(8, 8)),
+            Err(CompareError::Size(16, 16, 8, 8))
+        );
+    }
+}

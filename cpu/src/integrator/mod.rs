@@ -1,0 +1,405 @@
+//! The CPU path tracer: unidirectional path tracing with next-event
+//! estimation and multiple importance sampling, Mitsuba 3's `path`
+//! integrator semantics. `shaders/pathtrace.comp` mirrors [`PathTracer::sample`]
+//! step by step, with the same names.
+//!
+//! - MIS: the power heuristic, beta = 2 (Veach 1997, sec. 9.2.4), between
+//!   light sampling and BSDF sampling for area emitters and the background;
+//!   punctual lights are deltas and take no MIS weight.
+//! - Depth (Mitsuba's `max_depth`): 1 = emitters seen directly, 2 = direct
+//!   lighting, -1 = unbounded. `depth` counts the scattering vertices behind
+//!   the current ray; a vertex scatters (light sample + BSDF sample) only
+//!   while `depth + 1 < max_depth`.
+//! - Russian roulette once `depth >= 5` (Mitsuba's `rr_depth`), continuing
+//!   with q = min(max(throughput) * eta^2, 0.95), eta the product of the
+//!   relative IORs crossed (removing the 1/eta^2 radiance scaling from the
+//!   survival odds, as Mitsuba does).
+//! - Random numbers: a fixed budget per vertex (2 for the pixel position,
+//!   then 4 light + 3 BSDF + 1 roulette per bounce) whether used or not, so
+//!   both backends walk the same stream.
+//! - Ray offsets: new rays start at `p + ng * sign(wi . ng) * eps(p)`, with
+//!   eps(p) = 1e-4 max|p_i| + 1e-6 * scene extent (relative to the
+//!   position's own magnitude, where float error of the interpolated hit
+//!   point lives, with an absolute floor scaled by the scene for points at
+//!   the origin); shadow rays run from that offset origin to eps(q) short
+//!   of the light point q.
+//! - Light leaks: a direction whose side of the geometric normal differs
+//!   from its side of the shading normal is discarded (light sample) or
+//!   ends the path (BSDF sample), since it would pass through the surface
+//!   the interpolated normal pretends is not there (Veach 1996's
+//!   shading-normal asymmetry; pbrt-v3 sec. 16.1 discusses the same leak).
+
+// `!(x > 0.0)` on floats is meant: it rejects NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+mod gpu;
+
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::Instant;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+pub use gpu::{GpuParams, GpuSceneData, gpu_scene_data};
+
+use crate::bsdf::Bsdf;
+use crate::bvh::Ray;
+use crate::camera::{PinholeCamera, scene_camera};
+use crate::film::{Film, RenderOptions, RenderStats};
+use crate::frame::Frame;
+use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
+use crate::sampling::{Rng, power_heuristic, seed_key};
+use crate::scene::{NO_LIGHT, Scene};
+
+/// Mitsuba's default `rr_depth`.
+pub const RR_DEPTH: u32 = 5;
+/// Largest survival probability of Russian roulette (Mitsuba's 0.95).
+pub const RR_MAX_PROB: f32 = 0.95;
+/// Relative part of the ray-origin offset.
+pub const RAY_EPS_REL: f32 = 1e-4;
+/// Absolute floor of the offset, as a fraction of the scene's extent.
+pub const RAY_EPS_SCENE: f32 = 1e-6;
+/// Image tile edge for the CPU's parallel loop.
+pub const TILE: u32 = 16;
+
+#[derive(Debug, thiserror::Error, PartialEq)]
+pub enum RenderError {
+    #[error("invalid render option: {0}")]
+    InvalidOptions(String),
+}
+
+/// Check the options against the contract's ranges.
+pub fn validate_options(scene: &Scene, opts: &RenderOptions) -> Result<(), RenderError> {
+    let bad = |m: String| Err(RenderError::InvalidOptions(m));
+    if !(1..=16384).contains(&opts.width) || !(1..=16384).contains(&opts.height) {
+        return bad(format!(
+            "image size {}x{} (each side must be 1..=16384)",
+            opts.width, opts.height
+        ));
+    }
+    if opts.spp == 0 {
+        return bad("spp must be at least 1".into());
+    }
+    if opts.max_depth == 0 || opts.max_depth < -1 {
+        return bad(format!(
+            "max depth {} (must be -1 or at least 1)",
+            opts.max_depth
+        ));
+    }
+    if !scene.cameras.is_empty() && opts.camera >= scene.cameras.len() {
+        return bad(format!(
+            "camera {} (the scene has {})",
+            opts.camera,
+            scene.cameras.len()
+        ));
+    }
+    Ok(())
+}
+
+/// Offset scale for ray origins near `p`; see the module notes.
+#[inline]
+pub fn ray_eps(p: Vec3, eps_abs: f32) -> f32 {
+    RAY_EPS_REL * p.abs().max_element() + eps_abs
+}
+
+/// `p` moved off its surface to the side of `ng` that `w` points to.
+#[inline]
+pub fn offset_origin(p: Vec3, ng: Vec3, w: Vec3, eps_abs: f32) -> Vec3 {
+    let e = ray_eps(p, eps_abs);
+    if w.dot(ng) >= 0.0 {
+        p + ng * e
+    } else {
+        p - ng * e
+    }
+}
+
+/// One tile's output: its index, per-pixel (sum, sum_sq), rays traced.
+type TileResult = (u32, Vec<(Vec3, Vec3)>, u64);
+
+/// Everything one render needs, prepared once.
+pub struct PathTracer<'a> {
+    pub scene: &'a Scene,
+    pub lights: Lights,
+    pub camera: PinholeCamera,
+    /// Mitsuba's max_depth with -1 mapped to u32::MAX.
+    pub max_depth: u32,
+    pub key: u32,
+    pub eps_abs: f32,
+    /// Next-event estimation on (the default). Off: pure BSDF sampling,
+    /// emitters found only by hitting them (a test of MIS correctness).
+    pub nee: bool,
+}
+
+/// The interpolated shading frame at a hit, with the geometric normal.
+struct SurfaceFrame {
+    ng: Vec3,
+    ns: Vec3,
+    frame: Frame,
+}
+
+impl<'a> PathTracer<'a> {
+    pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<Self, RenderError> {
+        validate_options(scene, opts)?;
+        let camera = PinholeCamera::new(&scene_camera(scene, opts.camera), opts.width, opts.height);
+        let (lo, hi) = scene.bounds();
+        let extent = (hi - lo).max_element();
+        Ok(Self {
+            scene,
+            lights: Lights::new(scene),
+            camera,
+            max_depth: if opts.max_depth < 0 {
+                u32::MAX
+            } else {
+                opts.max_depth as u32
+            },
+            key: seed_key(opts.seed),
+            eps_abs: RAY_EPS_SCENE * extent,
+            nee: true,
+        })
+    }
+
+    fn surface(&self, tri: u32, u: f32, v: f32) -> SurfaceFrame {
+        let t = &self.scene.triangles[tri as usize];
+        let sh = &self.scene.shading[tri as usize];
+        let ng = t.geometric_normal().normalize();
+        let w = 1.0 - u - v;
+        let mut ns = ng;
+        if sh.n[0][3] == 1.0 {
+            let n = |i: usize| Vec3::new(sh.n[i][0], sh.n[i][1], sh.n[i][2]);
+            let n = (w * n(0) + u * n(1) + v * n(2)).normalize_or_zero();
+            if n != Vec3::ZERO {
+                // The shading normal lives on the geometric normal's side,
+                // so the BSDF's +z is a dielectric's outside.
+                ns = if n.dot(ng) < 0.0 { -n } else { n };
+            }
+        }
+        let frame = if sh.t[0][3] == 1.0 {
+            let tg = |i: usize| Vec3::new(sh.t[i][0], sh.t[i][1], sh.t[i][2]);
+            Frame::from_normal_tangent(ns, w * tg(0) + u * tg(1) + v * tg(2))
+        } else {
+            Frame::from_normal(ns)
+        };
+        SurfaceFrame { ng, ns, frame }
+    }
+
+    /// The shadow ray from `p` (geometric normal `ng`) toward a light
+    /// sample: from the offset origin to eps(q) short of the light point q,
+    /// measured from the offset origin (which may sit closer to the light
+    /// than p by up to eps(p)).
+    pub fn shadow_ray(&self, p: Vec3, ng: Vec3, ls: &LightSample) -> Ray {
+        let o = offset_origin(p, ng, ls.wi, self.eps_abs);
+        if ls.dist.is_finite() {
+            let q = p + ls.wi * ls.dist;
+            let to = q - o;
+            let len = to.length();
+            Ray {
+                o,
+                d: to / len,
+                tmax: len - ray_eps(q, self.eps_abs),
+            }
+        } else {
+            Ray {
+                o,
+                d: ls.wi,
+                tmax: f32::MAX,
+            }
+        }
+    }
+
+    /// One radiance sample for pixel (x, y), sample index `s`; `rays`
+    /// counts camera, continuation and shadow rays.
+    pub fn sample(&self, x: u32, y: u32, s: u32, rays: &mut u64) -> Vec3 {
+        let scene = self.scene;
+        let pixel = y * self.camera.width + x;
+        let mut rng = Rng::new(self.key, pixel, s);
+        let mut ray = self.camera.ray(x, y, rng.next_2d());
+
+        let mut radiance = Vec3::ZERO;
+        let mut throughput = Vec3::ONE;
+        let mut eta = 1.0f32;
+        let mut depth = 0u32;
+        // The previous vertex's BSDF sample, for MIS of emitters it hits.
+        let mut prev_delta = true;
+        let mut prev_bsdf_pdf = 0.0f32;
+        let mut prev_bg_normal = Vec3::ZERO;
+
+        loop {
+            *rays += 1;
+            let Some(hit) = scene.bvh.intersect(&scene.triangles, &ray) else {
+                if self.lights.probs.background > 0.0 {
+                    let w = if depth == 0 || prev_delta || !self.nee {
+                        1.0
+                    } else {
+                        let lp = self.lights.background_pdf(prev_bg_normal, ray.d);
+                        power_heuristic(prev_bsdf_pdf, lp)
+                    };
+                    radiance += throughput * w * self.lights.background;
+                }
+                break;
+            };
+            let tri = &scene.triangles[hit.tri as usize];
+            let [p0, p1, p2] = tri.vertices();
+            // Interpolating the vertices keeps the hit point's error relative
+            // to its own magnitude, which is what ray_eps assumes.
+            let p = (1.0 - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
+            let wo = -ray.d;
+
+            if tri.light != NO_LIGHT
+                && let Some(le) = emitted(scene, tri, wo)
+            {
+                let w = if depth == 0 || prev_delta || !self.nee {
+                    1.0
+                } else {
+                    let lp = self.lights.area_pdf(scene, hit.tri, ray.d, hit.t);
+                    power_heuristic(prev_bsdf_pdf, lp)
+                };
+                radiance += throughput * w * le;
+            }
+
+            if depth.saturating_add(1) >= self.max_depth {
+                break;
+            }
+
+            // The fixed per-bounce budget of random numbers.
+            let u_light_cat = rng.next_f32();
+            let u_light_idx = rng.next_f32();
+            let u_light = rng.next_2d();
+            let u_bsdf_lobe = rng.next_f32();
+            let u_bsdf = rng.next_2d();
+            let u_rr = rng.next_f32();
+
+            let sf = self.surface(hit.tri, hit.u, hit.v);
+            let bsdf: &Bsdf = &scene.materials[tri.material as usize].bsdf;
+            let wo_local = sf.frame.to_local(wo);
+            let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
+
+            // Next-event estimation.
+            if self.nee
+                && !self.lights.is_empty()
+                && !bsdf.is_delta()
+                && let Some(ls) =
+                    self.lights
+                        .sample(scene, p, bg_normal, u_light_cat, u_light_idx, u_light)
+            {
+                let wi_local = sf.frame.to_local(ls.wi);
+                let same_side = (ls.wi.dot(sf.ng) > 0.0) == (wi_local.z > 0.0);
+                if same_side {
+                    let f = bsdf.eval(wo_local, wi_local) * wi_local.z.abs();
+                    if f.max_element() > 0.0 {
+                        let shadow = self.shadow_ray(p, sf.ng, &ls);
+                        *rays += 1;
+                        if shadow.tmax > 0.0 && !scene.bvh.occluded(&scene.triangles, &shadow) {
+                            let w = if ls.delta {
+                                1.0
+                            } else {
+                                power_heuristic(ls.pdf, bsdf.pdf(wo_local, wi_local))
+                            };
+                            radiance += throughput * f * ls.weight * w;
+                        }
+                    }
+                }
+            }
+
+            // BSDF sampling: the next ray.
+            let Some(bs) = bsdf.sample(wo_local, u_bsdf_lobe, u_bsdf) else {
+                break;
+            };
+            let wi = sf.frame.to_world(bs.wi).normalize();
+            if (wi.dot(sf.ng) > 0.0) != (bs.wi.z > 0.0) {
+                break;
+            }
+            throughput *= bs.weight;
+            eta *= bs.eta;
+            prev_delta = bs.delta;
+            prev_bsdf_pdf = bs.pdf;
+            prev_bg_normal = bg_normal;
+            ray = Ray {
+                o: offset_origin(p, sf.ng, wi, self.eps_abs),
+                d: wi,
+                tmax: f32::MAX,
+            };
+            depth += 1;
+
+            if depth >= RR_DEPTH {
+                let q = (throughput.max_element() * eta * eta).min(RR_MAX_PROB);
+                if !(u_rr < q) {
+                    break;
+                }
+                throughput /= q;
+            }
+            if !(throughput.max_element() > 0.0) {
+                break;
+            }
+        }
+        radiance
+    }
+
+    /// Render every pixel with samples [0, spp), in tiles over rayon's pool.
+    /// `progress(done, total)` counts finished tiles.
+    pub fn render(&self, spp: u32, progress: &(dyn Fn(u32, u32) + Sync)) -> (Film, RenderStats) {
+        let start = Instant::now();
+        let (w, h) = (self.camera.width, self.camera.height);
+        let tiles_x = w.div_ceil(TILE);
+        let tiles_y = h.div_ceil(TILE);
+        let total = tiles_x * tiles_y;
+        let done = AtomicU32::new(0);
+        let tiles: Vec<TileResult> = (0..total)
+            .into_par_iter()
+            .map(|ti| {
+                let (x0, y0) = ((ti % tiles_x) * TILE, (ti / tiles_x) * TILE);
+                let mut rays = 0u64;
+                let mut px = Vec::with_capacity((TILE * TILE) as usize);
+                for y in y0..(y0 + TILE).min(h) {
+                    for x in x0..(x0 + TILE).min(w) {
+                        let mut sum = Vec3::ZERO;
+                        let mut sum_sq = Vec3::ZERO;
+                        for s in 0..spp {
+                            let mut l = self.sample(x, y, s, &mut rays);
+                            // A NaN or infinity (a degenerate pdf somewhere)
+                            // would poison the pixel for good: drop it.
+                            if !l.is_finite() {
+                                l = Vec3::ZERO;
+                            }
+                            sum += l;
+                            sum_sq += l * l;
+                        }
+                        px.push((sum, sum_sq));
+                    }
+                }
+                progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
+                (ti, px, rays)
+            })
+            .collect();
+        let mut film = Film::new(w, h);
+        film.spp = spp;
+        let mut rays = 0u64;
+        for (ti, px, r) in tiles {
+            rays += r;
+            let (x0, y0) = ((ti % tiles_x) * TILE, (ti / tiles_x) * TILE);
+            let mut k = 0;
+            for y in y0..(y0 + TILE).min(h) {
+                for x in x0..(x0 + TILE).min(w) {
+                    let i = (y * w + x) as usize;
+                    film.sum[i] = px[k].0;
+                    film.sum_sq[i] = px[k].1;
+                    k += 1;
+                }
+            }
+        }
+        let stats = RenderStats {
+            rays,
+            render_seconds: start.elapsed().as_secs_f64(),
+        };
+        (film, stats)
+    }
+}
+
+/// Render `scene` on the CPU: the reference the GPU must match.
+pub fn render(
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &(dyn Fn(u32, u32) + Sync),
+) -> Result<(Film, RenderStats), RenderError> {
+    let pt = PathTracer::new(scene, opts)?;
+    Ok(pt.render(opts.spp, progress))
+}

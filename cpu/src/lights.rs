@@ -1,0 +1,401 @@
+//! The emitter set for next-event estimation: emissive triangles, punctual
+//! lights and the constant background, with their GPU layouts.
+//!
+//! Choosing a light (mirrored in `shaders/integrator/lights.glsl`):
+//! 1. a category, uniformly among those present: area emitters (any emissive
+//!    triangle), punctual lights (any KHR_lights_punctual light), the
+//!    background (when not black). Uniform, because powers of an infinite
+//!    background, a directional irradiance and a finite emitter are not
+//!    comparable without scene-dependent guesses;
+//! 2. within the area emitters, one triangle with probability proportional
+//!    to its power, luminance(emission) x area (a CDF), then a point
+//!    uniformly by area; the area density is converted to solid angle,
+//!    p = P(category) P(triangle) / area * d^2 / |cos theta_light|;
+//!    within the punctual lights, one uniformly (delta lights: no MIS);
+//!    the background is sampled in direction space (see
+//!    [`background_direction_frame`]).
+//!
+//! Every light sample draws exactly four uniform numbers (category, index,
+//! 2D position), whatever is chosen, so the GPU consumes the same stream.
+
+// `!(x > 0.0)` on floats is meant: it rejects NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+use std::mem::{offset_of, size_of};
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3};
+
+use crate::frame::Frame;
+use crate::sampling::{
+    UNIFORM_SPHERE_PDF, cosine_hemisphere_pdf, sample_cdf, square_to_cosine_hemisphere,
+    square_to_uniform_sphere, square_to_uniform_triangle,
+};
+use crate::scene::{PunctualLight, Scene, TRI_DOUBLE_SIDED, Triangle};
+
+/// Rec. 709 / sRGB luminance.
+pub fn luminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// One emissive triangle in emitter order (`Triangle::light`), as the GPU
+/// reads it (std430, 16 bytes): `cdf` is the inclusive CDF of the power
+/// distribution at this entry, `pmf` its own probability.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuEmitter {
+    pub tri: u32,
+    pub cdf: f32,
+    pub pmf: f32,
+    pub area: f32,
+}
+const _: () = assert!(size_of::<GpuEmitter>() == 16);
+const _: () = assert!(offset_of!(GpuEmitter, cdf) == 4 && offset_of!(GpuEmitter, area) == 12);
+
+/// A punctual light as the GPU reads it (std430, 48 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuLight {
+    /// Position (point, spot); unused for directional.
+    pub position: [f32; 3],
+    /// One of `GpuLight::KIND_*`.
+    pub kind: u32,
+    /// Spot: the direction the light points to; directional: the direction
+    /// the light travels. Unit length.
+    pub direction: [f32; 3],
+    /// Spot: cos(outer cone angle).
+    pub cos_outer: f32,
+    /// Point, spot: radiant intensity; directional: irradiance.
+    pub intensity: [f32; 3],
+    /// Spot: cos(inner cone angle).
+    pub cos_inner: f32,
+}
+const _: () = assert!(size_of::<GpuLight>() == 48);
+const _: () =
+    assert!(offset_of!(GpuLight, direction) == 16 && offset_of!(GpuLight, intensity) == 32);
+
+impl GpuLight {
+    pub const KIND_POINT: u32 = 0;
+    pub const KIND_SPOT: u32 = 1;
+    pub const KIND_DIRECTIONAL: u32 = 2;
+}
+
+impl From<&PunctualLight> for GpuLight {
+    fn from(l: &PunctualLight) -> Self {
+        match *l {
+            PunctualLight::Point {
+                position,
+                intensity,
+            } => GpuLight {
+                position: position.into(),
+                kind: Self::KIND_POINT,
+                intensity: intensity.into(),
+                ..Default::default()
+            },
+            PunctualLight::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone_angle,
+                outer_cone_angle,
+            } => GpuLight {
+                position: position.into(),
+                kind: Self::KIND_SPOT,
+                direction: direction.normalize_or(Vec3::NEG_Z).into(),
+                cos_outer: outer_cone_angle.cos(),
+                intensity: intensity.into(),
+                cos_inner: inner_cone_angle.cos(),
+            },
+            PunctualLight::Directional {
+                direction,
+                irradiance,
+            } => GpuLight {
+                kind: Self::KIND_DIRECTIONAL,
+                direction: direction.normalize_or(Vec3::NEG_Z).into(),
+                intensity: irradiance.into(),
+                ..Default::default()
+            },
+        }
+    }
+}
+
+/// KHR_lights_punctual's spot attenuation: a linear ramp in cos(angle) from
+/// the outer cone (0) to the inner cone (1), squared (the spec's sample
+/// implementation, with its 0.001 guard on the ramp width).
+pub fn spot_falloff(cos_angle: f32, cos_inner: f32, cos_outer: f32) -> f32 {
+    let scale = 1.0 / (cos_inner - cos_outer).max(0.001);
+    let t = ((cos_angle - cos_outer) * scale).clamp(0.0, 1.0);
+    t * t
+}
+
+/// Probabilities of the three light categories (sum 1, or all 0 when the
+/// scene has no light at all).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CategoryProbs {
+    pub area: f32,
+    pub punctual: f32,
+    pub background: f32,
+}
+
+/// A light sample seen from a shading point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightSample {
+    /// Unit direction from the shading point toward the light.
+    pub wi: Vec3,
+    /// Distance to the sampled point (f32::INFINITY for directional and
+    /// background samples).
+    pub dist: f32,
+    /// Incident radiance (area, background) or radiance-equivalent
+    /// (punctual: I falloff / d^2, or E) divided by the sampling density.
+    pub weight: Vec3,
+    /// Solid-angle density including the category choice, for MIS; zero
+    /// for delta lights.
+    pub pdf: f32,
+    pub delta: bool,
+}
+
+/// The emitters of a scene, ready to sample.
+#[derive(Clone, Debug, Default)]
+pub struct Lights {
+    pub emitters: Vec<GpuEmitter>,
+    pub punctual: Vec<GpuLight>,
+    pub background: Vec3,
+    pub probs: CategoryProbs,
+}
+
+impl Lights {
+    pub fn new(scene: &Scene) -> Self {
+        let tris = scene.emitter_triangles();
+        let powers: Vec<f64> = tris
+            .iter()
+            .map(|&i| {
+                let t = &scene.triangles[i as usize];
+                let m = &scene.materials[t.material as usize];
+                let sides = if t.flags & TRI_DOUBLE_SIDED != 0 {
+                    2.0
+                } else {
+                    1.0
+                };
+                luminance(m.emission).max(0.0) as f64 * t.area() as f64 * sides
+            })
+            .collect();
+        let mut total: f64 = powers.iter().sum();
+        // A coloured emitter can have zero luminance (pure blue is not, but
+        // guard anyway): fall back to area alone so it is still sampled.
+        let powers: Vec<f64> = if total > 0.0 {
+            powers
+        } else {
+            let p: Vec<f64> = tris
+                .iter()
+                .map(|&i| scene.triangles[i as usize].area() as f64)
+                .collect();
+            total = p.iter().sum();
+            p
+        };
+        let mut acc = 0.0f64;
+        let mut emitters: Vec<GpuEmitter> = tris
+            .iter()
+            .zip(&powers)
+            .map(|(&tri, &p)| {
+                acc += p;
+                GpuEmitter {
+                    tri,
+                    cdf: (acc / total) as f32,
+                    pmf: (p / total) as f32,
+                    area: scene.triangles[tri as usize].area(),
+                }
+            })
+            .collect();
+        if let Some(last) = emitters.last_mut() {
+            last.cdf = 1.0;
+        }
+        let punctual: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
+        let has_bg = scene.background.max_element() > 0.0;
+        let present = [!emitters.is_empty(), !punctual.is_empty(), has_bg];
+        let n = present.iter().filter(|&&b| b).count();
+        let p = if n > 0 { 1.0 / n as f32 } else { 0.0 };
+        let probs = CategoryProbs {
+            area: if present[0] { p } else { 0.0 },
+            punctual: if present[1] { p } else { 0.0 },
+            background: if present[2] { p } else { 0.0 },
+        };
+        Self {
+            emitters,
+            punctual,
+            background: scene.background,
+            probs,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.probs.area + self.probs.punctual + self.probs.background == 0.0
+    }
+
+    /// Sample a light from shading point `p`. `bg_normal` is the axis of
+    /// the background's cosine lobe, or zero for uniform sphere sampling
+    /// (see [`background_direction_frame`]). `u_cat`, `u_idx`, `u` are the
+    /// four uniform numbers the sample consumes. `None`: the chosen light
+    /// sends nothing toward `p` (back face, outside a spot cone).
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        bg_normal: Vec3,
+        u_cat: f32,
+        u_idx: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
+        let pr = self.probs;
+        if u_cat < pr.area {
+            let n = self.emitters.len() as u32;
+            let i = sample_cdf(|k| self.emitters[k as usize].cdf, n, u_idx);
+            let e = self.emitters[i as usize];
+            let t = &scene.triangles[e.tri as usize];
+            let b = square_to_uniform_triangle(u);
+            let [a0, a1, a2] = t.vertices();
+            let q = (1.0 - b.x - b.y) * a0 + b.x * a1 + b.y * a2;
+            let d = q - p;
+            let dist2 = d.length_squared();
+            let dist = dist2.sqrt();
+            if !(dist > 0.0) {
+                return None;
+            }
+            let wi = d / dist;
+            let le = emitted(scene, t, -wi)?;
+            let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
+            let pdf = pr.area * e.pmf / e.area * dist2 / cos_l;
+            if !(pdf > 0.0 && pdf.is_finite()) {
+                return None;
+            }
+            Some(LightSample {
+                wi,
+                dist,
+                weight: le / pdf,
+                pdf,
+                delta: false,
+            })
+        } else if u_cat < pr.area + pr.punctual {
+            let n = self.punctual.len();
+            let i = ((u_idx * n as f32) as usize).min(n - 1);
+            let l = self.punctual[i];
+            let sel = pr.punctual / n as f32;
+            let intensity = Vec3::from(l.intensity);
+            let (wi, dist, li) = if l.kind == GpuLight::KIND_DIRECTIONAL {
+                (-Vec3::from(l.direction), f32::INFINITY, intensity)
+            } else {
+                let d = Vec3::from(l.position) - p;
+                let dist2 = d.length_squared();
+                let dist = dist2.sqrt();
+                if !(dist > 0.0) {
+                    return None;
+                }
+                let wi = d / dist;
+                let mut li = intensity / dist2;
+                if l.kind == GpuLight::KIND_SPOT {
+                    let cos_a = Vec3::from(l.direction).dot(-wi);
+                    li *= spot_falloff(cos_a, l.cos_inner, l.cos_outer);
+                }
+                (wi, dist, li)
+            };
+            if li.max_element() <= 0.0 {
+                return None;
+            }
+            Some(LightSample {
+                wi,
+                dist,
+                weight: li / sel,
+                pdf: 0.0,
+                delta: true,
+            })
+        } else if pr.background > 0.0 {
+            let (wi, dir_pdf) = if bg_normal == Vec3::ZERO {
+                (square_to_uniform_sphere(u), UNIFORM_SPHERE_PDF)
+            } else {
+                let local = square_to_cosine_hemisphere(u);
+                let wi = Frame::from_normal(bg_normal).to_world(local);
+                (wi, cosine_hemisphere_pdf(local.z))
+            };
+            let pdf = pr.background * dir_pdf;
+            if !(pdf > 0.0) {
+                return None;
+            }
+            Some(LightSample {
+                wi,
+                dist: f32::INFINITY,
+                weight: self.background / pdf,
+                pdf,
+                delta: false,
+            })
+        } else {
+            None
+        }
+    }
+
+    /// Solid-angle density with which [`Lights::sample`] picks the point
+    /// `dist` away along `wi` on emitter triangle `tri` (for MIS of a BSDF
+    /// sample that hit it).
+    pub fn area_pdf(&self, scene: &Scene, tri: u32, wi: Vec3, dist: f32) -> f32 {
+        let t = &scene.triangles[tri as usize];
+        let e = self.emitters[t.light as usize];
+        let cos_l = t.geometric_normal().normalize().dot(wi).abs();
+        if !(cos_l > 0.0) {
+            return 0.0;
+        }
+        self.probs.area * e.pmf / e.area * dist * dist / cos_l
+    }
+
+    /// Solid-angle density of sampling background direction `wi`.
+    pub fn background_pdf(&self, bg_normal: Vec3, wi: Vec3) -> f32 {
+        let dir_pdf = if bg_normal == Vec3::ZERO {
+            UNIFORM_SPHERE_PDF
+        } else {
+            cosine_hemisphere_pdf(bg_normal.dot(wi))
+        };
+        self.probs.background * dir_pdf
+    }
+}
+
+/// Radiance an emissive triangle sends along `w` (pointing away from it):
+/// its emission on the front face (the side the geometric normal points to)
+/// or on both faces when double-sided; `None` when it sends nothing.
+pub fn emitted(scene: &Scene, t: &Triangle, w: Vec3) -> Option<Vec3> {
+    let m = &scene.materials[t.material as usize];
+    if !m.is_emissive() {
+        return None;
+    }
+    let front = t.geometric_normal().dot(w) > 0.0;
+    if front || t.flags & TRI_DOUBLE_SIDED != 0 {
+        Some(m.emission)
+    } else {
+        None
+    }
+}
+
+/// The axis about which the background is sampled at a shading point:
+/// cosine-weighted about the shading normal turned toward `wo` for BSDFs
+/// that only reflect (this is the BSDF's own cosine factor: exact for a
+/// Lambertian surface under a constant sky), or zero (uniform sphere) when
+/// the BSDF transmits, so light from behind the surface is reachable too.
+pub fn background_direction_frame(ns: Vec3, wo: Vec3, transmits: bool) -> Vec3 {
+    if transmits {
+        Vec3::ZERO
+    } else if ns.dot(wo) >= 0.0 {
+        ns
+    } else {
+        -ns
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spot_falloff_matches_the_khr_ramp() {
+        let (ci, co) = (0.9f32, 0.8f32);
+        assert_eq!(spot_falloff(0.95, ci, co), 1.0);
+        assert_eq!(spot_falloff(0.7, ci, co), 0.0);
+        let mid = spot_falloff(0.85, ci, co);
+        assert!((mid - 0.25).abs() < 1e-5, "{mid}");
+    }
+}

@@ -1,0 +1,291 @@
+//! Renders whose answer is known in closed form, tested with a z-test on
+//! the film's own variance (`compare::compare_to_reference`), not a
+//! hand-tuned epsilon.
+
+mod render_common;
+
+use glam::{Vec2, Vec3};
+use glint_cpu::bsdf::{Bsdf, Roughness};
+use glint_cpu::camera::PinholeCamera;
+use glint_cpu::compare::{compare_to_constant, compare_to_reference};
+use glint_cpu::{Material, PunctualLight, Scene};
+use render_common::*;
+
+const SIZE: u32 = 32;
+
+/// Which pixels of a view of a sphere are certainly on it (true, true),
+/// certainly off it (false, true) or on the silhouette (_, false): the
+/// distance of the pixel-centre ray from the centre, with a margin of one
+/// pixel footprint at the sphere's distance.
+fn sphere_mask(scene: &Scene, c: Vec3, r_out: f32, r_in: f32) -> Vec<(bool, bool)> {
+    let cam = PinholeCamera::new(&scene.cameras[0], SIZE, SIZE);
+    let pixel = 2.0 * cam.up.length() / SIZE as f32 * (c - cam.origin).length();
+    let mut out = Vec::new();
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let ray = cam.ray(x, y, Vec2::splat(0.5));
+            let d = (c - ray.o).cross(ray.d).length();
+            out.push(if d < r_in - pixel {
+                (true, true)
+            } else if d > r_out + pixel {
+                (false, true)
+            } else {
+                (false, false)
+            });
+        }
+    }
+    out
+}
+
+fn sphere_under_sky(m: Material) -> Scene {
+    scene(
+        uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
+        vec![m],
+        vec![],
+        look_at(Vec3::new(0.0, 0.0, 3.5), Vec3::ZERO, Vec3::Y, 45.0),
+        Vec3::ONE,
+    )
+}
+
+#[test]
+fn diffuse_sphere_under_white_sky_shows_its_albedo() {
+    // A convex Lambertian object under a constant unit sky: every point
+    // sees only sky over its upper hemisphere, so L = rho exactly.
+    let s = sphere_under_sky(diffuse("rho 0.8", 0.8));
+    let film = render(&s, &opts(SIZE, 64, -1, 1));
+    let mask = sphere_mask(&s, Vec3::ZERO, 1.0, uv_sphere_inner_radius(1.0, 48, 24));
+    let on = |x: u32, y: u32| mask[(y * SIZE + x) as usize] == (true, true);
+    let off = |x: u32, y: u32| mask[(y * SIZE + x) as usize] == (false, true);
+    let r = compare_to_constant(&film, Vec3::splat(0.8), &on).unwrap();
+    assert!(r.pass, "sphere: {r}");
+    let r = compare_to_constant(&film, Vec3::ONE, &off).unwrap();
+    assert!(r.pass, "sky: {r}");
+    // And the test can fail: 0.78 is not 0.8.
+    assert!(
+        !compare_to_constant(&film, Vec3::splat(0.78), &on)
+            .unwrap()
+            .pass
+    );
+}
+
+#[test]
+fn glass_sphere_under_white_sky_is_invisible() {
+    // A lossless dielectric under a constant sky: whatever the path does
+    // inside, it leaves toward the sky with unit radiance (the 1/eta^2
+    // radiance scaling cancels in and out), so the image is 1 everywhere.
+    let glass = Material {
+        name: "glass".into(),
+        bsdf: Bsdf::Dielectric {
+            eta: 1.5046,
+            roughness: Roughness::SMOOTH,
+        },
+        emission: Vec3::ZERO,
+        double_sided: false,
+    };
+    let s = sphere_under_sky(glass);
+    let film = render(&s, &opts(SIZE, 64, -1, 2));
+    let r = compare_to_constant(&film, Vec3::ONE, &|_, _| true).unwrap();
+    assert!(r.pass, "{r}");
+    assert!(
+        !compare_to_constant(&film, Vec3::splat(0.98), &|_, _| true)
+            .unwrap()
+            .pass
+    );
+}
+
+/// A diffuse floor (y = 0) seen straight down from (0, 2, 0), a wall at
+/// x = 1.6 out of view (indirect light only), lit by `light`.
+const RHO: f32 = 0.6;
+const EYE_Y: f32 = 2.0;
+
+fn floor_scene(light: PunctualLight) -> Scene {
+    let mut t = floor(0.0, 3.0, 0);
+    t.extend(quad(
+        Vec3::new(1.6, 0.0, 3.0),
+        Vec3::new(1.6, 0.0, -3.0),
+        Vec3::new(1.6, 3.0, -3.0),
+        Vec3::new(1.6, 3.0, 3.0),
+        0,
+    ));
+    scene(
+        t,
+        vec![diffuse("floor", RHO)],
+        vec![light],
+        look_at(Vec3::new(0.0, EYE_Y, 0.0), Vec3::ZERO, Vec3::NEG_Z, 50.0),
+        Vec3::ZERO,
+    )
+}
+
+/// Direct radiance at floor point p lit by `light`: rho/pi x irradiance.
+fn direct(light: &PunctualLight, p: Vec3) -> Vec3 {
+    let n = Vec3::Y;
+    let e = match *light {
+        PunctualLight::Point {
+            position,
+            intensity,
+        } => {
+            let d = position - p;
+            intensity * n.dot(d.normalize()).max(0.0) / d.length_squared()
+        }
+        PunctualLight::Spot {
+            position,
+            direction,
+            intensity,
+            inner_cone_angle,
+            outer_cone_angle,
+        } => {
+            let d = position - p;
+            let l = d.normalize();
+            let cd = direction.dot(-l);
+            let (ci, co) = (inner_cone_angle.cos(), outer_cone_angle.cos());
+            let t = ((cd - co) / (ci - co).max(0.001)).clamp(0.0, 1.0);
+            intensity * t * t * n.dot(l).max(0.0) / d.length_squared()
+        }
+        PunctualLight::Directional {
+            direction,
+            irradiance,
+        } => irradiance * n.dot(-direction).max(0.0),
+    };
+    e * RHO / std::f32::consts::PI
+}
+
+/// The exact pixel means: the box filter's integral by a 16x16 midpoint
+/// rule (its error is ~1e-4 of the noise the test can resolve).
+fn floor_reference(s: &Scene, light: &PunctualLight) -> Vec<Vec3> {
+    let cam = PinholeCamera::new(&s.cameras[0], SIZE, SIZE);
+    let k = 16;
+    let mut out = Vec::new();
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let mut acc = Vec3::ZERO;
+            for j in 0..k {
+                for i in 0..k {
+                    let u = Vec2::new((i as f32 + 0.5) / k as f32, (j as f32 + 0.5) / k as f32);
+                    let ray = cam.ray(x, y, u);
+                    let t = -ray.o.y / ray.d.y;
+                    acc += direct(light, ray.o + t * ray.d);
+                }
+            }
+            out.push(acc / (k * k) as f32);
+        }
+    }
+    out
+}
+
+#[test]
+fn punctual_lights_give_their_analytic_irradiance_and_depth_2_is_direct_only() {
+    let lights = [
+        PunctualLight::Point {
+            position: Vec3::new(0.3, 1.0, -0.2),
+            intensity: Vec3::new(1.0, 2.0, 3.0),
+        },
+        PunctualLight::Spot {
+            position: Vec3::new(0.0, 1.2, 0.0),
+            direction: Vec3::new(1.0, -1.0, 0.1).normalize(),
+            intensity: Vec3::splat(2.0),
+            inner_cone_angle: 0.25,
+            outer_cone_angle: 0.6,
+        },
+        PunctualLight::Directional {
+            direction: Vec3::new(0.3, -1.0, 0.2).normalize(),
+            irradiance: Vec3::new(1.0, 0.5, 0.25),
+        },
+    ];
+    for light in lights {
+        let s = floor_scene(light);
+        let reference = floor_reference(&s, &light);
+        // Depth 2: direct lighting only, exactly the analytic value.
+        let film = render(&s, &opts(SIZE, 64, 2, 3));
+        let r = compare_to_reference(&film, &reference, &|_, _| true).unwrap();
+        assert!(r.pass, "{light:?} depth 2: {r}");
+        // Depth 3 adds light bounced off the wall: no longer direct only.
+        let film3 = render(&s, &opts(SIZE, 64, 3, 3));
+        let r3 = compare_to_reference(&film3, &reference, &|_, _| true).unwrap();
+        assert!(!r3.pass, "{light:?} depth 3 should exceed direct: {r3}");
+    }
+}
+
+#[test]
+fn depth_1_shows_only_emitters_seen_directly() {
+    // The lit room: at depth 1 a pixel sample is either the emission (the
+    // light seen from below), the background, or zero; the sphere, walls
+    // and floor are black.
+    let s = lit_room(vec![]);
+    let film = render(&s, &opts(SIZE, 16, 1, 4));
+    let le = Vec3::new(4.0, 3.5, 3.0);
+    let bg = Vec3::splat(0.3);
+    let mut lit = 0;
+    for i in 0..film.sum.len() {
+        let (sum, sum_sq) = (film.sum[i], film.sum_sq[i]);
+        // Samples in {0, bg, le}: sum = a bg + b le, sum_sq = a bg^2 + b le^2
+        // for integers a, b with a + b <= spp; solve from the x channel
+        // and the y channel (le.x != le.y, bg grey).
+        let b = (sum.x - sum.y) / (le.x - le.y);
+        let a = (sum.x - b * le.x) / bg.x;
+        let (ar, br) = (a.round(), b.round());
+        assert!(
+            (a - ar).abs() < 1e-3 && (b - br).abs() < 1e-3 && ar + br <= 16.0,
+            "pixel {i}: {sum} is not a mix of emission and background"
+        );
+        let expect_sq = ar * bg * bg + br * le * le;
+        assert!((sum_sq - expect_sq).abs().max_element() < 1e-3 * expect_sq.max_element().max(1.0));
+        lit += (br > 0.0) as u32;
+    }
+    assert!(lit > 0, "the light is in view");
+    // The floor in the bottom rows is black at depth 1 and lit at depth 2.
+    let i = film.index(SIZE / 2, SIZE - 3);
+    assert_eq!(film.sum[i], Vec3::ZERO);
+    let film2 = render(&s, &opts(SIZE, 16, 2, 4));
+    assert!(film2.sum[i].min_element() > 0.0);
+}
+
+#[test]
+fn area_light_irradiance_matches_quadrature() {
+    // A floor point under a square emitter (facing down, Le = 1), seen
+    // through a 1-degree field of view: L = rho/pi * Le * integral of
+    // cos cos / r^2 over the light, by a 400x400 midpoint rule.
+    let mats = vec![diffuse("floor", RHO), emitter("light", Vec3::ONE, false)];
+    let mut t = floor(-1.0, 1.0, 0);
+    t.extend(quad(
+        Vec3::new(-0.5, 0.99, -0.5),
+        Vec3::new(0.5, 0.99, -0.5),
+        Vec3::new(0.5, 0.99, 0.5),
+        Vec3::new(-0.5, 0.99, 0.5),
+        1,
+    ));
+    let s = scene(
+        t,
+        mats,
+        vec![],
+        look_at(
+            Vec3::new(0.0, 0.5, 0.0),
+            Vec3::new(0.0, -1.0, 0.0),
+            Vec3::Z,
+            1.0,
+        ),
+        Vec3::ZERO,
+    );
+    let n = 400;
+    let p = Vec3::new(0.0, -1.0, 0.0);
+    let mut e = 0.0f64;
+    for i in 0..n {
+        for j in 0..n {
+            let q = Vec3::new(
+                -0.5 + (i as f32 + 0.5) / n as f32,
+                0.99,
+                -0.5 + (j as f32 + 0.5) / n as f32,
+            );
+            let d = q - p;
+            let r2 = d.length_squared();
+            let cos = d.y / r2.sqrt();
+            e += (cos * cos / r2) as f64 / (n * n) as f64;
+        }
+    }
+    let expect = Vec3::splat((RHO as f64 / std::f64::consts::PI * e) as f32);
+    for max_depth in [2, -1] {
+        let film = render(&s, &opts(8, 512, max_depth, 5));
+        // Depth -1 adds floor -> light-back-face (black) paths only.
+        let r = compare_to_constant(&film, expect, &|_, _| true).unwrap();
+        assert!(r.pass, "depth {max_depth}: {r}");
+    }
+}

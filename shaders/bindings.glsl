@@ -1,0 +1,92 @@
+// The path tracer's binding table (descriptor set 0), shared by
+// shaders/pathtrace.comp and the host (src/gpu/render.rs). Rust mirrors:
+//
+//   binding 0  uniform Params          glint_cpu::integrator::GpuParams (std140, 144 B)
+//   binding 1  Triangle triangles[]    glint_cpu::Triangle (48 B), BVH leaf order
+//   binding 2  BvhNode bvh_nodes[]     glint_cpu::BvhNode (32 B)
+//   binding 3  TriangleShading shading[]  glint_cpu::TriangleShading (96 B)
+//   binding 4  Material materials[]    glint_cpu::GpuMaterial (96 B)
+//   binding 5  Emitter emitters[]      glint_cpu::lights::GpuEmitter (16 B), emitter order
+//   binding 6  Light lights[]          glint_cpu::lights::GpuLight (48 B)
+//   binding 7  vec4 accum[]            2 per pixel: (sum, sum of squares); ADDED to
+//   binding 8  uint ray_counts[]       1 per pixel; ADDED to
+//
+// Push constants: uint sample_start, sample_count: a dispatch renders
+// samples [sample_start, sample_start + sample_count) of every pixel, one
+// invocation per pixel, 8x8 workgroups. Arrays may hold a dummy element
+// (Vulkan buffers cannot be empty): the counts in Params are the truth.
+// glint_cpu::integrator::gpu_scene_data fills Params and bindings 4-6.
+#ifndef GLINT_BINDINGS_GLSL
+#define GLINT_BINDINGS_GLSL
+
+#include "bvh_types.glsl"
+#include "bsdf/material.glsl"
+
+struct TriangleShading {
+    // .w of each normal: 1 when the mesh had NORMAL (else use the
+    // geometric normal); .w of each tangent: 1 when a tangent is known.
+    vec4 n[3];
+    vec4 t[3];
+};
+
+struct Emitter {
+    uint tri;   // index into triangles[]
+    float cdf;  // inclusive CDF of the power distribution
+    float pmf;  // this emitter's probability
+    float area;
+};
+
+#define LIGHT_POINT 0u
+#define LIGHT_SPOT 1u
+#define LIGHT_DIRECTIONAL 2u
+
+struct Light {
+    vec3 position;
+    uint kind;
+    vec3 direction;  // spot: where it points; directional: where light travels
+    float cos_outer;
+    vec3 intensity;  // point, spot: intensity; directional: irradiance
+    float cos_inner;
+};
+
+layout(std140, set = 0, binding = 0) uniform ParamsBlock {
+    vec4 cam_origin;
+    vec4 cam_right;   // scaled by tan(yfov/2) * aspect
+    vec4 cam_up;      // scaled by tan(yfov/2)
+    vec4 cam_forward;
+    vec4 background;
+    uint width;
+    uint height;
+    uint spp;
+    uint max_depth;   // 0xffffffff: unbounded
+    uint seed_key;
+    uint triangle_count;
+    uint bvh_node_count;
+    uint emitter_count;
+    uint light_count;
+    uint nee;
+    uint pad0;
+    uint pad1;
+    float p_area;
+    float p_punctual;
+    float p_background;
+    float eps_abs;
+} params;
+
+layout(std430, set = 0, binding = 1) readonly buffer TriangleBuffer { Triangle triangles[]; };
+layout(std430, set = 0, binding = 2) readonly buffer BvhNodeBuffer { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = 3) readonly buffer ShadingBuffer { TriangleShading shading[]; };
+layout(std430, set = 0, binding = 4) readonly buffer MaterialBuffer { Material materials[]; };
+layout(std430, set = 0, binding = 5) readonly buffer EmitterBuffer { Emitter emitters[]; };
+layout(std430, set = 0, binding = 6) readonly buffer LightBuffer { Light lights[]; };
+layout(std430, set = 0, binding = 7) buffer AccumBuffer { vec4 accum[]; };
+layout(std430, set = 0, binding = 8) buffer RayCountBuffer { uint ray_counts[]; };
+
+layout(push_constant) uniform SamplePush {
+    uint sample_start;
+    uint sample_count;
+} push;
+
+#define BVH_NODE_COUNT (params.bvh_node_count)
+
+#endif

@@ -1,0 +1,410 @@
+// The BSDFs in the local shading frame (n = +z, wo toward the viewer, wi
+// toward the light): line-for-line twin of cpu/src/bsdf/{mod,diffuse,
+// conductor,dielectric,metallic}.rs, same function names and math, so a
+// CPU/GPU mismatch can be pinned to one function (tests/gpu_bsdf.rs).
+//
+// API: bsdf_eval, bsdf_pdf, bsdf_sample, bsdf_is_delta on a Material
+// (material.glsl). Radiance transport: transmission carries 1/eta_rel^2.
+#ifndef GLINT_BSDF_BSDF_GLSL
+#define GLINT_BSDF_BSDF_GLSL
+
+#include "bsdf/material.glsl"
+#include "bsdf/fresnel.glsl"
+#include "bsdf/microfacet.glsl"
+#include "bsdf/warp.glsl"
+
+#define GLINT_INV_PI 0.31830988618379067154
+
+// GGX alphas below this are rendered as the smooth (delta) counterpart
+// (SMOOTH_ALPHA_THRESHOLD in cpu/src/bsdf/mod.rs).
+#define SMOOTH_ALPHA_THRESHOLD 1e-3
+
+struct BsdfSample {
+    vec3 wi;      // sampled incident direction (local frame)
+    float pdf;    // solid-angle pdf; for delta lobes the lobe's probability
+    vec3 weight;  // f |cos wi| / pdf; for delta lobes the lobe's throughput
+    float eta;    // eta_t / eta_i crossed by a transmission, else 1
+    bool delta;   // sampled a Dirac lobe
+};
+
+bool roughness_is_smooth(float alpha_u, float alpha_v) {
+    return max(alpha_u, alpha_v) < SMOOTH_ALPHA_THRESHOLD;
+}
+
+vec2 rough_alphas(Material m) {
+    return vec2(max(m.alpha_u, MIN_ALPHA), max(m.alpha_v, MIN_ALPHA));
+}
+
+bool material_separable(Material m) {
+    return m.shadowing == SHADOWING_SEPARABLE;
+}
+
+// Mirror both directions to the upper hemisphere when wo is below it.
+void two_sided(inout vec3 wo, inout vec3 wi) {
+    if (wo.z < 0.0) {
+        wo.z = -wo.z;
+        wi.z = -wi.z;
+    }
+}
+
+// ------------------------------------------------------------------ diffuse
+
+vec3 diffuse_eval(vec3 rho, vec3 wo, vec3 wi) {
+    if (wo.z * wi.z <= 0.0) {
+        return vec3(0.0);
+    }
+    return rho * GLINT_INV_PI;
+}
+
+float diffuse_pdf(vec3 wo, vec3 wi) {
+    if (wo.z * wi.z <= 0.0) {
+        return 0.0;
+    }
+    return abs(wi.z) * GLINT_INV_PI;
+}
+
+bool diffuse_sample(vec3 rho, vec3 wo, vec2 u, out BsdfSample s) {
+    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+    if (wo.z == 0.0) {
+        return false;
+    }
+    vec3 wi = square_to_cosine_hemisphere(u);
+    if (wi.z <= 0.0) {
+        return false;
+    }
+    if (wo.z < 0.0) {
+        wi.z = -wi.z;
+    }
+    s = BsdfSample(wi, abs(wi.z) * GLINT_INV_PI, rho, 1.0, false);
+    return true;
+}
+
+// ---------------------------------------------------------------- conductor
+
+vec3 conductor_eval(Material m, vec3 wo, vec3 wi) {
+    if (roughness_is_smooth(m.alpha_u, m.alpha_v)) {
+        return vec3(0.0);
+    }
+    two_sided(wo, wi);
+    if (wo.z <= 0.0 || wi.z <= 0.0) {
+        return vec3(0.0);
+    }
+    vec2 a = rough_alphas(m);
+    vec3 wm = normalize(wo + wi);
+    vec3 f = fresnel_conductor(dot(wo, wm), m.eta.xyz, m.k.xyz) * m.specular.xyz;
+    return f * (ggx_d(wm, a.x, a.y) * ggx_visibility(wo, wi, a.x, a.y, material_separable(m)));
+}
+
+float conductor_pdf(Material m, vec3 wo, vec3 wi) {
+    if (roughness_is_smooth(m.alpha_u, m.alpha_v)) {
+        return 0.0;
+    }
+    two_sided(wo, wi);
+    if (wo.z <= 0.0 || wi.z <= 0.0) {
+        return 0.0;
+    }
+    vec2 a = rough_alphas(m);
+    vec3 wm = normalize(wo + wi);
+    float d = dot(wo, wm);
+    if (d <= 0.0) {
+        return 0.0;
+    }
+    return ggx_pdf_visible(wo, wm, a.x, a.y) / (4.0 * d);
+}
+
+bool conductor_sample(Material m, vec3 wo, vec2 u, out BsdfSample s) {
+    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+    if (wo.z == 0.0) {
+        return false;
+    }
+    bool flip = wo.z < 0.0;
+    vec3 wo_up = vec3(wo.x, wo.y, abs(wo.z));
+    if (roughness_is_smooth(m.alpha_u, m.alpha_v)) {
+        vec3 f = fresnel_conductor(wo_up.z, m.eta.xyz, m.k.xyz) * m.specular.xyz;
+        s = BsdfSample(vec3(-wo.x, -wo.y, wo.z), 1.0, f, 1.0, true);
+        return true;
+    }
+    vec2 a = rough_alphas(m);
+    vec3 wm = ggx_sample_visible(wo_up, a.x, a.y, u);
+    float d = dot(wo_up, wm);
+    vec3 wi = reflect_dir(wo_up, wm);
+    if (wi.z <= 0.0 || d <= 0.0) {
+        return false;
+    }
+    // pdf and weight from the sampled normal (see conductor.rs).
+    float pdf = ggx_pdf_visible(wo_up, wm, a.x, a.y) / (4.0 * d);
+    float g1 = ggx_g1(wo_up, a.x, a.y);
+    if (!(pdf > 0.0) || isinf(pdf) || !(g1 > 0.0)) {
+        return false;
+    }
+    vec3 f = fresnel_conductor(d, m.eta.xyz, m.k.xyz) * m.specular.xyz;
+    vec3 weight = f * (ggx_g2(wo_up, wi, a.x, a.y, material_separable(m)) / g1);
+    if (flip) {
+        wi.z = -wi.z;
+    }
+    s = BsdfSample(wi, pdf, weight, 1.0, false);
+    return true;
+}
+
+// --------------------------------------------------------------- dielectric
+
+bool dielectric_is_smooth(float eta, Material m) {
+    return roughness_is_smooth(m.alpha_u, m.alpha_v) || eta == 1.0;
+}
+
+// Generalised half vector (Walter 2007 eq. 16), face-forwarded to +z;
+// false when degenerate or back-facing.
+bool dielectric_half_vector(float eta, vec3 wo, vec3 wi, out vec3 wm, out float etap,
+                            out bool is_reflection) {
+    float co = wo.z;
+    float ci = wi.z;
+    wm = vec3(0.0, 0.0, 1.0);
+    etap = 1.0;
+    is_reflection = co * ci > 0.0;
+    if (co == 0.0 || ci == 0.0) {
+        return false;
+    }
+    etap = is_reflection ? 1.0 : (co > 0.0 ? eta : 1.0 / eta);
+    vec3 h = wi * etap + wo;
+    float len2 = dot(h, h);
+    if (!(len2 > 1e-12)) {
+        return false;
+    }
+    wm = h / sqrt(len2);
+    if (wm.z < 0.0) {
+        wm = -wm;
+    }
+    if (dot(wm, wi) * ci <= 0.0 || dot(wm, wo) * co <= 0.0) {
+        return false;
+    }
+    return true;
+}
+
+vec3 dielectric_eval(float eta, Material m, vec3 wo, vec3 wi) {
+    if (dielectric_is_smooth(eta, m)) {
+        return vec3(0.0);
+    }
+    vec3 wm;
+    float etap;
+    bool is_reflection;
+    if (!dielectric_half_vector(eta, wo, wi, wm, etap, is_reflection)) {
+        return vec3(0.0);
+    }
+    vec2 a = rough_alphas(m);
+    float d = ggx_d(wm, a.x, a.y);
+    float v = ggx_visibility(wo, wi, a.x, a.y, material_separable(m));
+    float f = fresnel_dielectric(dot(wo, wm), eta);
+    if (is_reflection) {
+        return vec3(d * f * v);
+    }
+    float dot_i = dot(wi, wm);
+    float dot_o = dot(wo, wm);
+    float denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+    if (!(denom > 0.0)) {
+        return vec3(0.0);
+    }
+    float ft = d * (1.0 - f) * 4.0 * v * abs(dot_i * dot_o) / denom;
+    return vec3(ft / (etap * etap));
+}
+
+float dielectric_pdf(float eta, Material m, vec3 wo, vec3 wi) {
+    if (dielectric_is_smooth(eta, m)) {
+        return 0.0;
+    }
+    vec3 wm;
+    float etap;
+    bool is_reflection;
+    if (!dielectric_half_vector(eta, wo, wi, wm, etap, is_reflection)) {
+        return 0.0;
+    }
+    vec2 a = rough_alphas(m);
+    float dot_o = dot(wo, wm);
+    float dot_i = dot(wi, wm);
+    float pr = fresnel_dielectric(dot_o, eta);
+    float pt = 1.0 - pr;
+    float pdf_wm = ggx_pdf_visible(wo, wm, a.x, a.y);
+    if (is_reflection) {
+        return pdf_wm / (4.0 * abs(dot_o)) * pr;
+    }
+    float denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+    if (!(denom > 0.0)) {
+        return 0.0;
+    }
+    return pdf_wm * (abs(dot_i) / denom) * pt;
+}
+
+bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+    if (wo.z == 0.0) {
+        return false;
+    }
+    if (dielectric_is_smooth(eta, m)) {
+        float pr = fresnel_dielectric(wo.z, eta);
+        if (uc < pr) {
+            s = BsdfSample(vec3(-wo.x, -wo.y, wo.z), pr, vec3(1.0), 1.0, true);
+            return true;
+        }
+        vec3 wt;
+        float etap;
+        if (!refract_dir(wo, vec3(0.0, 0.0, 1.0), eta, wt, etap)) {
+            return false;
+        }
+        if (wt.z == 0.0) {
+            return false;
+        }
+        s = BsdfSample(wt, 1.0 - pr, vec3(1.0 / (etap * etap)), etap, true);
+        return true;
+    }
+    vec2 a = rough_alphas(m);
+    vec3 wm = ggx_sample_visible(wo, a.x, a.y, u);
+    float dot_o = dot(wo, wm);
+    float pr = fresnel_dielectric(dot_o, eta);
+    float pdf_wm = ggx_pdf_visible(wo, wm, a.x, a.y);
+    float g1 = ggx_g1(wo, a.x, a.y);
+    if (!(g1 > 0.0)) {
+        return false;
+    }
+    bool separable = material_separable(m);
+    vec3 wi;
+    float pdf;
+    float weight;
+    float eta_rel;
+    if (uc < pr) {
+        wi = reflect_dir(wo, wm);
+        if (wi.z * wo.z <= 0.0) {
+            return false;
+        }
+        pdf = pdf_wm / (4.0 * abs(dot_o)) * pr;
+        weight = ggx_g2(wo, wi, a.x, a.y, separable) / g1;
+        eta_rel = 1.0;
+    } else {
+        float etap;
+        if (!refract_dir(wo, wm, eta, wi, etap)) {
+            return false;
+        }
+        if (wi.z * wo.z >= 0.0) {
+            return false;
+        }
+        float dot_i = dot(wi, wm);
+        float denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        if (!(denom > 0.0)) {
+            return false;
+        }
+        pdf = pdf_wm * (abs(dot_i) / denom) * (1.0 - pr);
+        weight = ggx_g2(wo, wi, a.x, a.y, separable) / g1 / (etap * etap);
+        eta_rel = etap;
+    }
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        return false;
+    }
+    vec3 hm;
+    float hetap;
+    bool hrefl;
+    if (!dielectric_half_vector(eta, wo, wi, hm, hetap, hrefl)) {
+        return false;
+    }
+    s = BsdfSample(wi, pdf, vec3(weight), eta_rel, false);
+    return true;
+}
+
+// ----------------------------------------------------------------- metallic
+
+vec3 metallic_eval(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
+    return w * conductor_eval(m, wo, wi) + (1.0 - w) * diffuse_eval(base, wo, wi);
+}
+
+float metallic_pdf(float w, Material m, vec3 wo, vec3 wi) {
+    return w * conductor_pdf(m, wo, wi) + (1.0 - w) * diffuse_pdf(wo, wi);
+}
+
+bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
+                     out BsdfSample s) {
+    vec3 wi;
+    float pdf_c;
+    vec3 f_c;
+    float pdf_d;
+    vec3 f_d;
+    if (uc < w) {
+        if (!conductor_sample(m, wo, u, s)) {
+            return false;
+        }
+        if (s.delta) {
+            s.pdf = w;
+            return true;
+        }
+        wi = s.wi;
+        pdf_c = s.pdf;
+        f_c = s.weight * (s.pdf / abs(wi.z));
+        pdf_d = diffuse_pdf(wo, wi);
+        f_d = diffuse_eval(base, wo, wi);
+    } else {
+        if (!diffuse_sample(base, wo, u, s)) {
+            return false;
+        }
+        wi = s.wi;
+        pdf_d = s.pdf;
+        f_d = diffuse_eval(base, wo, wi);
+        pdf_c = conductor_pdf(m, wo, wi);
+        f_c = conductor_eval(m, wo, wi);
+    }
+    float pdf = w * pdf_c + (1.0 - w) * pdf_d;
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+        return false;
+    }
+    vec3 f = w * f_c + (1.0 - w) * f_d;
+    s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
+    return true;
+}
+
+// ---------------------------------------------------------------- dispatch
+
+vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
+    if (m.kind == KIND_DIFFUSE) {
+        return diffuse_eval(m.reflectance.xyz, wo, wi);
+    } else if (m.kind == KIND_CONDUCTOR) {
+        return conductor_eval(m, wo, wi);
+    } else if (m.kind == KIND_DIELECTRIC) {
+        return dielectric_eval(m.eta.x, m, wo, wi);
+    }
+    return metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+}
+
+float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
+    if (m.kind == KIND_DIFFUSE) {
+        return diffuse_pdf(wo, wi);
+    } else if (m.kind == KIND_CONDUCTOR) {
+        return conductor_pdf(m, wo, wi);
+    } else if (m.kind == KIND_DIELECTRIC) {
+        return dielectric_pdf(m.eta.x, m, wo, wi);
+    }
+    return metallic_pdf(m.reflectance.w, m, wo, wi);
+}
+
+bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    if (m.kind == KIND_DIFFUSE) {
+        return diffuse_sample(m.reflectance.xyz, wo, u, s);
+    } else if (m.kind == KIND_CONDUCTOR) {
+        return conductor_sample(m, wo, u, s);
+    } else if (m.kind == KIND_DIELECTRIC) {
+        return dielectric_sample(m.eta.x, m, wo, uc, u, s);
+    }
+    return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
+}
+
+bool bsdf_is_delta(Material m) {
+    if (m.kind == KIND_DIFFUSE) {
+        return false;
+    } else if (m.kind == KIND_CONDUCTOR) {
+        return roughness_is_smooth(m.alpha_u, m.alpha_v);
+    } else if (m.kind == KIND_DIELECTRIC) {
+        return dielectric_is_smooth(m.eta.x, m);
+    }
+    return m.reflectance.w >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
+}
+
+bool bsdf_has_transmission(Material m) {
+    return m.kind == KIND_DIELECTRIC;
+}
+
+#endif

@@ -1,0 +1,27 @@
+// The material record as the GPU reads it: std430 mirror of GpuMaterial in
+// cpu/src/scene.rs (96 bytes: 16 bytes of scalars, then five vec4s).
+#ifndef GLINT_BSDF_MATERIAL_GLSL
+#define GLINT_BSDF_MATERIAL_GLSL
+
+#define KIND_DIFFUSE 0u
+#define KIND_CONDUCTOR 1u
+#define KIND_DIELECTRIC 2u
+#define KIND_METALLIC 3u
+
+// Material.shadowing: 0 height-correlated Smith G2, 1 separable G1 G1.
+#define SHADOWING_CORRELATED 0u
+#define SHADOWING_SEPARABLE 1u
+
+struct Material {
+    uint kind;
+    uint shadowing;
+    float alpha_u;   // GGX alpha along the tangent s
+    float alpha_v;   // GGX alpha along t
+    vec4 reflectance; // diffuse / metallic base rgb; .w = metallic weight
+    vec4 eta;         // conductor eta rgb; dielectric: .x = int_ior / ext_ior
+    vec4 k;           // conductor k rgb
+    vec4 specular;    // conductor specular_reflectance rgb
+    vec4 emission;    // emitted radiance rgb; .w = 1 when both faces emit
+};
+
+#endif

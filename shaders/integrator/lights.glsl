@@ -1,0 +1,205 @@
+// Light sampling for next-event estimation, twin of cpu/src/lights.rs
+// (same names; read its header for the selection rule). Needs bindings.glsl
+// and bsdf/warp.glsl (square_to_cosine_hemisphere, the same map as
+// glint_cpu::sampling's).
+#ifndef GLINT_INTEGRATOR_LIGHTS_GLSL
+#define GLINT_INTEGRATOR_LIGHTS_GLSL
+
+#define GLINT_FLT_MAX 3.402823466e+38
+#define UNIFORM_SPHERE_PDF (1.0 / (4.0 * 3.14159265358979323846))
+#define TRI_DOUBLE_SIDED 1u
+#define NO_LIGHT 0xffffffffu
+
+vec3 square_to_uniform_sphere(vec2 u) {
+    float z = 1.0 - 2.0 * u.x;
+    float r = sqrt(max(1.0 - z * z, 0.0));
+    float phi = 2.0 * 3.14159265358979323846 * u.y;
+    return vec3(r * cos(phi), r * sin(phi), z);
+}
+
+float cosine_hemisphere_pdf(float cos_theta) {
+    return max(cos_theta, 0.0) * 0.31830988618379067154;
+}
+
+vec2 square_to_uniform_triangle(vec2 u) {
+    float su0 = sqrt(u.x);
+    return vec2(1.0 - su0, u.y * su0);
+}
+
+// Power heuristic, beta = 2 (Veach 1997, eq. 9.13).
+float power_heuristic(float a, float b) {
+    float a2 = a * a;
+    float b2 = b * b;
+    float s = a2 + b2;
+    if (s > 0.0 && !isinf(s)) {
+        return a2 / s;
+    } else if (isinf(a)) {
+        return 1.0;
+    }
+    return 0.0;
+}
+
+// Smallest i with u < emitters[i].cdf (glint_cpu::sampling::sample_cdf).
+uint sample_emitter_cdf(uint n, float u) {
+    uint lo = 0u;
+    uint hi = n > 0u ? n - 1u : 0u;
+    while (lo < hi) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (u < emitters[mid].cdf) {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
+        }
+    }
+    return lo;
+}
+
+// KHR_lights_punctual's spot attenuation.
+float spot_falloff(float cos_angle, float cos_inner, float cos_outer) {
+    float scale = 1.0 / max(cos_inner - cos_outer, 0.001);
+    float t = clamp((cos_angle - cos_outer) * scale, 0.0, 1.0);
+    return t * t;
+}
+
+vec3 triangle_normal(Triangle t) {
+    return cross(t.p1.xyz - t.p0.xyz, t.p2.xyz - t.p0.xyz);
+}
+
+// Radiance an emissive triangle sends along w (away from it); false when
+// it sends nothing (not emissive, or its back face without doubleSided).
+bool emitted(Triangle t, vec3 w, out vec3 le) {
+    Material m = materials[floatBitsToUint(t.p0.w)];
+    le = m.emission.xyz;
+    if (!(max(le.x, max(le.y, le.z)) > 0.0)) {
+        return false;
+    }
+    bool front = dot(triangle_normal(t), w) > 0.0;
+    return front || (floatBitsToUint(t.p2.w) & TRI_DOUBLE_SIDED) != 0u;
+}
+
+struct LightSample {
+    vec3 wi;
+    float dist;        // meaningless when at_infinity
+    vec3 weight;       // radiance (or equivalent) / pdf
+    float pdf;         // solid angle, with the category choice; 0 for deltas
+    bool delta;
+    bool at_infinity;  // directional and background samples
+};
+
+bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
+                   out LightSample ls) {
+    ls.wi = vec3(0.0);
+    ls.dist = 0.0;
+    ls.weight = vec3(0.0);
+    ls.pdf = 0.0;
+    ls.delta = false;
+    ls.at_infinity = false;
+    if (u_cat < params.p_area) {
+        uint i = sample_emitter_cdf(params.emitter_count, u_idx);
+        Emitter e = emitters[i];
+        Triangle t = triangles[e.tri];
+        vec2 b = square_to_uniform_triangle(u);
+        vec3 q = (1.0 - b.x - b.y) * t.p0.xyz + b.x * t.p1.xyz + b.y * t.p2.xyz;
+        vec3 d = q - p;
+        float dist2 = dot(d, d);
+        float dist = sqrt(dist2);
+        if (!(dist > 0.0)) {
+            return false;
+        }
+        vec3 wi = d / dist;
+        vec3 le;
+        if (!emitted(t, -wi, le)) {
+            return false;
+        }
+        float cos_l = abs(dot(normalize(triangle_normal(t)), -wi));
+        float pdf = params.p_area * e.pmf / e.area * dist2 / cos_l;
+        if (!(pdf > 0.0) || isinf(pdf)) {
+            return false;
+        }
+        ls.wi = wi;
+        ls.dist = dist;
+        ls.weight = le / pdf;
+        ls.pdf = pdf;
+        return true;
+    } else if (u_cat < params.p_area + params.p_punctual) {
+        uint n = params.light_count;
+        uint i = min(uint(u_idx * float(n)), n - 1u);
+        Light l = lights[i];
+        float sel = params.p_punctual / float(n);
+        vec3 li;
+        if (l.kind == LIGHT_DIRECTIONAL) {
+            ls.wi = -l.direction;
+            ls.at_infinity = true;
+            li = l.intensity;
+        } else {
+            vec3 d = l.position - p;
+            float dist2 = dot(d, d);
+            float dist = sqrt(dist2);
+            if (!(dist > 0.0)) {
+                return false;
+            }
+            ls.wi = d / dist;
+            ls.dist = dist;
+            li = l.intensity / dist2;
+            if (l.kind == LIGHT_SPOT) {
+                li *= spot_falloff(dot(l.direction, -ls.wi), l.cos_inner, l.cos_outer);
+            }
+        }
+        if (max(li.x, max(li.y, li.z)) <= 0.0) {
+            return false;
+        }
+        ls.weight = li / sel;
+        ls.delta = true;
+        return true;
+    } else if (params.p_background > 0.0) {
+        vec3 wi;
+        float dir_pdf;
+        if (all(equal(bg_normal, vec3(0.0)))) {
+            wi = square_to_uniform_sphere(u);
+            dir_pdf = UNIFORM_SPHERE_PDF;
+        } else {
+            vec3 local = square_to_cosine_hemisphere(u);
+            wi = frame_to_world(frame_from_normal(bg_normal), local);
+            dir_pdf = cosine_hemisphere_pdf(local.z);
+        }
+        float pdf = params.p_background * dir_pdf;
+        if (!(pdf > 0.0)) {
+            return false;
+        }
+        ls.wi = wi;
+        ls.at_infinity = true;
+        ls.weight = params.background.xyz / pdf;
+        ls.pdf = pdf;
+        return true;
+    }
+    return false;
+}
+
+// Density of lights_sample picking the point dist away along wi on
+// emitter triangle tri (MIS of a BSDF sample that hit it).
+float lights_area_pdf(uint tri, vec3 wi, float dist) {
+    Triangle t = triangles[tri];
+    Emitter e = emitters[floatBitsToUint(t.p1.w)];
+    float cos_l = abs(dot(normalize(triangle_normal(t)), wi));
+    if (!(cos_l > 0.0)) {
+        return 0.0;
+    }
+    return params.p_area * e.pmf / e.area * dist * dist / cos_l;
+}
+
+float lights_background_pdf(vec3 bg_normal, vec3 wi) {
+    float dir_pdf = all(equal(bg_normal, vec3(0.0))) ? UNIFORM_SPHERE_PDF
+                                                       : cosine_hemisphere_pdf(dot(bg_normal, wi));
+    return params.p_background * dir_pdf;
+}
+
+// Axis of the background's cosine lobe, or zero (uniform sphere) for
+// transmissive BSDFs (glint_cpu::lights::background_direction_frame).
+vec3 background_direction_frame(vec3 ns, vec3 wo, bool transmits) {
+    if (transmits) {
+        return vec3(0.0);
+    }
+    return dot(ns, wo) >= 0.0 ? ns : -ns;
+}
+
+#endif

@@ -1,0 +1,214 @@
+#version 460
+// The GPU path tracer: PathTracer::sample of cpu/src/integrator/mod.rs,
+// step by step under the same names (read its header for the MIS, depth,
+// Russian roulette, ray offset and light-leak rules). Binding table:
+// bindings.glsl. One invocation per pixel renders samples
+// [push.sample_start, push.sample_start + push.sample_count) and adds their
+// sum and sum of squares to accum, and the rays traced to ray_counts.
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "bindings.glsl"
+#include "bvh.glsl"
+#include "bsdf/bsdf.glsl"
+#include "integrator/rng.glsl"
+#include "integrator/frame.glsl"
+#include "integrator/camera.glsl"
+#include "integrator/lights.glsl"
+
+// glint_cpu::integrator constants.
+#define RR_DEPTH 5u
+#define RR_MAX_PROB 0.95
+#define RAY_EPS_REL 1e-4
+
+float ray_eps(vec3 p) {
+    vec3 a = abs(p);
+    return RAY_EPS_REL * max(a.x, max(a.y, a.z)) + params.eps_abs;
+}
+
+vec3 offset_origin(vec3 p, vec3 ng, vec3 w) {
+    float e = ray_eps(p);
+    return dot(w, ng) >= 0.0 ? p + ng * e : p - ng * e;
+}
+
+struct SurfaceFrame {
+    vec3 ng;
+    vec3 ns;
+    Frame frame;
+};
+
+SurfaceFrame surface(uint tri, float u, float v) {
+    Triangle t = triangles[tri];
+    TriangleShading sh = shading[tri];
+    SurfaceFrame sf;
+    sf.ng = normalize(triangle_normal(t));
+    float w = 1.0 - u - v;
+    sf.ns = sf.ng;
+    if (sh.n[0].w == 1.0) {
+        vec3 n = w * sh.n[0].xyz + u * sh.n[1].xyz + v * sh.n[2].xyz;
+        float len2 = dot(n, n);
+        if (len2 > 0.0 && !isinf(len2)) {
+            n = n / sqrt(len2);
+            // On the geometric normal's side: the BSDF's +z is the outside.
+            sf.ns = dot(n, sf.ng) < 0.0 ? -n : n;
+        }
+    }
+    if (sh.t[0].w == 1.0) {
+        sf.frame = frame_from_normal_tangent(sf.ns, w * sh.t[0].xyz + u * sh.t[1].xyz + v * sh.t[2].xyz);
+    } else {
+        sf.frame = frame_from_normal(sf.ns);
+    }
+    return sf;
+}
+
+// The shadow ray toward a light sample, from the offset origin to eps(q)
+// short of the light point q (PathTracer::shadow_ray).
+void shadow_ray(vec3 p, vec3 ng, LightSample ls, out vec3 o, out vec3 d, out float tmax) {
+    o = offset_origin(p, ng, ls.wi);
+    if (!ls.at_infinity) {
+        vec3 q = p + ls.wi * ls.dist;
+        vec3 to = q - o;
+        float len = length(to);
+        d = to / len;
+        tmax = len - ray_eps(q);
+    } else {
+        d = ls.wi;
+        tmax = GLINT_FLT_MAX;
+    }
+}
+
+vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
+    uint pixel = y * params.width + x;
+    Rng rng = rng_new(params.seed_key, pixel, s);
+    vec3 ray_o;
+    vec3 ray_d;
+    camera_ray(x, y, rng_next_2d(rng), ray_o, ray_d);
+
+    vec3 radiance = vec3(0.0);
+    vec3 throughput = vec3(1.0);
+    float eta = 1.0;
+    uint depth = 0u;
+    bool prev_delta = true;
+    float prev_bsdf_pdf = 0.0;
+    vec3 prev_bg_normal = vec3(0.0);
+    bool nee = params.nee != 0u;
+
+    for (;;) {
+        rays += 1u;
+        Hit hit;
+        if (!bvh_intersect(ray_o, ray_d, GLINT_FLT_MAX, hit)) {
+            if (params.p_background > 0.0) {
+                float w = 1.0;
+                if (!(depth == 0u || prev_delta || !nee)) {
+                    float lp = lights_background_pdf(prev_bg_normal, ray_d);
+                    w = power_heuristic(prev_bsdf_pdf, lp);
+                }
+                radiance += throughput * w * params.background.xyz;
+            }
+            break;
+        }
+        Triangle tri = triangles[hit.tri];
+        vec3 p = (1.0 - hit.u - hit.v) * tri.p0.xyz + hit.u * tri.p1.xyz + hit.v * tri.p2.xyz;
+        vec3 wo = -ray_d;
+
+        vec3 le;
+        if (floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, wo, le)) {
+            float w = 1.0;
+            if (!(depth == 0u || prev_delta || !nee)) {
+                float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
+                w = power_heuristic(prev_bsdf_pdf, lp);
+            }
+            radiance += throughput * w * le;
+        }
+
+        // depth + 1 >= max_depth, saturating (max_depth 0xffffffff: never).
+        if (depth >= params.max_depth - 1u) {
+            break;
+        }
+
+        float u_light_cat = rng_next_f32(rng);
+        float u_light_idx = rng_next_f32(rng);
+        vec2 u_light = rng_next_2d(rng);
+        float u_bsdf_lobe = rng_next_f32(rng);
+        vec2 u_bsdf = rng_next_2d(rng);
+        float u_rr = rng_next_f32(rng);
+
+        SurfaceFrame sf = surface(hit.tri, hit.u, hit.v);
+        Material m = materials[floatBitsToUint(tri.p0.w)];
+        vec3 wo_local = frame_to_local(sf.frame, wo);
+        vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));
+
+        bool lights_present = params.p_area + params.p_punctual + params.p_background > 0.0;
+        LightSample ls;
+        if (nee && lights_present && !bsdf_is_delta(m)
+            && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls)) {
+            vec3 wi_local = frame_to_local(sf.frame, ls.wi);
+            bool same_side = (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0);
+            if (same_side) {
+                vec3 f = bsdf_eval(m, wo_local, wi_local) * abs(wi_local.z);
+                if (max(f.x, max(f.y, f.z)) > 0.0) {
+                    vec3 so;
+                    vec3 sd;
+                    float stmax;
+                    shadow_ray(p, sf.ng, ls, so, sd, stmax);
+                    rays += 1u;
+                    if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
+                        float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
+                        radiance += throughput * f * ls.weight * w;
+                    }
+                }
+            }
+        }
+
+        BsdfSample bs;
+        if (!bsdf_sample(m, wo_local, u_bsdf_lobe, u_bsdf, bs)) {
+            break;
+        }
+        vec3 wi = normalize(frame_to_world(sf.frame, bs.wi));
+        if ((dot(wi, sf.ng) > 0.0) != (bs.wi.z > 0.0)) {
+            break;
+        }
+        throughput *= bs.weight;
+        eta *= bs.eta;
+        prev_delta = bs.delta;
+        prev_bsdf_pdf = bs.pdf;
+        prev_bg_normal = bg_normal;
+        ray_o = offset_origin(p, sf.ng, wi);
+        ray_d = wi;
+        depth += 1u;
+
+        if (depth >= RR_DEPTH) {
+            float q = min(max(throughput.x, max(throughput.y, throughput.z)) * eta * eta, RR_MAX_PROB);
+            if (!(u_rr < q)) {
+                break;
+            }
+            throughput /= q;
+        }
+        if (!(max(throughput.x, max(throughput.y, throughput.z)) > 0.0)) {
+            break;
+        }
+    }
+    return radiance;
+}
+
+void main() {
+    uvec2 px = gl_GlobalInvocationID.xy;
+    if (px.x >= params.width || px.y >= params.height) {
+        return;
+    }
+    uint pixel = px.y * params.width + px.x;
+    uint rays = 0u;
+    vec3 sum = vec3(0.0);
+    vec3 sum_sq = vec3(0.0);
+    for (uint s = push.sample_start; s < push.sample_start + push.sample_count; s++) {
+        vec3 l = path_sample(px.x, px.y, s, rays);
+        // A NaN or infinity would poison the pixel for good: drop it.
+        if (any(isnan(l)) || any(isinf(l))) {
+            l = vec3(0.0);
+        }
+        sum += l;
+        sum_sq += l * l;
+    }
+    accum[2u * pixel] += vec4(sum, 0.0);
+    accum[2u * pixel + 1u] += vec4(sum_sq, 0.0);
+    ray_counts[pixel] += rays;
+}

@@ -1,0 +1,378 @@
+//! The `glint` binary end to end: outputs, stats, and the contract's error
+//! behaviour (one line on stderr, non-zero status, no output file).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn glint() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_glint"))
+}
+
+/// A fresh, empty scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("glint-cli-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+/// A tiny glTF with an external buffer: a diffuse floor (y = 0), an
+/// emissive quad facing the camera, and a camera at (0, 1, 3) looking down
+/// -Z with aspectRatio 1.5.
+fn write_scene(dir: &Path) -> PathBuf {
+    let pos: [[f32; 3]; 8] = [
+        [-2.0, 0.0, 2.0],
+        [2.0, 0.0, 2.0],
+        [2.0, 0.0, -2.0],
+        [-2.0, 0.0, -2.0],
+        [-0.5, 0.5, -1.0],
+        [0.5, 0.5, -1.0],
+        [0.5, 1.5, -1.0],
+        [-0.5, 1.5, -1.0],
+    ];
+    let idx: [u16; 12] = [0, 1, 2, 0, 2, 3, 0, 1, 2, 0, 2, 3];
+    let mut bytes: Vec<u8> = pos.iter().flatten().flat_map(|f| f.to_le_bytes()).collect();
+    bytes.extend(idx.iter().flat_map(|i| i.to_le_bytes()));
+    std::fs::write(dir.join("scene.bin"), &bytes).unwrap();
+    let gltf = format!(
+        r#"{{
+  "asset": {{ "version": "2.0" }},
+  "scene": 0,
+  "scenes": [ {{ "nodes": [0, 1, 2] }} ],
+  "nodes": [
+    {{ "mesh": 0 }},
+    {{ "mesh": 1 }},
+    {{ "camera": 0, "name": "main", "translation": [0, 1, 3] }}
+  ],
+  "cameras": [ {{ "type": "perspective", "name": "main",
+                  "perspective": {{ "yfov": 0.8, "aspectRatio": 1.5, "znear": 0.01 }} }} ],
+  "meshes": [
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 0 }}, "indices": 2, "material": 0 }} ] }},
+    {{ "primitives": [ {{ "attributes": {{ "POSITION": 1 }}, "indices": 3, "material": 1 }} ] }}
+  ],
+  "materials": [
+    {{ "name": "floor", "pbrMetallicRoughness": {{ "baseColorFactor": [0.8, 0.8, 0.8, 1], "metallicFactor": 0 }} }},
+    {{ "name": "light", "emissiveFactor": [1, 1, 1],
+       "extensions": {{ "KHR_materials_emissive_strength": {{ "emissiveStrength": 4 }} }} }}
+  ],
+  "extensionsUsed": [ "KHR_materials_emissive_strength" ],
+  "buffers": [ {{ "uri": "scene.bin", "byteLength": {len} }} ],
+  "bufferViews": [
+    {{ "buffer": 0, "byteOffset": 0, "byteLength": 48 }},
+    {{ "buffer": 0, "byteOffset": 48, "byteLength": 48 }},
+    {{ "buffer": 0, "byteOffset": 96, "byteLength": 12 }},
+    {{ "buffer": 0, "byteOffset": 108, "byteLength": 12 }}
+  ],
+  "accessors": [
+    {{ "bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+       "min": [-2, 0, -2], "max": [2, 0, 2] }},
+    {{ "bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC3",
+       "min": [-0.5, 0.5, -1], "max": [0.5, 1.5, -1] }},
+    {{ "bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR" }},
+    {{ "bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR" }}
+  ]
+}}"#,
+        len = bytes.len()
+    );
+    let path = dir.join("scene.gltf");
+    std::fs::write(&path, gltf).unwrap();
+    path
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+/// The contract's failure shape: non-zero status, exactly one non-empty
+/// line on stderr, containing `needle`.
+fn assert_one_line_error(out: &Output, needle: &str) {
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "expected failure, stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "one line on stderr, got: {err:?}");
+    assert!(
+        lines[0].contains(needle),
+        "stderr {:?} should mention {needle:?}",
+        lines[0]
+    );
+    assert!(
+        !err.contains("panicked") && !err.contains("backtrace"),
+        "{err}"
+    );
+}
+
+#[test]
+fn renders_png_and_exr_with_stats() {
+    let dir = scratch("ok");
+    let scene = write_scene(&dir);
+    let (png, exr, stats) = (dir.join("a.png"), dir.join("a.exr"), dir.join("s.json"));
+    let out = glint()
+        .arg("render")
+        .arg(&scene)
+        .args(["-o"])
+        .arg(&png)
+        .args(["--output"])
+        .arg(&exr)
+        .args(["--backend", "cpu", "--spp", "4", "--width", "48", "--stats"])
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // 48 wide, height from the camera's aspectRatio 1.5.
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (48, 32));
+    let hdr = image::open(&exr).unwrap().into_rgb32f();
+    assert_eq!((hdr.width(), hdr.height()), (48, 32));
+    // The emitter is in the middle of the view: radiance 4 there, and the
+    // PNG clamps it to 255.
+    let centre = hdr.get_pixel(24, 14);
+    assert!(
+        centre.0.iter().all(|&c| (c - 4.0).abs() < 1e-4),
+        "{centre:?}"
+    );
+    assert_eq!(img.to_rgb8().get_pixel(24, 14).0, [255, 255, 255]);
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for key in [
+        "backend",
+        "device",
+        "width",
+        "height",
+        "spp",
+        "max_depth",
+        "triangles",
+        "setup_seconds",
+        "render_seconds",
+        "samples_per_second",
+        "rays_per_second",
+    ] {
+        assert!(v.get(key).is_some(), "stats lack {key}: {v}");
+    }
+    assert_eq!(v["backend"], "cpu");
+    assert_eq!(
+        (v["width"].as_u64(), v["height"].as_u64()),
+        (Some(48), Some(32))
+    );
+    assert_eq!(v["spp"], 4);
+    assert_eq!(v["max_depth"], -1);
+    assert_eq!(v["triangles"], 4);
+    assert!(v["rays_per_second"].as_f64().unwrap() > 0.0);
+    // Nothing but the inputs and the three outputs.
+    assert_eq!(
+        files_in(&dir),
+        ["a.exr", "a.png", "s.json", "scene.bin", "scene.gltf"]
+    );
+
+    // Same seed: the same image; height alone keeps the aspect.
+    let again = dir.join("b.exr");
+    let out = glint()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&again)
+        .args(["--backend", "cpu", "--spp", "4", "--height", "32"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(image::open(&again).unwrap().into_rgb32f(), hdr);
+    // The camera by name and by index is the same camera; another seed
+    // gives another image.
+    for (camera, seed, same) in [("main", "0", true), ("0", "0", true), ("0", "9", false)] {
+        let out = glint()
+            .arg("render")
+            .arg(&scene)
+            .arg("-o")
+            .arg(&again)
+            .args(["--backend", "cpu", "--spp", "4", "--width", "48"])
+            .args(["--camera", camera, "--seed", seed])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert_eq!(
+            image::open(&again).unwrap().into_rgb32f() == hdr,
+            same,
+            "{camera} {seed}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn bad_inputs_fail_with_one_line_and_no_output() {
+    let dir = scratch("bad");
+    let scene = write_scene(&dir);
+    let bad_json = dir.join("broken.gltf");
+    std::fs::write(&bad_json, "{ this is not json").unwrap();
+    let out_png = dir.join("out.png");
+    let s = |p: &Path| p.to_string_lossy().into_owned();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec![s(&dir.join("missing.gltf")), "-o".into(), s(&out_png)],
+            "missing.gltf",
+        ),
+        (vec![s(&bad_json), "-o".into(), s(&out_png)], "broken.gltf"),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--spp".into(),
+                "0".into(),
+            ],
+            "spp",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--spp".into(),
+                "many".into(),
+            ],
+            "spp",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--width".into(),
+                "0".into(),
+            ],
+            "width",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--height".into(),
+                "20000".into(),
+            ],
+            "height",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--max-depth".into(),
+                "0".into(),
+            ],
+            "max-depth",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--max-depth".into(),
+                "-2".into(),
+            ],
+            "max-depth",
+        ),
+        (
+            vec![s(&scene), "-o".into(), s(&dir.join("out.jpg"))],
+            "out.jpg",
+        ),
+        (
+            vec![s(&scene), "-o".into(), s(&dir.join("no/such/dir/out.png"))],
+            "out.png",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--camera".into(),
+                "nosuch".into(),
+            ],
+            "nosuch",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--camera".into(),
+                "7".into(),
+            ],
+            "scene.gltf",
+        ),
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--backend".into(),
+                "tpu".into(),
+            ],
+            "tpu",
+        ),
+        // No Vulkan device has this name, whether or not Vulkan works here.
+        (
+            vec![
+                s(&scene),
+                "-o".into(),
+                s(&out_png),
+                "--backend".into(),
+                "gpu".into(),
+                "--device".into(),
+                "no-such-device-xyzzy".into(),
+            ],
+            "scene.gltf",
+        ),
+        (vec![s(&scene)], "output"),
+    ];
+    // The compare verb validates the same way.
+    for (args, needle) in [
+        (vec!["--spp", "1"], "spp"),
+        (vec!["--alpha", "2"], "alpha"),
+        (vec!["--max-depth", "-5"], "max-depth"),
+    ] {
+        let out = glint()
+            .arg("compare")
+            .arg(&scene)
+            .args(args)
+            .output()
+            .unwrap();
+        assert_one_line_error(&out, needle);
+    }
+    for (args, needle) in cases {
+        let mut full = vec!["render".to_string()];
+        full.extend(args.iter().cloned());
+        if !args.iter().any(|a| a == "--backend") {
+            full.extend(["--backend".into(), "cpu".into()]);
+        }
+        if !args
+            .iter()
+            .any(|a| a == "--spp" || a == "--width" || a == "--height")
+        {
+            full.extend(["--spp".into(), "2".into(), "--width".into(), "16".into()]);
+        }
+        let out = glint().args(&full).output().unwrap();
+        assert_one_line_error(&out, needle);
+        assert_eq!(
+            files_in(&dir),
+            ["broken.gltf", "scene.bin", "scene.gltf"],
+            "{args:?} left files behind"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

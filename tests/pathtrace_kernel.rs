@@ -1,0 +1,88 @@
+//! shaders/pathtrace.comp against the CPU path tracer it mirrors.
+//!
+//! Both draw the same random numbers for a sample (the counter-based
+//! generator of glint_cpu::sampling and shaders/integrator/rng.glsl), so
+//! they trace the same paths up to float rounding: almost every pixel must
+//! agree to 1e-3 relative, the ray counts nearly exactly, and the images
+//! must pass the statistical comparison (which a systematic error in one
+//! backend fails even where rounding makes paths diverge).
+
+mod common;
+
+use std::path::Path;
+
+use glint::cpu::compare::compare_films;
+use glint::cpu::integrator::gpu_scene_data;
+use glint::cpu::{Film, RenderOptions, Scene};
+use glint::gpu::render::{SceneBytes, render_film};
+
+fn gpu_render(ctx: &common::ValidatedContext, scene: &Scene, opts: &RenderOptions) -> (Film, u64) {
+    let d = gpu_scene_data(scene, opts).unwrap();
+    let bytes = SceneBytes {
+        params: bytemuck::bytes_of(&d.params),
+        triangles: bytemuck::cast_slice(&scene.triangles),
+        bvh_nodes: bytemuck::cast_slice(&scene.bvh.nodes),
+        shading: bytemuck::cast_slice(&scene.shading),
+        materials: bytemuck::cast_slice(&d.materials),
+        emitters: bytemuck::cast_slice(&d.emitters),
+        lights: bytemuck::cast_slice(&d.lights),
+    };
+    let r = render_film(
+        ctx,
+        "pathtrace",
+        &bytes,
+        opts.width,
+        opts.height,
+        opts.spp,
+        &|_, _| {},
+    )
+    .unwrap();
+    (r.film, r.stats.rays)
+}
+
+#[test]
+fn gpu_kernel_traces_the_cpu_paths() {
+    let ctx = common::context();
+    let cases = [
+        ("cornell.gltf", -1),
+        ("cornell.gltf", 2),
+        ("dielectric.gltf", -1),
+        ("roughdielectric.gltf", -1),
+        ("roughconductor.gltf", -1),
+        ("conductor.gltf", 3),
+    ];
+    for (asset, max_depth) in cases {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets")
+            .join(asset);
+        let scene = glint::cpu::loader::load(&path).unwrap();
+        let opts = RenderOptions {
+            width: 40,
+            height: 32,
+            spp: 16,
+            max_depth,
+            seed: 7,
+            camera: 0,
+        };
+        let (gpu, gpu_rays) = gpu_render(&ctx, &scene, &opts);
+        let (cpu, cpu_stats) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
+        let what = format!("{asset} max_depth {max_depth}");
+
+        let r = compare_films(&gpu, &cpu).unwrap();
+        assert!(r.pass, "{what}: {r}");
+        let close = (0..cpu.sum.len())
+            .filter(|&i| {
+                let (a, b) = (gpu.sum[i], cpu.sum[i]);
+                (a - b).abs().max_element() <= 1e-3 * a.abs().max(b.abs()).max_element().max(1e-3)
+            })
+            .count();
+        assert!(
+            close as f64 >= 0.99 * cpu.sum.len() as f64,
+            "{what}: only {close} of {} pixels trace the same paths",
+            cpu.sum.len()
+        );
+        let rel = (gpu_rays as f64 - cpu_stats.rays as f64).abs() / cpu_stats.rays as f64;
+        assert!(rel < 0.01, "{what}: rays {gpu_rays} vs {}", cpu_stats.rays);
+    }
+    assert!(ctx.finish().is_empty());
+}
