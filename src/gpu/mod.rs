@@ -115,8 +115,5 @@ pub fn render(
     device: Option<&str>,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
-    let _ = (scene, opts, device, progress);
-    Err(GpuError::Unavailable(
-        "the path tracing kernel has not landed yet".into(),
-    ))
+    render::render(scene, opts, device, progress)
 }
