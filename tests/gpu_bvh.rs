@@ -55,82 +55,21 @@ impl Rng {
     }
 }
 
-/// The bunny's triangles, read straight from the GLB (positions and indices
-/// of every primitive; the file has no node transforms). The root package does
-/// not depend on the gltf crate, and this test must not depend on the loader.
+/// The bunny's triangles in file order, positions only (repository copy,
+/// read by the loader without building its BVH).
 fn bunny() -> Vec<Triangle> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/assets/bunny.glb");
-    let path = if path.exists() {
-        path
-    } else {
-        Path::new("/work/shared/assets/bunny.glb").to_path_buf()
-    };
-    let glb = std::fs::read(&path).expect("bunny.glb");
-    let word = |at: usize| u32::from_le_bytes(glb[at..at + 4].try_into().unwrap()) as usize;
-    assert_eq!(&glb[0..4], b"glTF");
-    // Header (12 bytes), then the JSON chunk, then the BIN chunk.
-    let json_len = word(12);
-    let json: serde_json::Value = serde_json::from_slice(&glb[20..20 + json_len]).unwrap();
-    let bin_at = 20 + json_len;
-    let bin = &glb[bin_at + 8..bin_at + 8 + word(bin_at)];
-    let accessor = |i: &serde_json::Value| -> (usize, usize, u64) {
-        let a = &json["accessors"][i.as_u64().unwrap() as usize];
-        let view = &json["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
-        assert!(
-            view.get("byteStride").is_none(),
-            "strided views not handled"
-        );
-        let offset =
-            view["byteOffset"].as_u64().unwrap_or(0) + a["byteOffset"].as_u64().unwrap_or(0);
-        (
-            offset as usize,
-            a["count"].as_u64().unwrap() as usize,
-            a["componentType"].as_u64().unwrap(),
-        )
-    };
-    let mut out = Vec::new();
-    for node in json["nodes"].as_array().unwrap() {
-        assert!(node.get("matrix").is_none() && node.get("translation").is_none());
-        let Some(mesh) = node.get("mesh") else {
-            continue;
-        };
-        for prim in json["meshes"][mesh.as_u64().unwrap() as usize]["primitives"]
-            .as_array()
-            .unwrap()
-        {
-            let (off, n, ty) = accessor(&prim["attributes"]["POSITION"]);
-            assert_eq!(ty, 5126);
-            let pos: Vec<[f32; 3]> = (0..n)
-                .map(|k| {
-                    let f = |c: usize| {
-                        f32::from_le_bytes(bin[off + 12 * k + 4 * c..][..4].try_into().unwrap())
-                    };
-                    [f(0), f(1), f(2)]
-                })
-                .collect();
-            let (off, n, ty) = accessor(&prim["indices"]);
-            let idx: Vec<usize> = (0..n)
-                .map(|k| match ty {
-                    5125 => {
-                        u32::from_le_bytes(bin[off + 4 * k..][..4].try_into().unwrap()) as usize
-                    }
-                    5123 => {
-                        u16::from_le_bytes(bin[off + 2 * k..][..2].try_into().unwrap()) as usize
-                    }
-                    _ => bin[off + k] as usize,
-                })
-                .collect();
-            for f in idx.chunks_exact(3) {
-                out.push(Triangle {
-                    p0: pos[f[0]],
-                    p1: pos[f[1]],
-                    p2: pos[f[2]],
-                    ..Default::default()
-                });
-            }
-        }
-    }
-    out
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.glb");
+    let scene = glint::cpu::loader::parse(&path).expect("bunny.glb");
+    scene
+        .triangles
+        .iter()
+        .map(|t| Triangle {
+            p0: t.p0,
+            p1: t.p1,
+            p2: t.p2,
+            ..Default::default()
+        })
+        .collect()
 }
 
 /// As the CPU differential test: origins in and around the bounds, most
