@@ -21,8 +21,6 @@ pub use kernel::{Kernel, groups};
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("{0}")]
-    Unavailable(String),
     #[error(
         "cannot load the Vulkan loader (libvulkan.so.1): {0}; install the Vulkan loader and a driver (e.g. mesa-vulkan-drivers for lavapipe), or use --backend cpu"
     )]
@@ -67,7 +65,7 @@ pub enum GpuError {
         source: gpu_allocator::AllocationError,
     },
     #[error(
-        "buffer '{name}' needs {size} bytes, more than the device's limit of {max} bytes per buffer binding"
+        "buffer '{name}' needs {size} bytes, more than the device's limit of {max} bytes per buffer binding; use a smaller image or scene, or --backend cpu"
     )]
     BufferTooLarge { name: String, size: u64, max: u64 },
     #[error("no compiled kernel named '{0}' (shaders/{0}.comp)")]
