@@ -20,7 +20,7 @@ use super::GpuError;
 use super::context::Context;
 
 /// Smallest buffer created, for empty arrays (Vulkan forbids size 0).
-const MIN_SIZE: u64 = 16;
+pub const MIN_SIZE: u64 = 16;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BufferKind {
