@@ -164,13 +164,13 @@ fn device_override_by_name() {
 fn validation_log_catches_a_deliberate_error() {
     let ctx = Context::new(&ContextDesc {
         device: None,
-        validation: Validation::IfAvailable,
+        validation: common::validation(),
         loader: None,
     })
     .unwrap();
     let Some(log) = ctx.validation_log() else {
-        // Without the layer there is nothing to check; CI installs it, and
-        // the other tests then run validated.
+        // Without the layer (and without GLINT_VALIDATION, which requires it)
+        // there is nothing to check.
         eprintln!("VK_LAYER_KHRONOS_validation not installed: skipping");
         return;
     };
@@ -202,4 +202,28 @@ fn kernels_are_compiled_and_named_by_path() {
     let words = shaders::spirv("tests/smoke").unwrap();
     assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
     assert!(shaders::spirv("smoke").is_none());
+}
+
+/// Leaks count too: the layer reports objects still alive at
+/// vkDestroyDevice, after the context is gone, and the log must see that.
+#[test]
+fn validation_log_catches_a_leak() {
+    let ctx = Context::new(&ContextDesc {
+        device: None,
+        validation: common::validation(),
+        loader: None,
+    })
+    .unwrap();
+    let Some(log) = ctx.validation_log() else {
+        eprintln!("VK_LAYER_KHRONOS_validation not installed: skipping");
+        return;
+    };
+    let info = vk::BufferCreateInfo::default()
+        .size(16)
+        .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    // Deliberately never destroyed.
+    let _leaked = unsafe { ctx.device().create_buffer(&info, None) }.unwrap();
+    assert_eq!(log.errors(), 0, "{:?}", log.messages());
+    drop(ctx);
+    assert!(log.errors() >= 1, "leak not reported: {:?}", log.messages());
 }
