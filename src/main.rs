@@ -49,7 +49,7 @@ fn main() -> ExitCode {
                 return ExitCode::SUCCESS;
             }
             if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
-                let _ = e.print();
+                eprintln!("glint: missing command: render or compare (see glint --help)");
                 return ExitCode::from(2);
             }
             // clap's first paragraph is the error itself (a list of

@@ -340,6 +340,8 @@ fn bad_inputs_fail_with_one_line_and_no_output() {
         ),
         (vec![s(&scene)], "output"),
     ];
+    assert_one_line_error(&glint().output().unwrap(), "missing command");
+    assert_one_line_error(&glint().arg("paint").output().unwrap(), "paint");
     // The compare verb validates the same way.
     for (args, needle) in [
         (vec!["--spp", "1"], "spp"),
