@@ -87,7 +87,9 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
     vec3 throughput = vec3(1.0);
     float eta = 1.0;
     uint depth = 0u;
-    bool prev_delta = true;
+    // An emitter the ray finds is MIS-weighted only when the previous
+    // vertex sampled lights and its BSDF sample was not a delta.
+    bool prev_mis = false;
     float prev_bsdf_pdf = 0.0;
     vec3 prev_bg_normal = vec3(0.0);
     bool nee = params.nee != 0u;
@@ -98,7 +100,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         if (!bvh_intersect(ray_o, ray_d, GLINT_FLT_MAX, hit)) {
             if (params.p_background > 0.0) {
                 float w = 1.0;
-                if (!(depth == 0u || prev_delta || !nee)) {
+                if (prev_mis) {
                     float lp = lights_background_pdf(prev_bg_normal, ray_d);
                     w = power_heuristic(prev_bsdf_pdf, lp);
                 }
@@ -113,7 +115,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 le;
         if (floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, wo, le)) {
             float w = 1.0;
-            if (!(depth == 0u || prev_delta || !nee)) {
+            if (prev_mis) {
                 float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
                 w = power_heuristic(prev_bsdf_pdf, lp);
             }
@@ -138,8 +140,9 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));
 
         bool lights_present = params.p_area + params.p_punctual + params.p_background > 0.0;
+        bool sample_lights = nee && lights_present && !bsdf_is_delta(m);
         LightSample ls;
-        if (nee && lights_present && !bsdf_is_delta(m)
+        if (sample_lights
             && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls)) {
             vec3 wi_local = frame_to_local(sf.frame, ls.wi);
             bool same_side = (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0);
@@ -169,7 +172,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         }
         throughput *= bs.weight;
         eta *= bs.eta;
-        prev_delta = bs.delta;
+        prev_mis = sample_lights && !bs.delta;
         prev_bsdf_pdf = bs.pdf;
         prev_bg_normal = bg_normal;
         ray_o = offset_origin(p, sf.ng, wi);
