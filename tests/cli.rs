@@ -210,6 +210,35 @@ fn renders_png_and_exr_with_stats() {
             "{camera} {seed}"
         );
     }
+
+    // Without a camera in the default scene: the documented default
+    // viewpoint, aspect 1.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let no_cam = dir.join("nocam.gltf");
+    std::fs::write(
+        &no_cam,
+        text.replace(r#""nodes": [0, 1, 2]"#, r#""nodes": [0, 1]"#),
+    )
+    .unwrap();
+    let out = glint()
+        .arg("render")
+        .arg(&no_cam)
+        .arg("-o")
+        .arg(&png)
+        .args(["--backend", "cpu", "--spp", "2", "--width", "20"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (20, 20));
+    assert!(
+        img.pixels().any(|p| p.0 != [0, 0, 0]),
+        "the default view sees the scene"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

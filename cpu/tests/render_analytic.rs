@@ -289,3 +289,45 @@ fn area_light_irradiance_matches_quadrature() {
         assert!(r.pass, "depth {max_depth}: {r}");
     }
 }
+
+#[test]
+fn emitters_shine_from_the_front_unless_double_sided() {
+    // Two emissive quads side by side, both with their geometric normal
+    // pointing away from the camera (seen from behind): the single-sided
+    // one is black, the double-sided one shows its emission. Depth 1, so a
+    // pixel sample is either 0 or the emission.
+    let le = Vec3::new(2.0, 1.0, 0.5);
+    let mats = vec![emitter("single", le, false), emitter("double", le, true)];
+    // Counter-clockwise seen from -Z: the normal is -Z, away from a camera
+    // on +Z.
+    let back_quad = |x0: f32, x1: f32, m: u32| {
+        quad(
+            Vec3::new(x0, -1.0, 0.0),
+            Vec3::new(x0, 1.0, 0.0),
+            Vec3::new(x1, 1.0, 0.0),
+            Vec3::new(x1, -1.0, 0.0),
+            m,
+        )
+    };
+    let mut t = back_quad(-2.0, 0.0, 0);
+    t.extend(back_quad(0.0, 2.0, 1));
+    let s = scene(
+        t,
+        mats,
+        vec![],
+        look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 30.0),
+        Vec3::ZERO,
+    );
+    assert!(s.triangles[0].geometric_normal().z < 0.0);
+    let film = render(&s, &opts(SIZE, 4, 1, 6));
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            let m = film.mean(film.index(x, y));
+            if x < SIZE / 2 - 1 {
+                assert_eq!(m, Vec3::ZERO, "({x}, {y}) single-sided back face");
+            } else if x > SIZE / 2 {
+                assert_eq!(m, le, "({x}, {y}) double-sided back face");
+            }
+        }
+    }
+}
