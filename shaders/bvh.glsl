@@ -37,8 +37,11 @@ struct PreparedRay {
     vec3 o;
     vec3 d;
     // 1 / d with zero (and tiny) components replaced by +-1e30, so the slab
-    // test never forms 0 * inf = NaN (tinybvh's safercp).
+    // test never forms 0 * inf = NaN (tinybvh's safercp); exactly zero
+    // components are then settled by zero_d in intersect_aabb.
     vec3 inv_d;
+    // Which components of d are exactly zero (either sign).
+    bvec3 zero_d;
     // Woop et al. 2013: kz is the dominant axis of d, kx and ky follow it
     // cyclically, swapped when d[kz] < 0 to keep the winding.
     int kx;
@@ -61,6 +64,7 @@ PreparedRay prepare_ray(vec3 o, vec3 d) {
     r.o = o;
     r.d = d;
     r.inv_d = vec3(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z));
+    r.zero_d = equal(d, vec3(0.0));
     vec3 a = abs(d);
     int kz = (a.x >= a.y && a.x >= a.z) ? 0 : (a.y >= a.z ? 1 : 2);
     int kx = (kz + 1) % 3;
@@ -84,8 +88,18 @@ PreparedRay prepare_ray(vec3 o, vec3 d) {
 float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
     vec3 t1 = (bmin - r.o) * r.inv_d;
     vec3 t2 = (bmax - r.o) * r.inv_d;
+    // Along an axis where d is exactly zero the slab holds the whole line when
+    // the origin is within it, faces included, and none of it otherwise (the
+    // 1e30 inverse would end the slab at t = 0 with the origin on a face).
     vec3 tlo = min(t1, t2);
     vec3 thi = max(t1, t2);
+    if (any(r.zero_d)) {
+        bvec3 ge = greaterThanEqual(r.o, bmin);
+        bvec3 le = lessThanEqual(r.o, bmax);
+        bvec3 inside = bvec3(ge.x && le.x, ge.y && le.y, ge.z && le.z);
+        tlo = mix(tlo, mix(vec3(BVH_INF), vec3(-BVH_INF), inside), r.zero_d);
+        thi = mix(thi, mix(vec3(-BVH_INF), vec3(BVH_INF), inside), r.zero_d);
+    }
     float tnear = max(max(max(tlo.x, tlo.y), tlo.z), 0.0);
     float tfar = min(min(min(thi.x, thi.y), thi.z), tmax) * BVH_SLAB_PAD;
     return tnear <= tfar ? tnear : BVH_INF;
@@ -190,8 +204,9 @@ bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
     return hit.tri != BVH_NO_HIT;
 }
 
-// Any hit in (0, tmax): the first triangle hit ends the search; children in
-// stored order.
+// Any hit in (0, tmax): the first triangle hit ends the search. Children are
+// still visited nearer first (tinybvh's IsOccluded): the near side is the
+// likelier to hold a blocker.
 bool bvh_occluded(vec3 o, vec3 d, float tmax) {
     if (uint(BVH_NODE_COUNT) == 0u) {
         return false;
@@ -216,14 +231,22 @@ bool bvh_occluded(vec3 o, vec3 d, float tmax) {
         } else {
             uint c1 = first;
             uint c2 = first + 1u;
-            bool hit1 = intersect_aabb(r, bvh_nodes[c1].min_left.xyz, bvh_nodes[c1].max_count.xyz, tmax) != BVH_INF;
-            bool hit2 = intersect_aabb(r, bvh_nodes[c2].min_left.xyz, bvh_nodes[c2].max_count.xyz, tmax) != BVH_INF;
-            if (hit1 || hit2) {
-                if (hit1 && hit2) {
+            float d1 = intersect_aabb(r, bvh_nodes[c1].min_left.xyz, bvh_nodes[c1].max_count.xyz, tmax);
+            float d2 = intersect_aabb(r, bvh_nodes[c2].min_left.xyz, bvh_nodes[c2].max_count.xyz, tmax);
+            if (d1 > d2) {
+                float td = d1;
+                d1 = d2;
+                d2 = td;
+                uint tc = c1;
+                c1 = c2;
+                c2 = tc;
+            }
+            if (d1 != BVH_INF) {
+                if (d2 != BVH_INF) {
                     stack[sp] = c2;
                     sp++;
                 }
-                node = hit1 ? c1 : c2;
+                node = c1;
                 continue;
             }
         }

@@ -5,7 +5,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use std::time::Instant;
 
-use glam::{Mat4, Vec3};
+use glam::Vec3;
 use glint_cpu::bvh::{MAX_DEPTH, MAX_LEAF_SIZE, PreparedRay, STACK_SIZE, intersect_triangle};
 use glint_cpu::{Bvh, Hit, Ray, Triangle};
 use rayon::prelude::*;
@@ -371,46 +371,19 @@ fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
     tris
 }
 
+/// The bunny's triangles in file order, positions only (repository copy,
+/// read by the loader without building its BVH).
 fn bunny() -> Vec<Triangle> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/assets/bunny.glb");
-    let path = if path.exists() {
-        path
-    } else {
-        Path::new("/work/shared/assets/bunny.glb").to_path_buf()
-    };
-    let (doc, buffers, _) = gltf::import(&path).expect("bunny.glb");
-    let mut out = Vec::new();
-    let scene = doc
-        .default_scene()
-        .or_else(|| doc.scenes().next())
-        .expect("a scene");
-    let mut stack: Vec<(gltf::Node, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
-    while let Some((node, parent)) = stack.pop() {
-        let m = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
-        if let Some(mesh) = node.mesh() {
-            for prim in mesh.primitives() {
-                let reader = prim.reader(|b| Some(&buffers[b.index()]));
-                let pos: Vec<Vec3> = reader
-                    .read_positions()
-                    .expect("positions")
-                    .map(|p| m.transform_point3(Vec3::from(p)))
-                    .collect();
-                let idx: Vec<u32> = match reader.read_indices() {
-                    Some(i) => i.into_u32().collect(),
-                    None => (0..pos.len() as u32).collect(),
-                };
-                for f in idx.chunks_exact(3) {
-                    out.push(tri(
-                        pos[f[0] as usize],
-                        pos[f[1] as usize],
-                        pos[f[2] as usize],
-                    ));
-                }
-            }
-        }
-        stack.extend(node.children().map(|c| (c, m)));
-    }
-    out
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/bunny.glb");
+    let scene = glint_cpu::loader::parse(&path).expect("bunny.glb");
+    scene
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.vertices();
+            tri(a, b, c)
+        })
+        .collect()
 }
 
 #[test]
@@ -483,6 +456,21 @@ fn single_triangle() {
         bvh.intersect(&tris, &ray(Vec3::new(-1.0, 0.25, 1.0), Vec3::X, 5.0))
             .is_none()
     );
+    // Axis-aligned rays whose origin lies exactly on the box's faces (zero
+    // direction components: the slab test must not form 0 * inf = NaN),
+    // through the triangle's edges and a vertex, which count as inside.
+    for (o, d, t) in [
+        (Vec3::new(0.0, 0.25, 0.0), Vec3::Z, 1.0),
+        (Vec3::new(0.25, 0.0, 0.0), Vec3::Z, 1.0),
+        (Vec3::new(0.0, 0.0, 0.0), Vec3::Z, 1.0),
+        (Vec3::new(0.0, 1.0, 2.0), -Vec3::Z, 1.0),
+        (Vec3::new(1.0, 0.0, 3.0), -Vec3::Z, 2.0),
+        (Vec3::new(0.5, 0.5, 0.0), Vec3::Z, 1.0),
+    ] {
+        let r = ray(o, d, f32::INFINITY);
+        assert_eq!(bvh.intersect(&tris, &r).map(|h| h.t), Some(t), "{r:?}");
+        assert!(bvh.occluded(&tris, &r), "{r:?}");
+    }
 }
 
 /// The triangle test alone against a double-precision Moller-Trumbore on
