@@ -12,7 +12,15 @@ fn f32s(v: &[f32]) -> &[u8] {
 
 #[test]
 fn film_accumulates_every_sample_once_across_batches() {
-    let ctx = common::context();
+    plumbing(common::context());
+}
+
+#[test]
+fn film_through_staging_buffers() {
+    plumbing(common::staging_context());
+}
+
+fn plumbing(ctx: common::ValidatedContext) {
     // Not multiples of the 8x8 workgroup: exercises the bounds check.
     let (w, h, spp) = (13u32, 7u32, 37u32);
     let mut params = vec![0u32; 36];

@@ -10,7 +10,15 @@ use glint::gpu::{
 
 #[test]
 fn smoke_kernel_adds_arrays() {
-    let ctx = common::context();
+    smoke(common::context());
+}
+
+#[test]
+fn smoke_kernel_through_staging_buffers() {
+    smoke(common::staging_context());
+}
+
+fn smoke(ctx: common::ValidatedContext) {
     // Not a multiple of the local size (64), to exercise the bounds check.
     let n = 1000u32;
     let a: Vec<f32> = (0..n).map(|i| i as f32).collect();
@@ -38,7 +46,15 @@ fn smoke_kernel_adds_arrays() {
 
 #[test]
 fn kernel_reuse_and_zero_length_buffers() {
-    let ctx = common::context();
+    reuse(common::context());
+}
+
+#[test]
+fn kernel_reuse_through_staging_buffers() {
+    reuse(common::staging_context());
+}
+
+fn reuse(ctx: common::ValidatedContext) {
     let empty: [f32; 0] = [];
     // Empty arrays still get a (small) buffer: Vulkan forbids size 0.
     let a = Buffer::from_slice(&ctx, "a", BufferKind::Storage, &empty).unwrap();
@@ -148,13 +164,13 @@ fn device_override_by_name() {
 fn validation_log_catches_a_deliberate_error() {
     let ctx = Context::new(&ContextDesc {
         device: None,
-        validation: Validation::IfAvailable,
+        validation: common::validation(),
         loader: None,
     })
     .unwrap();
     let Some(log) = ctx.validation_log() else {
-        // Without the layer there is nothing to check; CI installs it, and
-        // the other tests then run validated.
+        // Without the layer (and without GLINT_VALIDATION, which requires it)
+        // there is nothing to check.
         eprintln!("VK_LAYER_KHRONOS_validation not installed: skipping");
         return;
     };
@@ -186,4 +202,28 @@ fn kernels_are_compiled_and_named_by_path() {
     let words = shaders::spirv("tests/smoke").unwrap();
     assert_eq!(words[0], 0x0723_0203, "SPIR-V magic");
     assert!(shaders::spirv("smoke").is_none());
+}
+
+/// Leaks count too: the layer reports objects still alive at
+/// vkDestroyDevice, after the context is gone, and the log must see that.
+#[test]
+fn validation_log_catches_a_leak() {
+    let ctx = Context::new(&ContextDesc {
+        device: None,
+        validation: common::validation(),
+        loader: None,
+    })
+    .unwrap();
+    let Some(log) = ctx.validation_log() else {
+        eprintln!("VK_LAYER_KHRONOS_validation not installed: skipping");
+        return;
+    };
+    let info = vk::BufferCreateInfo::default()
+        .size(16)
+        .usage(vk::BufferUsageFlags::STORAGE_BUFFER);
+    // Deliberately never destroyed.
+    let _leaked = unsafe { ctx.device().create_buffer(&info, None) }.unwrap();
+    assert_eq!(log.errors(), 0, "{:?}", log.messages());
+    drop(ctx);
+    assert!(log.errors() >= 1, "leak not reported: {:?}", log.messages());
 }

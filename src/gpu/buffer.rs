@@ -20,7 +20,7 @@ use super::GpuError;
 use super::context::Context;
 
 /// Smallest buffer created, for empty arrays (Vulkan forbids size 0).
-const MIN_SIZE: u64 = 16;
+pub const MIN_SIZE: u64 = 16;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BufferKind {
@@ -273,6 +273,9 @@ impl<'a> Buffer<'a> {
 
     /// The host pointer when the buffer's memory is mapped and coherent.
     fn mapped_ptr(&self) -> Option<*mut u8> {
+        if self.ctx.force_staging() {
+            return None;
+        }
         let a = self.allocation.as_ref()?;
         let coherent =
             vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;

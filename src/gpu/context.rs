@@ -186,6 +186,7 @@ pub struct Context {
     info: DeviceInfo,
     validation_log: Option<Arc<ValidationLog>>,
     timings: ContextTimings,
+    force_staging: bool,
 }
 
 fn vk_err(what: &'static str) -> impl FnOnce(vk::Result) -> GpuError {
@@ -461,6 +462,7 @@ impl Context {
                 instance_seconds,
                 device_seconds,
             },
+            force_staging: false,
         })
     }
 
@@ -470,6 +472,17 @@ impl Context {
 
     pub fn timings(&self) -> ContextTimings {
         self.timings
+    }
+
+    /// Upload and read back through staging buffers and copies even where
+    /// device memory is host-visible: runs a discrete GPU's path on
+    /// lavapipe, so tests cover it on machines without one.
+    pub fn set_force_staging(&mut self, on: bool) {
+        self.force_staging = on;
+    }
+
+    pub fn force_staging(&self) -> bool {
+        self.force_staging
     }
 
     /// The validation log when the layer is enabled. Keep the `Arc` past the

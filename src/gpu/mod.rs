@@ -21,8 +21,6 @@ pub use kernel::{Kernel, groups};
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
-    #[error("{0}")]
-    Unavailable(String),
     #[error(
         "cannot load the Vulkan loader (libvulkan.so.1): {0}; install the Vulkan loader and a driver (e.g. mesa-vulkan-drivers for lavapipe), or use --backend cpu"
     )]
@@ -67,13 +65,15 @@ pub enum GpuError {
         source: gpu_allocator::AllocationError,
     },
     #[error(
-        "buffer '{name}' needs {size} bytes, more than the device's limit of {max} bytes per buffer binding"
+        "buffer '{name}' needs {size} bytes, more than the device's limit of {max} bytes per buffer binding; use a smaller image or scene, or --backend cpu"
     )]
     BufferTooLarge { name: String, size: u64, max: u64 },
     #[error("no compiled kernel named '{0}' (shaders/{0}.comp)")]
     UnknownKernel(String),
     #[error("{0}")]
     Invalid(String),
+    #[error("the Vulkan validation layer reported errors:\n{}", .0.join("\n"))]
+    Validation(Vec<String>),
 }
 
 impl GpuError {
@@ -113,8 +113,5 @@ pub fn render(
     device: Option<&str>,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
-    let _ = (scene, opts, device, progress);
-    Err(GpuError::Unavailable(
-        "the path tracing kernel has not landed yet".into(),
-    ))
+    render::render(scene, opts, device, progress)
 }

@@ -19,12 +19,13 @@ use std::time::Instant;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use glint_cpu::{Film, RenderStats};
+use glint_cpu::integrator::gpu_scene_data;
+use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
-use super::GpuError;
 use super::buffer::{Buffer, BufferKind};
-use super::context::Context;
+use super::context::{Context, ContextDesc};
 use super::kernel::{Kernel, groups};
+use super::{GpuError, GpuRender};
 
 /// Aim for dispatches of about this long: well under any watchdog, long
 /// enough that per-dispatch overhead (submit, wait) is negligible.
@@ -274,5 +275,73 @@ pub fn render_film(
         setup_seconds,
         batches,
         timestamped: timer.is_some(),
+    })
+}
+
+/// The whole GPU render behind `glint render --backend gpu`: context,
+/// upload, sampling, readback. Under `GLINT_VALIDATION` any validation
+/// error fails the render (after the context is destroyed, so leaks count),
+/// which makes every CLI test a validation test too.
+pub fn render(
+    scene: &Scene,
+    opts: &RenderOptions,
+    device: Option<&str>,
+    progress: &dyn Fn(u32, u32),
+) -> Result<GpuRender, GpuError> {
+    let start = Instant::now();
+    let ctx = Context::new(&ContextDesc {
+        device,
+        ..Default::default()
+    })?;
+    let log = ctx.validation_log();
+    let context_seconds = start.elapsed().as_secs_f64();
+    let mut r = render_on(&ctx, scene, opts, progress)?;
+    r.setup_seconds += context_seconds;
+    drop(ctx);
+    if let Some(log) = log {
+        if log.errors() > 0 {
+            return Err(GpuError::Validation(log.messages()));
+        }
+    }
+    Ok(r)
+}
+
+/// [`render`] on an existing context (tests share one validated context
+/// across scenes). `setup_seconds` covers scene preparation, upload and
+/// pipeline creation, not the context.
+pub fn render_on(
+    ctx: &Context,
+    scene: &Scene,
+    opts: &RenderOptions,
+    progress: &dyn Fn(u32, u32),
+) -> Result<GpuRender, GpuError> {
+    let start = Instant::now();
+    let data = gpu_scene_data(scene, opts).map_err(|e| GpuError::Invalid(e.to_string()))?;
+    let bytes = SceneBytes {
+        params: bytemuck::bytes_of(&data.params),
+        triangles: bytemuck::cast_slice(&scene.triangles),
+        bvh_nodes: bytemuck::cast_slice(&scene.bvh.nodes),
+        shading: bytemuck::cast_slice(&scene.shading),
+        materials: bytemuck::cast_slice(&data.materials),
+        emitters: bytemuck::cast_slice(&data.emitters),
+        lights: bytemuck::cast_slice(&data.lights),
+    };
+    let prepare_seconds = start.elapsed().as_secs_f64();
+    let r = render_film(
+        ctx,
+        "pathtrace",
+        &bytes,
+        opts.width,
+        opts.height,
+        opts.spp,
+        progress,
+    )?;
+    let info = ctx.info();
+    Ok(GpuRender {
+        film: r.film,
+        stats: r.stats,
+        device: info.name.clone(),
+        driver: info.driver.clone(),
+        setup_seconds: prepare_seconds + r.setup_seconds,
     })
 }

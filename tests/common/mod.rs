@@ -67,12 +67,23 @@ pub fn validation() -> Validation {
 /// A context on the default device, validated when the layer is installed
 /// (always under scripts/test.sh).
 pub fn context() -> ValidatedContext {
-    let ctx = Context::new(&ContextDesc {
+    context_with(false)
+}
+
+/// [`context`] with uploads and readbacks forced through staging buffers
+/// (the path of GPUs whose device-local memory is not host-visible).
+pub fn staging_context() -> ValidatedContext {
+    context_with(true)
+}
+
+fn context_with(force_staging: bool) -> ValidatedContext {
+    let mut ctx = Context::new(&ContextDesc {
         device: None,
         validation: validation(),
         loader: None,
     })
     .unwrap_or_else(|e| panic!("cannot create a Vulkan context: {e}"));
+    ctx.set_force_staging(force_staging);
     let log = ctx.validation_log();
     ValidatedContext {
         ctx: Some(ctx),
