@@ -407,3 +407,48 @@ fn bad_inputs_fail_with_one_line_and_no_output() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn gpu_backend_renders_and_compare_finds_the_backends_agree() {
+    let dir = scratch("compare");
+    let scene = write_scene(&dir);
+    let out = glint()
+        .arg("compare")
+        .arg(&scene)
+        .args(["--spp", "8", "--width", "24"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(stdout.contains("pass"), "{stdout}");
+    // Nothing written.
+    assert_eq!(files_in(&dir), ["scene.bin", "scene.gltf"]);
+
+    // The default backend is the GPU; its stats name the device and driver.
+    let (png, stats) = (dir.join("g.png"), dir.join("g.json"));
+    let out = glint()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&png)
+        .args(["--spp", "4", "--width", "24", "--stats"])
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(image::open(&png).unwrap().height(), 16);
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(v["backend"], "gpu");
+    assert!(v["driver"].as_str().is_some_and(|d| !d.is_empty()), "{v}");
+    assert!(v["rays_per_second"].as_f64().unwrap() > 0.0);
+    let _ = std::fs::remove_dir_all(&dir);
+}
