@@ -3,8 +3,9 @@
 // step by step under the same names (read its header for the MIS, depth,
 // Russian roulette, ray offset and light-leak rules). Binding table:
 // bindings.glsl. One invocation per pixel renders samples
-// [push.sample_start, push.sample_start + push.sample_count) and adds their
-// sum and sum of squares to accum, and the rays traced to ray_counts.
+// [push.sample_start, push.sample_start + push.sample_count), adding each
+// sample and its square to the running sums in accum, in sample order, and
+// the rays traced to ray_counts.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "bindings.glsl"
@@ -200,8 +201,12 @@ void main() {
     }
     uint pixel = px.y * params.width + px.x;
     uint rays = 0u;
-    vec3 sum = vec3(0.0);
-    vec3 sum_sq = vec3(0.0);
+    // Continue the running sums rather than adding a per-dispatch partial
+    // sum: the additions then happen in sample order whatever the batch
+    // sizes (which the host picks from timings), so an image does not
+    // depend on them, and matches the CPU's sample-order sums.
+    vec3 sum = accum[2u * pixel].xyz;
+    vec3 sum_sq = accum[2u * pixel + 1u].xyz;
     for (uint s = push.sample_start; s < push.sample_start + push.sample_count; s++) {
         vec3 l = path_sample(px.x, px.y, s, rays);
         // A NaN or infinity would poison the pixel for good: drop it.
@@ -211,7 +216,7 @@ void main() {
         sum += l;
         sum_sq += l * l;
     }
-    accum[2u * pixel] += vec4(sum, 0.0);
-    accum[2u * pixel + 1u] += vec4(sum_sq, 0.0);
+    accum[2u * pixel] = vec4(sum, 0.0);
+    accum[2u * pixel + 1u] = vec4(sum_sq, 0.0);
     ray_counts[pixel] += rays;
 }
