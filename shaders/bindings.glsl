@@ -8,7 +8,8 @@
 //   binding 4  Material materials[]    glint_cpu::GpuMaterial (96 B)
 //   binding 5  Emitter emitters[]      glint_cpu::lights::GpuEmitter (16 B), emitter order
 //   binding 6  Light lights[]          glint_cpu::lights::GpuLight (48 B)
-//   binding 7  vec4 accum[]            2 per pixel: (sum, sum of squares); ADDED to
+//   binding 7  vec4 accum[]            2 per pixel: (sum, sum of squares); ADDED to,
+//                                      sample by sample in sample order (the host zeroes it)
 //   binding 8  uint ray_counts[]       1 per pixel; ADDED to
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders

@@ -3,8 +3,9 @@
 // step by step under the same names (read its header for the MIS, depth,
 // Russian roulette, ray offset and light-leak rules). Binding table:
 // bindings.glsl. One invocation per pixel renders samples
-// [push.sample_start, push.sample_start + push.sample_count) and adds their
-// sum and sum of squares to accum, and the rays traced to ray_counts.
+// [push.sample_start, push.sample_start + push.sample_count), adding each
+// sample and its square to the running sums in accum, in sample order, and
+// the rays traced to ray_counts.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "bindings.glsl"
@@ -87,7 +88,9 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
     vec3 throughput = vec3(1.0);
     float eta = 1.0;
     uint depth = 0u;
-    bool prev_delta = true;
+    // An emitter the ray finds is MIS-weighted only when the previous
+    // vertex sampled lights and its BSDF sample was not a delta.
+    bool prev_mis = false;
     float prev_bsdf_pdf = 0.0;
     vec3 prev_bg_normal = vec3(0.0);
     bool nee = params.nee != 0u;
@@ -98,7 +101,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         if (!bvh_intersect(ray_o, ray_d, GLINT_FLT_MAX, hit)) {
             if (params.p_background > 0.0) {
                 float w = 1.0;
-                if (!(depth == 0u || prev_delta || !nee)) {
+                if (prev_mis) {
                     float lp = lights_background_pdf(prev_bg_normal, ray_d);
                     w = power_heuristic(prev_bsdf_pdf, lp);
                 }
@@ -113,7 +116,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 le;
         if (floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, wo, le)) {
             float w = 1.0;
-            if (!(depth == 0u || prev_delta || !nee)) {
+            if (prev_mis) {
                 float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
                 w = power_heuristic(prev_bsdf_pdf, lp);
             }
@@ -138,8 +141,9 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));
 
         bool lights_present = params.p_area + params.p_punctual + params.p_background > 0.0;
+        bool sample_lights = nee && lights_present && !bsdf_is_delta(m);
         LightSample ls;
-        if (nee && lights_present && !bsdf_is_delta(m)
+        if (sample_lights
             && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls)) {
             vec3 wi_local = frame_to_local(sf.frame, ls.wi);
             bool same_side = (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0);
@@ -169,7 +173,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         }
         throughput *= bs.weight;
         eta *= bs.eta;
-        prev_delta = bs.delta;
+        prev_mis = sample_lights && !bs.delta;
         prev_bsdf_pdf = bs.pdf;
         prev_bg_normal = bg_normal;
         ray_o = offset_origin(p, sf.ng, wi);
@@ -197,8 +201,12 @@ void main() {
     }
     uint pixel = px.y * params.width + px.x;
     uint rays = 0u;
-    vec3 sum = vec3(0.0);
-    vec3 sum_sq = vec3(0.0);
+    // Continue the running sums rather than adding a per-dispatch partial
+    // sum: the additions then happen in sample order whatever the batch
+    // sizes (which the host picks from timings), so an image does not
+    // depend on them, and matches the CPU's sample-order sums.
+    vec3 sum = accum[2u * pixel].xyz;
+    vec3 sum_sq = accum[2u * pixel + 1u].xyz;
     for (uint s = push.sample_start; s < push.sample_start + push.sample_count; s++) {
         vec3 l = path_sample(px.x, px.y, s, rays);
         // A NaN or infinity would poison the pixel for good: drop it.
@@ -208,7 +216,7 @@ void main() {
         sum += l;
         sum_sq += l * l;
     }
-    accum[2u * pixel] += vec4(sum, 0.0);
-    accum[2u * pixel + 1u] += vec4(sum_sq, 0.0);
+    accum[2u * pixel] = vec4(sum, 0.0);
+    accum[2u * pixel + 1u] = vec4(sum_sq, 0.0);
     ray_counts[pixel] += rays;
 }

@@ -19,8 +19,9 @@ pub struct Cli {
 pub enum Command {
     /// Render a glTF 2.0 scene to .exr (linear radiance) and/or .png (sRGB).
     Render(RenderArgs),
-    /// Render a scene with both backends and test statistically whether
-    /// they agree (8x8-block Welch z-tests; exit status 1 when they differ).
+    /// Render a scene with both backends (independent random streams) and
+    /// test statistically whether they agree (8x8-block Welch z-tests;
+    /// exit status 1 when they differ).
     Compare(CompareArgs),
 }
 

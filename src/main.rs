@@ -49,7 +49,7 @@ fn main() -> ExitCode {
                 return ExitCode::SUCCESS;
             }
             if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
-                let _ = e.print();
+                eprintln!("glint: missing command: render or compare (see glint --help)");
                 return ExitCode::from(2);
             }
             // clap's first paragraph is the error itself (a list of
@@ -390,6 +390,11 @@ fn run_render(args: &RenderArgs) -> Result<()> {
     outputs.commit()
 }
 
+/// The CPU's seed in `glint compare`: any value other than the GPU's.
+fn cpu_seed(seed: u64) -> u64 {
+    seed ^ 0x9e37_79b9_7f4a_7c15
+}
+
 /// `glint compare`: both backends on one scene, the statistical test of
 /// glint_cpu::compare, one line of verdict on stdout.
 fn run_compare(args: &CompareArgs) -> Result<()> {
@@ -401,8 +406,14 @@ fn run_compare(args: &CompareArgs) -> Result<()> {
         bail!("--spp must be at least 2 to estimate the variance");
     }
     let (scene, opts) = load_scene(&args.scene)?;
+    // Independent seeds: with the same seed both backends trace the same
+    // paths (one random stream), and the Welch test assumes independence.
     let gpu = render_on(Backend::Gpu, &args.scene, &scene, &opts)?;
-    let cpu = render_on(Backend::Cpu, &args.scene, &scene, &opts)?;
+    let cpu_opts = RenderOptions {
+        seed: cpu_seed(opts.seed),
+        ..opts.clone()
+    };
+    let cpu = render_on(Backend::Cpu, &args.scene, &scene, &cpu_opts)?;
     let report =
         glint::cpu::compare::compare_films_masked(&gpu.film, &cpu.film, &|_, _| true, args.alpha)
             .map_err(|e| anyhow!("{}: {e}", args.scene.scene.display()))?;

@@ -210,6 +210,35 @@ fn renders_png_and_exr_with_stats() {
             "{camera} {seed}"
         );
     }
+
+    // Without a camera in the default scene: the documented default
+    // viewpoint, aspect 1.
+    let text = std::fs::read_to_string(&scene).unwrap();
+    let no_cam = dir.join("nocam.gltf");
+    std::fs::write(
+        &no_cam,
+        text.replace(r#""nodes": [0, 1, 2]"#, r#""nodes": [0, 1]"#),
+    )
+    .unwrap();
+    let out = glint()
+        .arg("render")
+        .arg(&no_cam)
+        .arg("-o")
+        .arg(&png)
+        .args(["--backend", "cpu", "--spp", "2", "--width", "20"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert_eq!((img.width(), img.height()), (20, 20));
+    assert!(
+        img.pixels().any(|p| p.0 != [0, 0, 0]),
+        "the default view sees the scene"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -340,6 +369,8 @@ fn bad_inputs_fail_with_one_line_and_no_output() {
         ),
         (vec![s(&scene)], "output"),
     ];
+    assert_one_line_error(&glint().output().unwrap(), "missing command");
+    assert_one_line_error(&glint().arg("paint").output().unwrap(), "paint");
     // The compare verb validates the same way.
     for (args, needle) in [
         (vec!["--spp", "1"], "spp"),
@@ -374,5 +405,50 @@ fn bad_inputs_fail_with_one_line_and_no_output() {
             "{args:?} left files behind"
         );
     }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn gpu_backend_renders_and_compare_finds_the_backends_agree() {
+    let dir = scratch("compare");
+    let scene = write_scene(&dir);
+    let out = glint()
+        .arg("compare")
+        .arg(&scene)
+        .args(["--spp", "8", "--width", "24"])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(stdout.contains("pass"), "{stdout}");
+    // Nothing written.
+    assert_eq!(files_in(&dir), ["scene.bin", "scene.gltf"]);
+
+    // The default backend is the GPU; its stats name the device and driver.
+    let (png, stats) = (dir.join("g.png"), dir.join("g.json"));
+    let out = glint()
+        .arg("render")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&png)
+        .args(["--spp", "4", "--width", "24", "--stats"])
+        .arg(&stats)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert_eq!(image::open(&png).unwrap().height(), 16);
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    assert_eq!(v["backend"], "gpu");
+    assert!(v["driver"].as_str().is_some_and(|d| !d.is_empty()), "{v}");
+    assert!(v["rays_per_second"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }

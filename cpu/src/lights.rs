@@ -8,7 +8,8 @@
 //!    background, a directional irradiance and a finite emitter are not
 //!    comparable without scene-dependent guesses;
 //! 2. within the area emitters, one triangle with probability proportional
-//!    to its power, luminance(emission) x area (a CDF), then a point
+//!    to its power, luminance(emission) x area (x 2 when double-sided; by
+//!    area alone if every emitter has zero luminance) (a CDF), then a point
 //!    uniformly by area; the area density is converted to solid angle,
 //!    p = P(category) P(triangle) / area * d^2 / |cos theta_light|;
 //!    within the punctual lights, one uniformly (delta lights: no MIS);

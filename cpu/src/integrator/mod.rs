@@ -5,7 +5,9 @@
 //!
 //! - MIS: the power heuristic, beta = 2 (Veach 1997, sec. 9.2.4), between
 //!   light sampling and BSDF sampling for area emitters and the background;
-//!   punctual lights are deltas and take no MIS weight.
+//!   punctual lights are deltas and take no MIS weight. An emitter found
+//!   by a BSDF sample is weighted only when the vertex that sampled it also
+//!   sampled lights and the BSDF sample was not a delta (else weight 1).
 //! - Depth (Mitsuba's `max_depth`): 1 = emitters seen directly, 2 = direct
 //!   lighting, -1 = unbounded. `depth` counts the scattering vertices behind
 //!   the current ray; a vertex scatters (light sample + BSDF sample) only
@@ -218,8 +220,10 @@ impl<'a> PathTracer<'a> {
         let mut throughput = Vec3::ONE;
         let mut eta = 1.0f32;
         let mut depth = 0u32;
-        // The previous vertex's BSDF sample, for MIS of emitters it hits.
-        let mut prev_delta = true;
+        // Whether an emitter the current ray finds could also have been
+        // found by light sampling at the previous vertex (it sampled lights
+        // and its BSDF sample was not a delta): only then is it MIS-weighted.
+        let mut prev_mis = false;
         let mut prev_bsdf_pdf = 0.0f32;
         let mut prev_bg_normal = Vec3::ZERO;
 
@@ -227,7 +231,7 @@ impl<'a> PathTracer<'a> {
             *rays += 1;
             let Some(hit) = scene.bvh.intersect(&scene.triangles, &ray) else {
                 if self.lights.probs.background > 0.0 {
-                    let w = if depth == 0 || prev_delta || !self.nee {
+                    let w = if !prev_mis {
                         1.0
                     } else {
                         let lp = self.lights.background_pdf(prev_bg_normal, ray.d);
@@ -247,7 +251,7 @@ impl<'a> PathTracer<'a> {
             if tri.light != NO_LIGHT
                 && let Some(le) = emitted(scene, tri, wo)
             {
-                let w = if depth == 0 || prev_delta || !self.nee {
+                let w = if !prev_mis {
                     1.0
                 } else {
                     let lp = self.lights.area_pdf(scene, hit.tri, ray.d, hit.t);
@@ -274,9 +278,8 @@ impl<'a> PathTracer<'a> {
             let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
 
             // Next-event estimation.
-            if self.nee
-                && !self.lights.is_empty()
-                && !bsdf.is_delta()
+            let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
+            if sample_lights
                 && let Some(ls) =
                     self.lights
                         .sample(scene, p, bg_normal, u_light_cat, u_light_idx, u_light)
@@ -310,7 +313,7 @@ impl<'a> PathTracer<'a> {
             }
             throughput *= bs.weight;
             eta *= bs.eta;
-            prev_delta = bs.delta;
+            prev_mis = sample_lights && !bs.delta;
             prev_bsdf_pdf = bs.pdf;
             prev_bg_normal = bg_normal;
             ray = Ray {

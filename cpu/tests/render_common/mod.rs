@@ -87,6 +87,41 @@ pub fn uv_sphere(c: Vec3, r: f32, n_phi: u32, n_theta: u32, material: u32) -> Ve
     out
 }
 
+/// A closed box (half-extents `h`), rotated by `rot` about its centre `c`,
+/// faces counter-clockwise from outside.
+pub fn box_mesh(c: Vec3, h: Vec3, rot: glam::Quat, material: u32) -> Vec<Triangle> {
+    let corner = |i: u32| {
+        let s = Vec3::new(
+            if i & 1 == 0 { -1.0 } else { 1.0 },
+            if i & 2 == 0 { -1.0 } else { 1.0 },
+            if i & 4 == 0 { -1.0 } else { 1.0 },
+        );
+        c + rot * (s * h)
+    };
+    // Each face as four corner indices around it.
+    let faces = [
+        [0, 1, 3, 2],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 3, 7, 6],
+        [0, 2, 6, 4],
+        [1, 3, 7, 5],
+    ];
+    let mut out = Vec::new();
+    for f in faces {
+        let [a, b, cc, d] = f.map(corner);
+        for (x, y, z) in [(a, b, cc), (a, cc, d)] {
+            let t = tri(x, y, z, material);
+            out.push(if t.geometric_normal().dot((x + y + z) / 3.0 - c) < 0.0 {
+                tri(x, z, y, material)
+            } else {
+                t
+            });
+        }
+    }
+    out
+}
+
 /// The radius of the largest ball inside `uv_sphere` (a bound: each face
 /// lies within a spherical cap of half-angle pi/n_phi by pi/n_theta).
 pub fn uv_sphere_inner_radius(r: f32, n_phi: u32, n_theta: u32) -> f32 {
