@@ -29,7 +29,8 @@ impl Frame {
     pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
         let s = tangent - n * n.dot(tangent);
         let len2 = s.length_squared();
-        if !(len2 > 1e-12) || !len2.is_finite() {
+        // Also rejects NaN: a NaN tangent falls back to the normal-only frame.
+        if !(1e-12..=f32::MAX).contains(&len2) {
             return Self::from_normal(n);
         }
         let s = s / len2.sqrt();
