@@ -23,6 +23,9 @@ pub enum Command {
     /// test statistically whether they agree (8x8-block Welch z-tests;
     /// exit status 1 when they differ).
     Compare(CompareArgs),
+    /// Render a scene with both backends in one run and report samples/s,
+    /// rays/s and the GPU/CPU ratio (same scene, options and machine).
+    Bench(BenchArgs),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -110,4 +113,19 @@ pub struct CompareArgs {
     /// renderers are reported as differing).
     #[arg(long, value_name = "P", default_value_t = 1e-3)]
     pub alpha: f64,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+
+    /// Renders per backend; the fastest counts (the others absorb warm-up
+    /// and noise from the rest of the machine).
+    #[arg(long, value_name = "N", default_value_t = 1)]
+    pub repeat: u32,
+
+    /// Also write the figures as JSON to this file.
+    #[arg(long, value_name = "FILE.json")]
+    pub json: Option<PathBuf>,
 }

@@ -452,3 +452,47 @@ fn gpu_backend_renders_and_compare_finds_the_backends_agree() {
     assert!(v["rays_per_second"].as_f64().unwrap() > 0.0);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn bench_reports_both_backends_and_their_ratio() {
+    let dir = scratch("bench");
+    let scene = write_scene(&dir);
+    let json = dir.join("bench.json");
+    let out = glint()
+        .args(["bench"])
+        .arg(&scene)
+        .args(["--width", "16", "--spp", "2", "--json"])
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.lines().any(|l| l.starts_with("gpu ")), "{text}");
+    assert!(text.lines().any(|l| l.starts_with("cpu ")), "{text}");
+    let doc: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let backends = doc["backends"].as_array().unwrap();
+    assert_eq!(backends.len(), 2);
+    let rate = |i: usize| backends[i]["samples_per_second"].as_f64().unwrap();
+    // Both backends rendered the same 16x16x2 samples: equal ray counts
+    // within the float noise of the paths, and the ratio is their quotient.
+    let rays = |i: usize| backends[i]["rays"].as_f64().unwrap();
+    assert!((rays(0) - rays(1)).abs() <= 0.01 * rays(1), "{doc}");
+    let ratio = doc["gpu_over_cpu_samples_per_second"].as_f64().unwrap();
+    assert!(
+        (ratio - rate(0) / rate(1)).abs() <= 1e-6 * ratio.max(1.0),
+        "{doc}"
+    );
+
+    let bad = glint()
+        .args(["bench"])
+        .arg(&scene)
+        .args(["--repeat", "0"])
+        .output()
+        .unwrap();
+    assert_one_line_error(&bad, "--repeat");
+    let _ = std::fs::remove_dir_all(&dir);
+}
