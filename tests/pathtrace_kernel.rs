@@ -18,15 +18,7 @@ use glint::gpu::render::{SceneBytes, render_film};
 
 fn gpu_render(ctx: &common::ValidatedContext, scene: &Scene, opts: &RenderOptions) -> (Film, u64) {
     let d = gpu_scene_data(scene, opts).unwrap();
-    let bytes = SceneBytes {
-        params: bytemuck::bytes_of(&d.params),
-        triangles: bytemuck::cast_slice(&scene.triangles),
-        bvh_nodes: bytemuck::cast_slice(&scene.bvh.nodes),
-        shading: bytemuck::cast_slice(&scene.shading),
-        materials: bytemuck::cast_slice(&d.materials),
-        emitters: bytemuck::cast_slice(&d.emitters),
-        lights: bytemuck::cast_slice(&d.lights),
-    };
+    let bytes = SceneBytes::new(scene, &d);
     let r = render_film(
         ctx,
         "pathtrace",

@@ -19,7 +19,7 @@ use std::time::Instant;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
-use glint_cpu::integrator::gpu_scene_data;
+use glint_cpu::integrator::{GpuSceneData, gpu_scene_data};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::buffer::{Buffer, BufferKind};
@@ -52,6 +52,22 @@ pub struct SceneBytes<'d> {
     pub materials: &'d [u8],
     pub emitters: &'d [u8],
     pub lights: &'d [u8],
+}
+
+impl<'d> SceneBytes<'d> {
+    /// The path tracer's bindings for `scene` and the data
+    /// [`gpu_scene_data`] derived from it.
+    pub fn new(scene: &'d Scene, data: &'d GpuSceneData) -> Self {
+        Self {
+            params: bytemuck::bytes_of(&data.params),
+            triangles: bytemuck::cast_slice(&scene.triangles),
+            bvh_nodes: bytemuck::cast_slice(&scene.bvh.nodes),
+            shading: bytemuck::cast_slice(&scene.shading),
+            materials: bytemuck::cast_slice(&data.materials),
+            emitters: bytemuck::cast_slice(&data.emitters),
+            lights: bytemuck::cast_slice(&data.lights),
+        }
+    }
 }
 
 /// What a render produced, before the caller adds device names.
@@ -317,15 +333,7 @@ pub fn render_on(
 ) -> Result<GpuRender, GpuError> {
     let start = Instant::now();
     let data = gpu_scene_data(scene, opts).map_err(|e| GpuError::Invalid(e.to_string()))?;
-    let bytes = SceneBytes {
-        params: bytemuck::bytes_of(&data.params),
-        triangles: bytemuck::cast_slice(&scene.triangles),
-        bvh_nodes: bytemuck::cast_slice(&scene.bvh.nodes),
-        shading: bytemuck::cast_slice(&scene.shading),
-        materials: bytemuck::cast_slice(&data.materials),
-        emitters: bytemuck::cast_slice(&data.emitters),
-        lights: bytemuck::cast_slice(&data.lights),
-    };
+    let bytes = SceneBytes::new(scene, &data);
     let prepare_seconds = start.elapsed().as_secs_f64();
     let r = render_film(
         ctx,
