@@ -13,121 +13,14 @@
 //! relative and the same occlusion.
 
 mod common;
-
-use std::path::Path;
+#[path = "../cpu/tests/support/geometry.rs"]
+mod geometry;
 
 use glam::Vec3;
 use glint::cpu::{Bvh, Ray, Triangle};
 use glint::gpu::groups;
 
-/// SplitMix64.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-    fn vec_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(
-            self.range(lo.x, hi.x),
-            self.range(lo.y, hi.y),
-            self.range(lo.z, hi.z),
-        )
-    }
-    fn unit(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
-
-/// The bunny's triangles in file order, positions only (repository copy,
-/// read by the loader without building its BVH).
-fn bunny() -> Vec<Triangle> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/bunny.glb");
-    let scene = glint::cpu::loader::parse(&path).expect("bunny.glb");
-    scene
-        .triangles
-        .iter()
-        .map(|t| Triangle {
-            p0: t.p0,
-            p1: t.p1,
-            p2: t.p2,
-            ..Default::default()
-        })
-        .collect()
-}
-
-/// As the CPU differential test: origins in and around the bounds, most
-/// aimed at a random point of a random triangle, some with zero direction
-/// components or unnormalised, a quarter with a short tmax.
-fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for p in tris.iter().flat_map(|t| t.vertices()) {
-        lo = lo.min(p);
-        hi = hi.max(p);
-    }
-    let size = hi - lo;
-    (0..count)
-        .map(|_| {
-            let o = if rng.f() < 0.5 {
-                rng.vec_in(lo, hi)
-            } else {
-                rng.vec_in(lo - size, hi + size)
-            };
-            let mut d = if rng.f() < 0.7 {
-                let [a, b, c] = tris[rng.below(tris.len())].vertices();
-                let (mut u, mut v) = (rng.f(), rng.f());
-                if u + v > 1.0 {
-                    (u, v) = (1.0 - u, 1.0 - v);
-                }
-                (a + u * (b - a) + v * (c - a)) - o
-            } else {
-                rng.unit()
-            };
-            let zeros = rng.f();
-            if zeros < 0.1 {
-                d[rng.below(3)] = 0.0;
-            } else if zeros < 0.15 {
-                let keep = rng.below(3);
-                for k in 0..3 {
-                    if k != keep {
-                        d[k] = 0.0;
-                    }
-                }
-            }
-            if d == Vec3::ZERO || !d.is_finite() {
-                d = Vec3::X;
-            }
-            d = if rng.f() < 0.3 {
-                d * rng.range(0.1, 10.0)
-            } else {
-                d.normalize()
-            };
-            let tmax = if rng.below(4) == 0 {
-                rng.range(0.0, 1.5) * (size.length() / d.length())
-            } else {
-                f32::INFINITY
-            };
-            Ray { o, d, tmax }
-        })
-        .collect()
-}
+use geometry::{Rng, bunny, grid_cube, random_rays};
 
 struct GpuResult {
     /// (t, tri, u, v); tri = u32::MAX for a miss.
@@ -233,37 +126,6 @@ fn gpu_traversal_matches_cpu_on_bunny() {
     eprintln!("validation layer active: {}", ctx.validated());
     let messages = ctx.finish();
     assert!(messages.is_empty(), "validation: {messages:?}");
-}
-
-/// The surface of [-1, 1]^3 as an n x n grid per face, shared vertices
-/// bit-identical (one expression computes every grid coordinate).
-fn grid_cube(n: usize) -> Vec<Triangle> {
-    let coord = |i: usize| -1.0 + 2.0 * i as f32 / n as f32;
-    let mut tris = Vec::new();
-    for axis in 0..3 {
-        for side in [-1.0f32, 1.0] {
-            let p = |i: usize, j: usize| {
-                let mut v = [0.0f32; 3];
-                v[axis] = side;
-                v[(axis + 1) % 3] = coord(i);
-                v[(axis + 2) % 3] = coord(j);
-                v
-            };
-            for i in 0..n {
-                for j in 0..n {
-                    let t = |a, b, c| Triangle {
-                        p0: a,
-                        p1: b,
-                        p2: c,
-                        ..Default::default()
-                    };
-                    tris.push(t(p(i, j), p(i + 1, j), p(i + 1, j + 1)));
-                    tris.push(t(p(i, j), p(i + 1, j + 1), p(i, j + 1)));
-                }
-            }
-        }
-    }
-    tris
 }
 
 /// Watertightness on the GPU: from inside a closed grid cube, rays at every

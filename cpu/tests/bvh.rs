@@ -1,8 +1,10 @@
 //! BVH tests: structure invariants, differential closest/any-hit against brute
 //! force (tinybvh's test), watertightness on closed meshes and the bunny.
 
+#[path = "support/geometry.rs"]
+mod geometry;
+
 use std::collections::HashMap;
-use std::path::Path;
 use std::time::Instant;
 
 use glam::Vec3;
@@ -10,50 +12,7 @@ use glint_cpu::bvh::{MAX_DEPTH, MAX_LEAF_SIZE, PreparedRay, STACK_SIZE, intersec
 use glint_cpu::{Bvh, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-/// SplitMix64: a small, seedable generator, so each test has its own stream.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-    fn vec_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(
-            self.range(lo.x, hi.x),
-            self.range(lo.y, hi.y),
-            self.range(lo.z, hi.z),
-        )
-    }
-    fn unit(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
-
-fn tri(p0: Vec3, p1: Vec3, p2: Vec3) -> Triangle {
-    Triangle {
-        p0: p0.into(),
-        p1: p1.into(),
-        p2: p2.into(),
-        ..Default::default()
-    }
-}
+use geometry::{Rng, bounds_of, bunny, grid_cube, random_rays, tri};
 
 /// Builds and applies the order, as `Scene::build_bvh` does.
 fn build(input: &[Triangle]) -> (Bvh, Vec<Triangle>, Vec<u32>) {
@@ -78,20 +37,6 @@ fn brute_closest(tris: &[Triangle], ray: &Ray) -> Option<Hit> {
         }
     }
     best
-}
-
-fn bounds_of(tris: &[Triangle]) -> (Vec3, Vec3) {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for t in tris {
-        for p in t.vertices() {
-            if p.is_finite() {
-                lo = lo.min(p);
-                hi = hi.max(p);
-            }
-        }
-    }
-    (lo, hi)
 }
 
 /// Checks the layout every consumer relies on; returns (leaves, depth).
@@ -170,61 +115,6 @@ fn check_structure(bvh: &Bvh, tris: &[Triangle], order: &[u32]) -> (usize, usize
     );
     assert_eq!(bvh.depth(), depth);
     (leaves, depth)
-}
-
-/// Random rays in the style of tinybvh's test: origins inside and around the
-/// bounds, most aimed at a random point of a random triangle (so they hit),
-/// some with one or two zero direction components, some unnormalised, some
-/// with a tmax short of the aimed point.
-fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
-    let (lo, hi) = bounds_of(tris);
-    let size = hi - lo;
-    (0..count)
-        .map(|_| {
-            let o = if rng.f() < 0.5 {
-                rng.vec_in(lo, hi)
-            } else {
-                rng.vec_in(lo - size, hi + size)
-            };
-            let aimed = rng.f() < 0.7;
-            let mut d = if aimed {
-                let t = &tris[rng.below(tris.len())];
-                let [a, b, c] = t.vertices();
-                let (mut u, mut v) = (rng.f(), rng.f());
-                if u + v > 1.0 {
-                    (u, v) = (1.0 - u, 1.0 - v);
-                }
-                (a + u * (b - a) + v * (c - a)) - o
-            } else {
-                rng.unit()
-            };
-            let zeros = rng.f();
-            if zeros < 0.1 {
-                d[rng.below(3)] = 0.0;
-            } else if zeros < 0.15 {
-                let keep = rng.below(3);
-                for k in 0..3 {
-                    if k != keep {
-                        d[k] = 0.0;
-                    }
-                }
-            }
-            if d == Vec3::ZERO || !d.is_finite() {
-                d = Vec3::X;
-            }
-            // Unnormalised directions change the units of t: still exact.
-            d = if rng.f() < 0.3 {
-                d * rng.range(0.1, 10.0)
-            } else {
-                d.normalize()
-            };
-            let tmax = match rng.below(4) {
-                0 => rng.range(0.0, 1.5) * (size.length() / d.length()),
-                _ => f32::INFINITY,
-            };
-            Ray { o, d, tmax }
-        })
-        .collect()
 }
 
 #[derive(Default, Debug)]
@@ -369,21 +259,6 @@ fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
         }
     }
     tris
-}
-
-/// The bunny's triangles in file order, positions only (repository copy,
-/// read by the loader without building its BVH).
-fn bunny() -> Vec<Triangle> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/bunny.glb");
-    let scene = glint_cpu::loader::parse(&path).expect("bunny.glb");
-    scene
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.vertices();
-            tri(a, b, c)
-        })
-        .collect()
 }
 
 #[test]
@@ -679,31 +554,6 @@ fn icosphere(center: Vec3, radius: f32, levels: u32) -> Vec<Triangle> {
         .iter()
         .map(|&[a, b, c]| tri(world[a], world[b], world[c]))
         .collect()
-}
-
-/// The surface of [-1, 1]^3 as an n x n grid per face, every grid coordinate
-/// computed by one expression so shared vertices are bit-identical.
-fn grid_cube(n: usize) -> Vec<Triangle> {
-    let coord = |i: usize| -1.0 + 2.0 * i as f32 / n as f32;
-    let mut tris = Vec::new();
-    for axis in 0..3 {
-        for side in [-1.0f32, 1.0] {
-            let p = |i: usize, j: usize| {
-                let mut v = [0.0f32; 3];
-                v[axis] = side;
-                v[(axis + 1) % 3] = coord(i);
-                v[(axis + 2) % 3] = coord(j);
-                Vec3::from(v)
-            };
-            for i in 0..n {
-                for j in 0..n {
-                    tris.push(tri(p(i, j), p(i + 1, j), p(i + 1, j + 1)));
-                    tris.push(tri(p(i, j), p(i + 1, j + 1), p(i, j + 1)));
-                }
-            }
-        }
-    }
-    tris
 }
 
 /// Unique vertices and edges of a mesh (by exact position).

@@ -3,29 +3,16 @@
 //! bvh_throughput -- --nocapture`). The check: both runs give identical hits,
 //! so closest-hit results do not depend on threading.
 
-use std::path::Path;
+#[path = "support/geometry.rs"]
+mod geometry;
+
 use std::time::Instant;
 
 use glam::Vec3;
 use glint_cpu::{Bvh, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-/// The bunny's triangles in file order, positions only (repository copy,
-/// read by the loader without building its BVH).
-fn bunny() -> Vec<Triangle> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/bunny.glb");
-    let scene = glint_cpu::loader::parse(&path).expect("bunny.glb");
-    scene
-        .triangles
-        .iter()
-        .map(|t| Triangle {
-            p0: t.p0,
-            p1: t.p1,
-            p2: t.p2,
-            ..Default::default()
-        })
-        .collect()
-}
+use geometry::bunny;
 
 /// A pinhole camera framing the bounds from +z: the rays a render's first
 /// bounce traces.
