@@ -65,9 +65,9 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
     uint bvh_node_count;
     uint emitter_count;
     uint light_count;
-    uint nee;
-    uint pad0;
-    uint pad1;
+    uint nee;         // 1: next-event estimation on
+    uint mis;         // glint_cpu::Mis::code: 0 power, 1 balance, 2 none
+    uint sampler_kind; // glint_cpu::SamplerKind::code
     float p_area;
     float p_punctual;
     float p_background;

@@ -103,7 +103,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
                 float w = 1.0;
                 if (prev_mis) {
                     float lp = lights_background_pdf(prev_bg_normal, ray_d);
-                    w = power_heuristic(prev_bsdf_pdf, lp);
+                    w = mis_bsdf(params.mis, prev_bsdf_pdf, lp);
                 }
                 radiance += throughput * w * params.background.xyz;
             }
@@ -118,7 +118,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
             float w = 1.0;
             if (prev_mis) {
                 float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
-                w = power_heuristic(prev_bsdf_pdf, lp);
+                w = mis_bsdf(params.mis, prev_bsdf_pdf, lp);
             }
             radiance += throughput * w * le;
         }
@@ -156,7 +156,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
                     shadow_ray(p, sf.ng, ls, so, sd, stmax);
                     rays += 1u;
                     if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
-                        float w = ls.delta ? 1.0 : power_heuristic(ls.pdf, bsdf_pdf(m, wo_local, wi_local));
+                        float w = ls.delta ? 1.0 : mis_light(params.mis, ls.pdf, bsdf_pdf(m, wo_local, wi_local));
                         radiance += throughput * f * ls.weight * w;
                     }
                 }

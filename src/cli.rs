@@ -3,12 +3,17 @@
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
+use glint::backend::Backend;
+use glint::cpu::{Mis, SamplerKind};
 
 #[derive(Parser, Debug)]
 #[command(
     name = "glint",
     version,
-    about = "Headless physically based renderer: Vulkan compute path tracer with a CPU reference"
+    about = "Headless physically based renderer: Vulkan compute path tracer with a CPU reference",
+    // A later option overrides an earlier one (converge's variants append
+    // their options to the shared ones).
+    args_override_self = true
 )]
 pub struct Cli {
     #[command(subcommand)]
@@ -26,36 +31,64 @@ pub enum Command {
     /// Render a scene with both backends in one run and report samples/s,
     /// rays/s and the GPU/CPU ratio (same scene, options and machine).
     Bench(BenchArgs),
+    /// Error against time: render variants (sets of render options) at
+    /// several sample counts or time budgets, measure each image against a
+    /// reference, write DIR/converge.csv, .md, .svg and .png.
+    Converge(ConvergeArgs),
 }
 
+/// The verbs, for messages ("missing command: ...").
+pub const VERBS: &[&str] = &["render", "compare", "bench", "converge"];
+
+/// `--nee on|off`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
-pub enum Backend {
-    /// Vulkan compute (lavapipe where no GPU exists).
-    Gpu,
-    /// The CPU reference renderer.
-    Cpu,
+pub enum OnOff {
+    On,
+    Off,
 }
 
-impl Backend {
-    pub fn name(self) -> &'static str {
-        match self {
-            Backend::Gpu => "gpu",
-            Backend::Cpu => "cpu",
+/// `--mis power|balance|none`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum MisArg {
+    /// Power heuristic, beta 2 (Mitsuba 3's choice).
+    Power,
+    /// Balance heuristic.
+    Balance,
+    /// Light sampling alone for area lights and the background.
+    None,
+}
+
+impl From<MisArg> for Mis {
+    fn from(m: MisArg) -> Self {
+        match m {
+            MisArg::Power => Mis::Power,
+            MisArg::Balance => Mis::Balance,
+            MisArg::None => Mis::None,
         }
     }
 }
 
-/// What both `render` and `compare` take: the scene and the render options.
-#[derive(clap::Args, Debug)]
-pub struct SceneArgs {
-    /// The scene: a glTF 2.0 file (.gltf with external or embedded buffers, or .glb).
-    #[arg(value_name = "SCENE")]
-    pub scene: PathBuf,
+/// `--sampler`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum SamplerArg {
+    /// Independent uniform random numbers.
+    Independent,
+}
 
-    /// Samples per pixel (at least 1).
-    #[arg(long, value_name = "N", default_value_t = 64)]
-    pub spp: u32,
+impl From<SamplerArg> for SamplerKind {
+    fn from(s: SamplerArg) -> Self {
+        match s {
+            SamplerArg::Independent => SamplerKind::Independent,
+        }
+    }
+}
 
+/// Render options every verb shares (all but the scene, the sample count
+/// and the outputs). `to_args` writes them back as arguments, so converge
+/// can lay a variant's options over them: an option added here must be
+/// added there too.
+#[derive(clap::Args, Clone, Debug)]
+pub struct RenderOpts {
     /// Image width in pixels (1..=16384); alone, the height follows the
     /// camera's aspect ratio. Default 512.
     #[arg(long, value_name = "W")]
@@ -83,6 +116,76 @@ pub struct SceneArgs {
     /// GPU backend: use the Vulkan device whose name contains NAME.
     #[arg(long, value_name = "NAME")]
     pub device: Option<String>,
+
+    /// Next-event estimation (light sampling); off: BSDF sampling alone.
+    #[arg(long, value_enum, value_name = "on|off", default_value_t = OnOff::On)]
+    pub nee: OnOff,
+
+    /// Multiple importance sampling of light and BSDF samples.
+    #[arg(long, value_enum, default_value_t = MisArg::Power)]
+    pub mis: MisArg,
+
+    /// Where the random numbers come from.
+    #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
+    pub sampler: SamplerArg,
+
+    /// Stop at the last whole sample pass that fits this many seconds of
+    /// sampling (--spp, when given, caps the samples; --stats reports the
+    /// spp reached).
+    #[arg(long, value_name = "SECONDS")]
+    pub time_limit: Option<f64>,
+}
+
+impl RenderOpts {
+    /// These options as command-line arguments (every one explicit).
+    pub fn to_args(&self) -> Vec<String> {
+        let mut a = Vec::new();
+        let mut push = |k: &str, v: String| {
+            a.push(format!("--{k}"));
+            a.push(v);
+        };
+        if let Some(w) = self.width {
+            push("width", w.to_string());
+        }
+        if let Some(h) = self.height {
+            push("height", h.to_string());
+        }
+        push("max-depth", self.max_depth.to_string());
+        push("seed", self.seed.to_string());
+        if let Some(c) = &self.camera {
+            push("camera", c.clone());
+        }
+        if let Some(d) = &self.device {
+            push("device", d.clone());
+        }
+        let name = |v: &dyn Fn() -> Option<clap::builder::PossibleValue>| {
+            v().map(|p| p.get_name().to_string()).unwrap_or_default()
+        };
+        push("nee", name(&|| self.nee.to_possible_value()));
+        push("mis", name(&|| self.mis.to_possible_value()));
+        push("sampler", name(&|| self.sampler.to_possible_value()));
+        if let Some(t) = self.time_limit {
+            push("time-limit", t.to_string());
+        }
+        a
+    }
+}
+
+/// What `render`, `compare` and `bench` take: the scene, the sample count
+/// and the shared render options.
+#[derive(clap::Args, Debug)]
+pub struct SceneArgs {
+    /// The scene: a glTF 2.0 file (.gltf with external or embedded buffers, or .glb).
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+
+    /// Samples per pixel (at least 1). Default 64; with --time-limit and no
+    /// --spp, as many as fit.
+    #[arg(long, value_name = "N")]
+    pub spp: Option<u32>,
+
+    #[command(flatten)]
+    pub opts: RenderOpts,
 }
 
 #[derive(clap::Args, Debug)]
@@ -128,4 +231,67 @@ pub struct BenchArgs {
     /// Also write the figures as JSON to this file.
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
+}
+
+#[derive(clap::Args, Debug)]
+#[command(group(clap::ArgGroup::new("reference_source").required(true).args(["reference", "reference_spp"])))]
+pub struct ConvergeArgs {
+    /// The scene: a glTF 2.0 file.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+
+    /// Output folder (created if missing): converge.csv, converge.md,
+    /// converge.svg, converge.png (and NAME-SPP.exr with --keep-images).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    pub dir: PathBuf,
+
+    /// The reference image (.exr, the render's size).
+    #[arg(long, value_name = "REF.exr")]
+    pub reference: Option<PathBuf>,
+
+    /// Render the reference with the CPU backend at N spp (an independent
+    /// seed), cached in the user's cache folder by scene content and options.
+    #[arg(long, value_name = "N")]
+    pub reference_spp: Option<u32>,
+
+    /// Sample counts of each variant, comma-separated.
+    #[arg(
+        long,
+        value_name = "N,N,...",
+        value_delimiter = ',',
+        default_value = "4,16,64,256"
+    )]
+    pub spp: Vec<u32>,
+
+    /// Time budgets in seconds instead of sample counts, comma-separated
+    /// (each render stops at the last whole sample pass that fits).
+    #[arg(long, value_name = "S,S,...", value_delimiter = ',')]
+    pub time: Option<Vec<f64>>,
+
+    /// A variant: NAME=OPTIONS, the render options (quoted, space-separated)
+    /// laid over the shared ones, e.g. 'gpu-balance=--backend gpu --mis balance'.
+    /// May be given more than once. Default: gpu=--backend gpu and
+    /// cpu=--backend cpu.
+    #[arg(long = "variant", value_name = "NAME=OPTIONS")]
+    pub variants: Vec<String>,
+
+    /// Keep each image as DIR/NAME-SPP.exr (NAME-Ts.exr for time budgets).
+    #[arg(long)]
+    pub keep_images: bool,
+
+    #[command(flatten)]
+    pub opts: RenderOpts,
+}
+
+/// How a converge variant's options parse: the backend and the shared
+/// render options.
+#[derive(Parser, Debug)]
+#[command(name = "variant", no_binary_name = true, args_override_self = true)]
+pub struct VariantCli {
+    /// Which renderer runs the path tracer.
+    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
+    pub backend: Backend,
+
+    #[command(flatten)]
+    pub opts: RenderOpts,
 }

@@ -2,4 +2,6 @@
 
 pub use glint_cpu as cpu;
 
+pub mod backend;
+pub mod chart;
 pub mod gpu;

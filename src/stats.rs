@@ -1,10 +1,11 @@
 //! `--stats` JSON: what a benchmark script needs to compare runs.
 
+use glint::cpu::RenderOptions;
 use serde_json::{Value, json};
 
 /// Everything the stats file records.
 #[derive(Clone, Debug)]
-pub struct Stats {
+pub struct Stats<'a> {
     pub backend: &'static str,
     pub device: String,
     /// Vulkan driver name and version (GPU backend only).
@@ -23,9 +24,11 @@ pub struct Stats {
     pub setup_seconds: f64,
     pub render_seconds: f64,
     pub rays: u64,
+    /// The methods (nee, mis, sampler, time limit, sample range).
+    pub options: &'a RenderOptions,
 }
 
-impl Stats {
+impl Stats<'_> {
     pub fn samples(&self) -> u64 {
         self.width as u64 * self.height as u64 * self.spp as u64
     }
@@ -59,6 +62,13 @@ impl Stats {
             "samples_per_second": per_second(self.samples() as f64),
             "rays_per_second": per_second(self.rays as f64),
         });
+        v["nee"] = json!(self.options.nee);
+        v["mis"] = json!(self.options.mis.name());
+        v["sampler"] = json!(self.options.sampler.name());
+        v["sample_start"] = json!(self.options.sample_start);
+        if let Some(t) = self.options.time_limit {
+            v["time_limit"] = json!(t);
+        }
         if let Some(d) = &self.driver {
             v["driver"] = json!(d);
         }
@@ -67,19 +77,4 @@ impl Stats {
         }
         v
     }
-}
-
-/// The CPU's model name from /proc/cpuinfo (Linux), with the thread count
-/// the renderer uses, e.g. "Intel(R) Xeon(R) Processor (2 threads)".
-pub fn cpu_device_name(threads: usize) -> String {
-    let model = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_string())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
-    format!("{model} ({threads} threads)")
 }

@@ -35,12 +35,10 @@ fn asset(name: &str) -> PathBuf {
 
 fn options(seed: u64) -> RenderOptions {
     RenderOptions {
-        width: SIZE,
-        height: SIZE,
         spp: SPP,
         max_depth: -1,
         seed,
-        camera: 0,
+        ..RenderOptions::new(SIZE, SIZE)
     }
 }
 

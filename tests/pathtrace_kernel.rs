@@ -49,12 +49,10 @@ fn gpu_kernel_traces_the_cpu_paths() {
             .join(asset);
         let scene = glint::cpu::loader::load(&path).unwrap();
         let opts = RenderOptions {
-            width: 40,
-            height: 32,
             spp: 16,
             max_depth,
             seed: 7,
-            camera: 0,
+            ..RenderOptions::new(40, 32)
         };
         let (gpu, gpu_rays) = gpu_render(&ctx, &scene, &opts);
         let (cpu, cpu_stats) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();

@@ -21,6 +21,75 @@ pub struct RenderOptions {
     /// Index into `Scene::cameras`; ignored when the scene has none (the
     /// documented default viewpoint is used).
     pub camera: usize,
+    /// Next-event estimation (light sampling) on; off: BSDF sampling alone.
+    pub nee: bool,
+    /// How light and BSDF samples of area emitters and the background are
+    /// weighted against each other.
+    pub mis: Mis,
+    /// Where the random numbers come from.
+    pub sampler: SamplerKind,
+    /// First sample index rendered: a render covers sample indices
+    /// `[sample_start, sample_start + spp)` of every pixel (shards).
+    pub sample_start: u32,
+    /// Stop at the last whole sample pass that fits this many seconds of
+    /// sampling (`spp` is then the most samples taken).
+    pub time_limit: Option<f64>,
+}
+
+/// Multiple importance sampling between next-event estimation and BSDF
+/// sampling (Veach 1997, ch. 9).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Mis {
+    /// w = a^2 / (a^2 + b^2) (Veach's power heuristic, beta 2; Mitsuba 3).
+    #[default]
+    Power,
+    /// w = a / (a + b).
+    Balance,
+    /// Light sampling alone for area emitters and the background: a BSDF
+    /// sample that finds an emitter the vertex also sampled lights for
+    /// counts 0, a light sample counts 1.
+    None,
+}
+
+impl Mis {
+    /// The GPU's encoding (`Params.mis`).
+    pub fn code(self) -> u32 {
+        match self {
+            Mis::Power => 0,
+            Mis::Balance => 1,
+            Mis::None => 2,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            Mis::Power => "power",
+            Mis::Balance => "balance",
+            Mis::None => "none",
+        }
+    }
+}
+
+/// The source of each path's random numbers.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum SamplerKind {
+    /// Independent uniform numbers from a counter-based hash
+    /// (`sampling::Rng`).
+    #[default]
+    Independent,
+}
+
+impl SamplerKind {
+    /// The GPU's encoding (`Params.sampler`).
+    pub fn code(self) -> u32 {
+        match self {
+            SamplerKind::Independent => 0,
+        }
+    }
+    pub fn name(self) -> &'static str {
+        match self {
+            SamplerKind::Independent => "independent",
+        }
+    }
 }
 
 /// Per-pixel sums over the samples, enough for the mean and for the
@@ -56,6 +125,11 @@ impl RenderOptions {
             max_depth: -1,
             seed: 0,
             camera: 0,
+            nee: true,
+            mis: Mis::Power,
+            sampler: SamplerKind::default(),
+            sample_start: 0,
+            time_limit: None,
         }
     }
 }

@@ -13,12 +13,13 @@ pub mod frame;
 pub mod integrator;
 pub mod lights;
 pub mod loader;
+pub mod metrics;
 pub mod sampling;
 pub mod scene;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, BvhNode, Hit, Ray};
-pub use film::{Film, OutputFormat, RenderOptions, RenderStats};
+pub use film::{Film, Mis, OutputFormat, RenderOptions, RenderStats, SamplerKind};
 pub use frame::Frame;
 pub use integrator::{PathTracer, RenderError, render};
 pub use scene::{

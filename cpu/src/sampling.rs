@@ -8,6 +8,8 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::film::Mis;
+
 /// `pcg4d` from Jarzynski & Olano, "Hash Functions for GPU Rendering", JCGT
 /// 9(3), 2020: a 4-in/4-out bijective hash that passed their TestU01 runs,
 /// and maps to a handful of GLSL integer instructions.
@@ -167,6 +169,41 @@ pub fn power_heuristic(a: f32, b: f32) -> f32 {
     }
 }
 
+/// Balance heuristic (Veach 1997, eq. 9.10): a / (a + b).
+#[inline]
+pub fn balance_heuristic(a: f32, b: f32) -> f32 {
+    let s = a + b;
+    if s > 0.0 && s.is_finite() {
+        a / s
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// MIS weight of a light sample with density `light_pdf`, against BSDF
+/// sampling with density `bsdf_pdf` of the same direction.
+#[inline]
+pub fn mis_light(mode: Mis, light_pdf: f32, bsdf_pdf: f32) -> f32 {
+    match mode {
+        Mis::Power => power_heuristic(light_pdf, bsdf_pdf),
+        Mis::Balance => balance_heuristic(light_pdf, bsdf_pdf),
+        Mis::None => 1.0,
+    }
+}
+
+/// MIS weight of a BSDF sample that found an emitter the same vertex also
+/// sampled lights for (`Mis::None`: light sampling alone counts, so 0).
+#[inline]
+pub fn mis_bsdf(mode: Mis, bsdf_pdf: f32, light_pdf: f32) -> f32 {
+    match mode {
+        Mis::Power => power_heuristic(bsdf_pdf, light_pdf),
+        Mis::Balance => balance_heuristic(bsdf_pdf, light_pdf),
+        Mis::None => 0.0,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -253,5 +290,17 @@ mod tests {
         }
         assert_eq!(power_heuristic(1.0, 0.0), 1.0);
         assert_eq!(power_heuristic(0.0, 1.0), 0.0);
+    }
+
+    #[test]
+    fn mis_modes_weights_sum_to_one() {
+        for mode in [Mis::Power, Mis::Balance, Mis::None] {
+            for (l, b) in [(1.0f32, 2.0f32), (0.3, 0.0), (5.0, 1e-3), (0.0, 4.0)] {
+                let s = mis_light(mode, l, b) + mis_bsdf(mode, b, l);
+                assert!((s - 1.0).abs() < 1e-6, "{mode:?} {l} {b}: {s}");
+            }
+        }
+        assert!((balance_heuristic(1.0, 3.0) - 0.25).abs() < 1e-7);
+        assert_eq!(balance_heuristic(f32::INFINITY, 1.0), 1.0);
     }
 }

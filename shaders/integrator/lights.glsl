@@ -39,6 +39,42 @@ float power_heuristic(float a, float b) {
     return 0.0;
 }
 
+// Balance heuristic (Veach 1997, eq. 9.10).
+float balance_heuristic(float a, float b) {
+    float s = a + b;
+    if (s > 0.0 && !isinf(s)) {
+        return a / s;
+    } else if (isinf(a)) {
+        return 1.0;
+    }
+    return 0.0;
+}
+
+#define MIS_POWER 0u
+#define MIS_BALANCE 1u
+#define MIS_NONE 2u
+
+// glint_cpu::sampling::mis_light: weight of a light sample.
+float mis_light(uint mode, float light_pdf, float bsdf_pdf) {
+    if (mode == MIS_POWER) {
+        return power_heuristic(light_pdf, bsdf_pdf);
+    } else if (mode == MIS_BALANCE) {
+        return balance_heuristic(light_pdf, bsdf_pdf);
+    }
+    return 1.0;
+}
+
+// glint_cpu::sampling::mis_bsdf: weight of a BSDF sample that found an
+// emitter its vertex also sampled lights for.
+float mis_bsdf(uint mode, float bsdf_pdf, float light_pdf) {
+    if (mode == MIS_POWER) {
+        return power_heuristic(bsdf_pdf, light_pdf);
+    } else if (mode == MIS_BALANCE) {
+        return balance_heuristic(bsdf_pdf, light_pdf);
+    }
+    return 0.0;
+}
+
 // Smallest i with u < emitters[i].cdf (glint_cpu::sampling::sample_cdf).
 uint sample_emitter_cdf(uint n, float u) {
     uint lo = 0u;

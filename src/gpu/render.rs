@@ -159,6 +159,16 @@ pub fn next_batch(last_count: u32, last_seconds: f64, remaining: u32) -> u32 {
     (grown.min(remaining as f64) as u32).max(1).min(remaining)
 }
 
+/// Which samples a render takes: indices `[start, start + spp)` of every
+/// pixel, or, with a time limit, the longest prefix of them whose whole
+/// passes fit the budget (wall-clock seconds of sampling).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SampleRange {
+    pub start: u32,
+    pub spp: u32,
+    pub time_limit: Option<f64>,
+}
+
 /// Render `spp` samples of a `width` x `height` image with kernel
 /// `kernel_name`, which follows the binding table above.
 pub fn render_film(
@@ -170,6 +180,26 @@ pub fn render_film(
     spp: u32,
     progress: &dyn Fn(u32, u32),
 ) -> Result<FilmRender, GpuError> {
+    let range = SampleRange {
+        start: 0,
+        spp,
+        time_limit: None,
+    };
+    render_film_range(ctx, kernel_name, scene, width, height, range, progress)
+}
+
+/// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
+/// of samples taken.
+pub fn render_film_range(
+    ctx: &Context,
+    kernel_name: &str,
+    scene: &SceneBytes<'_>,
+    width: u32,
+    height: u32,
+    range: SampleRange,
+    progress: &dyn Fn(u32, u32),
+) -> Result<FilmRender, GpuError> {
+    let spp = range.spp;
     if width == 0 || height == 0 {
         return Err(GpuError::Invalid(format!(
             "image size {width}x{height}: both must be at least 1"
@@ -225,7 +255,7 @@ pub fn render_film(
     while done < spp {
         let count = batch.min(spp - done);
         let push = SamplePush {
-            sample_start: done,
+            sample_start: range.start.wrapping_add(done),
             sample_count: count,
         };
         let t = Instant::now();
@@ -262,6 +292,14 @@ pub fn render_film(
         progress(done, spp);
         // Size from wall time: it is what a watchdog and a progress bar see.
         batch = next_batch(count, wall_batch, spp.saturating_sub(done).max(1));
+        if let Some(limit) = range.time_limit {
+            let left = limit - wall.elapsed().as_secs_f64();
+            let fit = glint_cpu::integrator::next_pass(count, wall_batch, left, spp - done);
+            if fit == 0 {
+                break;
+            }
+            batch = batch.min(fit);
+        }
     }
     if timer.is_none() {
         render_seconds = wall.elapsed().as_secs_f64();
@@ -273,7 +311,7 @@ pub fn render_film(
     let film = Film {
         width,
         height,
-        spp,
+        spp: done,
         sum: (0..n)
             .map(|i| Vec3::from_slice(&sums[2 * i][..3]))
             .collect(),
@@ -335,13 +373,18 @@ pub fn render_on(
     let data = gpu_scene_data(scene, opts).map_err(|e| GpuError::Invalid(e.to_string()))?;
     let bytes = SceneBytes::new(scene, &data);
     let prepare_seconds = start.elapsed().as_secs_f64();
-    let r = render_film(
+    let range = SampleRange {
+        start: opts.sample_start,
+        spp: opts.spp,
+        time_limit: opts.time_limit,
+    };
+    let r = render_film_range(
         ctx,
         "pathtrace",
         &bytes,
         opts.width,
         opts.height,
-        opts.spp,
+        range,
         progress,
     )?;
     let info = ctx.info();

@@ -38,10 +38,12 @@ pub struct GpuParams {
     pub bvh_node_count: u32,
     pub emitter_count: u32,
     pub light_count: u32,
-    /// 1: next-event estimation on (always, for `glint render`).
+    /// 1: next-event estimation on (`RenderOptions::nee`).
     pub nee: u32,
-    pub _pad0: u32,
-    pub _pad1: u32,
+    /// `Mis::code`: 0 power, 1 balance, 2 none.
+    pub mis: u32,
+    /// `SamplerKind::code`.
+    pub sampler: u32,
     /// Light category probabilities (see `lights`).
     pub p_area: f32,
     pub p_punctual: f32,
@@ -100,9 +102,9 @@ pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneDat
         bvh_node_count: scene.bvh.nodes.len() as u32,
         emitter_count: pt.lights.emitters.len() as u32,
         light_count: pt.lights.punctual.len() as u32,
-        nee: 1,
-        _pad0: 0,
-        _pad1: 0,
+        nee: opts.nee as u32,
+        mis: opts.mis.code(),
+        sampler: opts.sampler.code(),
         p_area: pt.lights.probs.area,
         p_punctual: pt.lights.probs.punctual,
         p_background: pt.lights.probs.background,

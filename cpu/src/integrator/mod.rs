@@ -47,10 +47,10 @@ pub use gpu::{GpuParams, GpuSceneData, gpu_scene_data};
 use crate::bsdf::Bsdf;
 use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
-use crate::film::{Film, RenderOptions, RenderStats};
+use crate::film::{Film, Mis, RenderOptions, RenderStats};
 use crate::frame::Frame;
 use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
-use crate::sampling::{Rng, power_heuristic, seed_key};
+use crate::sampling::{Rng, mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene};
 
 /// Mitsuba's default `rr_depth`.
@@ -118,6 +118,21 @@ pub fn offset_origin(p: Vec3, ng: Vec3, w: Vec3, eps_abs: f32) -> Vec3 {
 /// One tile's output: its index, per-pixel (sum, sum_sq), rays traced.
 type TileResult = (u32, Vec<(Vec3, Vec3)>, u64);
 
+/// Samples per pass for a time-limited render: the passes left in the
+/// budget at the last pass's rate, growing at most 4x per pass (the first
+/// pass pays cache warm-up), never past `remaining`. 0 when the next whole
+/// pass of one sample would not fit.
+pub fn next_pass(last_count: u32, last_seconds: f64, left_seconds: f64, remaining: u32) -> u32 {
+    let per_sample = last_seconds / last_count.max(1) as f64;
+    let fit = if per_sample > 0.0 {
+        (left_seconds / per_sample).floor()
+    } else {
+        f64::INFINITY
+    };
+    let n = fit.min(last_count as f64 * 4.0).min(remaining as f64);
+    if n >= 1.0 { n as u32 } else { 0 }
+}
+
 /// Everything one render needs, prepared once.
 pub struct PathTracer<'a> {
     pub scene: &'a Scene,
@@ -130,6 +145,12 @@ pub struct PathTracer<'a> {
     /// Next-event estimation on (the default). Off: pure BSDF sampling,
     /// emitters found only by hitting them (a test of MIS correctness).
     pub nee: bool,
+    /// MIS weighting of light against BSDF samples.
+    pub mis: Mis,
+    /// First sample index (`RenderOptions::sample_start`).
+    pub sample_start: u32,
+    /// Sampling budget in seconds (`RenderOptions::time_limit`).
+    pub time_limit: Option<f64>,
 }
 
 /// The interpolated shading frame at a hit, with the geometric normal.
@@ -156,7 +177,10 @@ impl<'a> PathTracer<'a> {
             },
             key: seed_key(opts.seed),
             eps_abs: RAY_EPS_SCENE * extent,
-            nee: true,
+            nee: opts.nee,
+            mis: opts.mis,
+            sample_start: opts.sample_start,
+            time_limit: opts.time_limit,
         })
     }
 
@@ -235,7 +259,7 @@ impl<'a> PathTracer<'a> {
                         1.0
                     } else {
                         let lp = self.lights.background_pdf(prev_bg_normal, ray.d);
-                        power_heuristic(prev_bsdf_pdf, lp)
+                        mis_bsdf(self.mis, prev_bsdf_pdf, lp)
                     };
                     radiance += throughput * w * self.lights.background;
                 }
@@ -255,7 +279,7 @@ impl<'a> PathTracer<'a> {
                     1.0
                 } else {
                     let lp = self.lights.area_pdf(scene, hit.tri, ray.d, hit.t);
-                    power_heuristic(prev_bsdf_pdf, lp)
+                    mis_bsdf(self.mis, prev_bsdf_pdf, lp)
                 };
                 radiance += throughput * w * le;
             }
@@ -295,7 +319,7 @@ impl<'a> PathTracer<'a> {
                             let w = if ls.delta {
                                 1.0
                             } else {
-                                power_heuristic(ls.pdf, bsdf.pdf(wo_local, wi_local))
+                                mis_light(self.mis, ls.pdf, bsdf.pdf(wo_local, wi_local))
                             };
                             radiance += throughput * f * ls.weight * w;
                         }
@@ -337,15 +361,59 @@ impl<'a> PathTracer<'a> {
         radiance
     }
 
-    /// Render every pixel with samples [0, spp), in tiles over rayon's pool.
-    /// `progress(done, total)` counts finished tiles.
+    /// Render every pixel with sample indices `[sample_start, sample_start
+    /// + spp)`, in passes (one pass without a time limit; with one, passes
+    /// sized to the budget, stopping at the last whole pass that fits).
+    /// `progress(done, total)` counts finished tiles over all `spp`.
     pub fn render(&self, spp: u32, progress: &(dyn Fn(u32, u32) + Sync)) -> (Film, RenderStats) {
         let start = Instant::now();
+        let (w, h) = (self.camera.width, self.camera.height);
+        let tiles = w.div_ceil(TILE) * h.div_ceil(TILE);
+        let mut film = Film::new(w, h);
+        let mut rays = 0u64;
+        let mut count = if self.time_limit.is_some() { 1 } else { spp };
+        while film.spp < spp && count > 0 {
+            let pass_start = Instant::now();
+            let base = film.spp * tiles;
+            let total = spp.saturating_mul(tiles);
+            rays += self.render_pass(&mut film, count, &|done, _| {
+                progress(base + done * count, total)
+            });
+            let Some(limit) = self.time_limit else {
+                continue;
+            };
+            let left = limit - start.elapsed().as_secs_f64();
+            count = next_pass(
+                count,
+                pass_start.elapsed().as_secs_f64(),
+                left,
+                spp - film.spp,
+            );
+        }
+        let stats = RenderStats {
+            rays,
+            render_seconds: start.elapsed().as_secs_f64(),
+        };
+        (film, stats)
+    }
+
+    /// Add `count` more samples to every pixel of `film` (the indices
+    /// after the ones it holds), continuing each pixel's running sums in
+    /// sample order so that the image does not depend on the pass sizes.
+    /// Returns the rays traced.
+    pub fn render_pass(
+        &self,
+        film: &mut Film,
+        count: u32,
+        progress: &(dyn Fn(u32, u32) + Sync),
+    ) -> u64 {
         let (w, h) = (self.camera.width, self.camera.height);
         let tiles_x = w.div_ceil(TILE);
         let tiles_y = h.div_ceil(TILE);
         let total = tiles_x * tiles_y;
         let done = AtomicU32::new(0);
+        let first = self.sample_start + film.spp;
+        let prior: &Film = film;
         let tiles: Vec<TileResult> = (0..total)
             .into_par_iter()
             .map(|ti| {
@@ -354,9 +422,10 @@ impl<'a> PathTracer<'a> {
                 let mut px = Vec::with_capacity((TILE * TILE) as usize);
                 for y in y0..(y0 + TILE).min(h) {
                     for x in x0..(x0 + TILE).min(w) {
-                        let mut sum = Vec3::ZERO;
-                        let mut sum_sq = Vec3::ZERO;
-                        for s in 0..spp {
+                        let i = prior.index(x, y);
+                        let mut sum = prior.sum[i];
+                        let mut sum_sq = prior.sum_sq[i];
+                        for s in first..first + count {
                             let mut l = self.sample(x, y, s, &mut rays);
                             // A NaN or infinity (a degenerate pdf somewhere)
                             // would poison the pixel for good: drop it.
@@ -373,8 +442,6 @@ impl<'a> PathTracer<'a> {
                 (ti, px, rays)
             })
             .collect();
-        let mut film = Film::new(w, h);
-        film.spp = spp;
         let mut rays = 0u64;
         for (ti, px, r) in tiles {
             rays += r;
@@ -382,18 +449,15 @@ impl<'a> PathTracer<'a> {
             let mut k = 0;
             for y in y0..(y0 + TILE).min(h) {
                 for x in x0..(x0 + TILE).min(w) {
-                    let i = (y * w + x) as usize;
+                    let i = film.index(x, y);
                     film.sum[i] = px[k].0;
                     film.sum_sq[i] = px[k].1;
                     k += 1;
                 }
             }
         }
-        let stats = RenderStats {
-            rays,
-            render_seconds: start.elapsed().as_secs_f64(),
-        };
-        (film, stats)
+        film.spp += count;
+        rays
     }
 }
 

@@ -4,8 +4,8 @@
 use glam::{Mat4, Vec3};
 use glint_cpu::bsdf::Bsdf;
 use glint_cpu::{
-    Bvh, Camera, Film, Material, NO_LIGHT, PathTracer, PunctualLight, RenderOptions, Scene,
-    Triangle, TriangleShading,
+    Bvh, Camera, Film, Material, NO_LIGHT, PunctualLight, RenderOptions, Scene, Triangle,
+    TriangleShading,
 };
 
 pub fn diffuse(name: &str, rho: f32) -> Material {
@@ -161,12 +161,10 @@ pub fn scene(
 
 pub fn opts(size: u32, spp: u32, max_depth: i32, seed: u64) -> RenderOptions {
     RenderOptions {
-        width: size,
-        height: size,
         spp,
         max_depth,
         seed,
-        camera: 0,
+        ..RenderOptions::new(size, size)
     }
 }
 
@@ -177,9 +175,13 @@ pub fn render(scene: &Scene, o: &RenderOptions) -> Film {
 }
 
 pub fn render_no_nee(scene: &Scene, o: &RenderOptions) -> Film {
-    let mut pt = PathTracer::new(scene, o).expect("valid options");
-    pt.nee = false;
-    pt.render(o.spp, &|_, _| {}).0
+    let o = RenderOptions {
+        nee: false,
+        ..o.clone()
+    };
+    glint_cpu::render(scene, &o, &|_, _| {})
+        .expect("valid options")
+        .0
 }
 
 /// A closed-ish diffuse room lit by a ceiling quad (front face down) and a

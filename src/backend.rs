@@ -1,0 +1,116 @@
+//! The one interface every verb renders through: render options in, film
+//! and statistics out, on either backend. `render`, `compare`, `bench` and
+//! `converge` call [`render`]; a new sampler or kernel variant is a field of
+//! [`RenderOptions`] (or of [`GpuOptions`]) that both backends read, not a
+//! change to the verbs.
+
+use std::time::Instant;
+
+use glint_cpu::{Film, RenderOptions, Scene};
+
+/// Which renderer runs the path tracer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
+pub enum Backend {
+    /// Vulkan compute (lavapipe where no GPU exists).
+    Gpu,
+    /// The CPU reference renderer.
+    Cpu,
+}
+
+impl Backend {
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Gpu => "gpu",
+            Backend::Cpu => "cpu",
+        }
+    }
+}
+
+/// Options only the GPU backend reads.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GpuOptions {
+    /// Use the Vulkan device whose name contains this.
+    pub device: Option<String>,
+}
+
+/// A finished render on either backend.
+#[derive(Clone, Debug)]
+pub struct BackendRender {
+    pub backend: Backend,
+    /// The samples; `film.spp` is the count taken (a time limit may stop
+    /// short of `RenderOptions::spp`).
+    pub film: Film,
+    pub rays: u64,
+    /// The sampling alone.
+    pub render_seconds: f64,
+    /// Backend set-up after loading (device, pipelines, upload; CPU: lights).
+    pub setup_seconds: f64,
+    pub device: String,
+    pub driver: Option<String>,
+    pub threads: Option<usize>,
+}
+
+#[derive(Debug, thiserror::Error)]
+pub enum BackendError {
+    #[error("{0}")]
+    Cpu(#[from] glint_cpu::RenderError),
+    #[error("GPU backend: {0}")]
+    Gpu(#[from] crate::gpu::GpuError),
+}
+
+/// Render `scene` with `opts` on `backend`; `progress(done, total)` reports.
+pub fn render(
+    backend: Backend,
+    scene: &Scene,
+    opts: &RenderOptions,
+    gpu: &GpuOptions,
+    progress: &(dyn Fn(u32, u32) + Sync),
+) -> Result<BackendRender, BackendError> {
+    Ok(match backend {
+        Backend::Cpu => {
+            let start = Instant::now();
+            let pt = glint_cpu::PathTracer::new(scene, opts)?;
+            let setup_seconds = start.elapsed().as_secs_f64();
+            let (film, st) = pt.render(opts.spp, progress);
+            let threads = rayon::current_num_threads();
+            BackendRender {
+                backend,
+                film,
+                rays: st.rays,
+                render_seconds: st.render_seconds,
+                setup_seconds,
+                device: cpu_device_name(threads),
+                driver: None,
+                threads: Some(threads),
+            }
+        }
+        Backend::Gpu => {
+            let r = crate::gpu::render(scene, opts, gpu.device.as_deref(), progress)?;
+            BackendRender {
+                backend,
+                film: r.film,
+                rays: r.stats.rays,
+                render_seconds: r.stats.render_seconds,
+                setup_seconds: r.setup_seconds,
+                device: r.device,
+                driver: Some(r.driver),
+                threads: None,
+            }
+        }
+    })
+}
+
+/// The CPU's model name from /proc/cpuinfo (Linux), with the thread count
+/// the renderer uses, e.g. "Intel(R) Xeon(R) Processor (2 threads)".
+pub fn cpu_device_name(threads: usize) -> String {
+    let model = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string());
+    format!("{model} ({threads} threads)")
+}

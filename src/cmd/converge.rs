@@ -1,0 +1,526 @@
+//! `glint converge`: error against time. Each variant (a set of render
+//! options laid over the shared ones) renders at each sample count or time
+//! budget; every image is measured against a reference with
+//! `glint_cpu::metrics`; the table, the per-variant efficiency, the
+//! equal-time view and the log-log chart are written to DIR.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Parser;
+use glam::Vec3;
+use glint::backend::{Backend, BackendRender};
+use glint::chart::{ChartSpec, Curve};
+use glint::cpu::metrics::{self, ImageRef, Metrics};
+use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
+
+use super::outputs::Outputs;
+use super::{TIME_LIMIT_MAX_SPP, check_opts, encode, load, render_on, render_options};
+use crate::cli::{ConvergeArgs, RenderOpts, VariantCli};
+
+/// The reference's seed: independent of every variant's stream.
+const REFERENCE_SEED_XOR: u64 = 0x5851_f42d_4c95_7f2d;
+
+/// One parsed `--variant NAME=OPTIONS`.
+#[derive(Clone, Debug)]
+pub struct Variant {
+    pub name: String,
+    pub backend: Backend,
+    pub opts: RenderOpts,
+}
+
+/// Parse `NAME=OPTIONS` with OPTIONS laid over the shared options.
+pub fn parse_variant(spec: &str, shared: &RenderOpts) -> Result<Variant> {
+    let Some((name, options)) = spec.split_once('=') else {
+        bail!("--variant '{spec}': expected NAME=OPTIONS, e.g. 'gpu=--backend gpu'");
+    };
+    let name = name.trim();
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "-_.+".contains(c))
+    {
+        bail!("--variant '{spec}': the name must be letters, digits and - _ . + (it names files)");
+    }
+    let mut argv = shared.to_args();
+    argv.extend(options.split_whitespace().map(str::to_string));
+    let v = VariantCli::try_parse_from(&argv).map_err(|e| {
+        let text = e.to_string();
+        let first = text
+            .lines()
+            .next()
+            .unwrap_or("")
+            .trim_start_matches("error: ");
+        anyhow!("--variant '{spec}': {first}")
+    })?;
+    if v.opts.time_limit.is_some() {
+        bail!("--variant '{spec}': --time-limit is converge's own (use --time)");
+    }
+    Ok(Variant {
+        name: name.to_string(),
+        backend: v.backend,
+        opts: v.opts,
+    })
+}
+
+/// What each render of a variant is given: a sample count or a budget.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Budget {
+    Spp(u32),
+    Seconds(f64),
+}
+
+impl Budget {
+    fn file_tag(self) -> String {
+        match self {
+            Budget::Spp(n) => n.to_string(),
+            Budget::Seconds(t) => format!("{t}s"),
+        }
+    }
+}
+
+/// One measured render.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub variant: String,
+    pub backend: Backend,
+    pub spp: u32,
+    pub seconds: f64,
+    pub metrics: Metrics,
+}
+
+pub const CSV_HEADER: &str =
+    "variant,backend,spp,seconds,relmse,relmse_trim,rmse,flip,mean_r,mean_g,mean_b";
+
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from(CSV_HEADER);
+    s.push('\n');
+    for r in rows {
+        let m = &r.metrics;
+        let _ = writeln!(
+            s,
+            "{},{},{},{:.6},{:.6e},{:.6e},{:.6e},{:.6},{:.6e},{:.6e},{:.6e}",
+            r.variant,
+            r.backend.name(),
+            r.spp,
+            r.seconds,
+            m.relmse,
+            m.relmse_trim,
+            m.rmse,
+            m.flip,
+            m.mean.x,
+            m.mean.y,
+            m.mean.z
+        );
+    }
+    s
+}
+
+/// Efficiency = 1 / (relMSE x seconds) (contract).
+pub fn efficiency(relmse: f64, seconds: f64) -> f64 {
+    1.0 / (relmse * seconds)
+}
+
+/// The error at time `t` on the log-log line through a variant's points
+/// (sorted by time): interpolated inside, extended along the nearest
+/// segment outside, along 1/t with a single point.
+pub fn error_at(points: &[(f64, f64)], t: f64) -> f64 {
+    let mut p: Vec<(f64, f64)> = points
+        .iter()
+        .copied()
+        .filter(|(x, y)| *x > 0.0 && *y > 0.0 && x.is_finite() && y.is_finite())
+        .collect();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    match p.len() {
+        0 => f64::NAN,
+        1 => p[0].1 * p[0].0 / t,
+        n => {
+            let i = p.windows(2).position(|w| t <= w[1].0).unwrap_or(n - 2);
+            let ((t0, e0), (t1, e1)) = (p[i], p[i + 1]);
+            if t1 <= t0 {
+                return e0;
+            }
+            let s = (t.ln() - t0.ln()) / (t1.ln() - t0.ln());
+            (e0.ln() + s * (e1.ln() - e0.ln())).exp()
+        }
+    }
+}
+
+/// The markdown report: the table, per-variant efficiency and the
+/// equal-time view.
+pub fn markdown(title: &str, command: &str, rows: &[Row], variants: &[Variant]) -> String {
+    let mut s = format!("# glint converge: {title}\n\n`{command}`\n\n");
+    s.push_str("| variant | backend | spp | seconds | relMSE | relMSE (trimmed) | RMSE | FLIP | efficiency 1/(relMSE s) |\n");
+    s.push_str("|---|---|---:|---:|---:|---:|---:|---:|---:|\n");
+    for r in rows {
+        let m = &r.metrics;
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {:.3} | {:.3e} | {:.3e} | {:.3e} | {:.4} | {:.3e} |",
+            r.variant,
+            r.backend.name(),
+            r.spp,
+            r.seconds,
+            m.relmse,
+            m.relmse_trim,
+            m.rmse,
+            m.flip,
+            efficiency(m.relmse, r.seconds)
+        );
+    }
+    let pts = |v: &Variant| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.variant == v.name)
+            .map(|r| (r.seconds, r.metrics.relmse))
+            .collect()
+    };
+    // The slowest variant's smallest time: every variant has reached it.
+    let t_eq = variants
+        .iter()
+        .filter_map(|v| pts(v).iter().map(|p| p.0).reduce(f64::min))
+        .reduce(f64::max)
+        .unwrap_or(f64::NAN);
+    let _ = write!(
+        s,
+        "\n## Each variant\n\nEfficiency at the largest budget, and relMSE at equal time \
+         ({t_eq:.3} s, the slowest variant's shortest render), interpolated on the log-log \
+         line through its points.\n\n\
+         | variant | efficiency (last point) | relMSE at {t_eq:.3} s | vs first variant |\n\
+         |---|---:|---:|---:|\n"
+    );
+    let first = variants.first().map(|v| error_at(&pts(v), t_eq));
+    for v in variants {
+        let p = pts(v);
+        let last = rows.iter().rfind(|r| r.variant == v.name);
+        let eff = last.map_or(f64::NAN, |r| efficiency(r.metrics.relmse, r.seconds));
+        let e = error_at(&p, t_eq);
+        let ratio = first.map_or(f64::NAN, |f| f / e);
+        let _ = writeln!(
+            s,
+            "| {} | {:.3e} | {:.3e} | {:.2}x |",
+            v.name, eff, e, ratio
+        );
+    }
+    s.push_str(
+        "\n`vs first variant`: the first variant's relMSE over this one's at equal time \
+         (above 1: this variant is ahead).\n\nrelMSE = mean over pixels and channels of \
+         (x - r)^2 / (r^2 + 0.01); the trimmed form drops the 0.1% of pixels with the largest \
+         error; FLIP is NVIDIA's FLIP of the 8-bit sRGB images; seconds are the render's \
+         `render_seconds` (sampling alone).\n",
+    );
+    s
+}
+
+/// The folder references are cached in: `$GLINT_CACHE_DIR`, else
+/// `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`.
+pub fn cache_dir() -> Option<PathBuf> {
+    if let Some(d) = std::env::var_os("GLINT_CACHE_DIR") {
+        return Some(PathBuf::from(d));
+    }
+    if let Some(d) = std::env::var_os("XDG_CACHE_HOME").filter(|d| !d.is_empty()) {
+        return Some(PathBuf::from(d).join("glint"));
+    }
+    std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache").join("glint"))
+}
+
+/// 64-bit FNV-1a: a stable content key (std's hasher may change between
+/// Rust releases, which would silently orphan every cached reference).
+struct Fnv(u64);
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn add(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.0 ^= b as u64;
+            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
+        }
+        // A separator, so that ("ab", "c") and ("a", "bc") differ.
+        self.0 = self.0.rotate_left(7) ^ 0xff;
+    }
+}
+
+/// The reference's cache key: what the loaded scene holds (so external
+/// buffers count, not only the file's bytes), the options that shape the
+/// image, and glint's version.
+pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
+    let mut h = Fnv::new();
+    h.add(env!("CARGO_PKG_VERSION").as_bytes());
+    h.add(bytemuck::cast_slice(&scene.triangles));
+    h.add(bytemuck::cast_slice(&scene.shading));
+    h.add(
+        format!(
+            "{:?}|{:?}|{:?}|{:?}",
+            scene.materials, scene.lights, scene.cameras, scene.background
+        )
+        .as_bytes(),
+    );
+    h.add(
+        format!(
+            "{}x{} spp {} depth {} seed {} camera {} {:?} {:?} {:?} {}",
+            opts.width,
+            opts.height,
+            opts.spp,
+            opts.max_depth,
+            opts.seed,
+            opts.camera,
+            opts.nee,
+            opts.mis,
+            opts.sampler,
+            opts.sample_start
+        )
+        .as_bytes(),
+    );
+    format!("{:016x}", h.0)
+}
+
+/// Read a linear RGB EXR (or any image the `image` crate decodes).
+pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
+    let img = image::open(path)
+        .with_context(|| format!("{}: cannot read the image", path.display()))?
+        .into_rgb32f();
+    let (w, h) = img.dimensions();
+    let px = img
+        .pixels()
+        .map(|p| Vec3::new(p.0[0], p.0[1], p.0[2]))
+        .collect();
+    Ok((w, h, px))
+}
+
+/// The CPU reference at `spp` for `base` (an independent seed), from the
+/// cache when a render with the same key is there; written to the cache
+/// whole or not at all. Cache problems only cost a re-render (a warning).
+fn reference_image(
+    path: &Path,
+    scene: &Scene,
+    base: &RenderOptions,
+    spp: u32,
+    shared: &RenderOpts,
+) -> Result<(u32, u32, Vec<Vec3>)> {
+    let opts = RenderOptions {
+        spp,
+        seed: base.seed ^ REFERENCE_SEED_XOR,
+        time_limit: None,
+        sample_start: 0,
+        nee: true,
+        mis: glint::cpu::Mis::Power,
+        ..base.clone()
+    };
+    let key = reference_key(scene, &opts);
+    let cached = cache_dir().map(|d| d.join("references").join(format!("{key}.exr")));
+    if let Some(c) = &cached
+        && c.is_file()
+    {
+        match read_exr(c) {
+            Ok(img) if (img.0, img.1) == (opts.width, opts.height) => {
+                eprintln!(
+                    "glint: converge: reference from the cache ({})",
+                    c.display()
+                );
+                return Ok(img);
+            }
+            _ => eprintln!(
+                "glint: warning: {}: unreadable cached reference; rendering it again",
+                c.display()
+            ),
+        }
+    }
+    eprintln!(
+        "glint: converge: rendering the reference ({}x{}, {spp} spp, CPU)",
+        opts.width, opts.height
+    );
+    let r = render_on(Backend::Cpu, path, shared, scene, &opts)?;
+    if let Some(c) = &cached {
+        let stored = c
+            .parent()
+            .map(std::fs::create_dir_all)
+            .transpose()
+            .map_err(|e| e.to_string())
+            .and_then(|_| r.film.write_image(c).map_err(|e| e.to_string()));
+        if let Err(e) = stored {
+            eprintln!("glint: warning: cannot cache the reference: {e}");
+        }
+    }
+    Ok((opts.width, opts.height, r.film.means()))
+}
+
+fn title(path: &Path, rows: &[(Backend, String)]) -> String {
+    let scene = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let mut devices: Vec<String> = Vec::new();
+    for (_, d) in rows {
+        if !devices.contains(d) {
+            devices.push(d.clone());
+        }
+    }
+    format!("{scene}: {}", devices.join(" / "))
+}
+
+pub fn run(args: &ConvergeArgs) -> Result<()> {
+    // Everything that needs no file first: a bad command line reads and
+    // creates nothing.
+    let budgets: Vec<Budget> = match &args.time {
+        Some(ts) => {
+            if ts.is_empty() || ts.iter().any(|t| !(*t > 0.0 && t.is_finite())) {
+                bail!("--time: every budget must be a positive number of seconds");
+            }
+            ts.iter().map(|&t| Budget::Seconds(t)).collect()
+        }
+        None => {
+            if args.spp.is_empty() || args.spp.contains(&0) {
+                bail!("--spp: every sample count must be at least 1");
+            }
+            args.spp.iter().map(|&n| Budget::Spp(n)).collect()
+        }
+    };
+    if args.opts.time_limit.is_some() {
+        bail!("--time-limit: use --time for converge's time budgets");
+    }
+    if args.reference_spp == Some(0) {
+        bail!("--reference-spp must be at least 1");
+    }
+    check_opts(1, &args.opts)?;
+    let specs: Vec<String> = if args.variants.is_empty() {
+        vec!["gpu=--backend gpu".into(), "cpu=--backend cpu".into()]
+    } else {
+        args.variants.clone()
+    };
+    let variants: Vec<Variant> = specs
+        .iter()
+        .map(|s| parse_variant(s, &args.opts))
+        .collect::<Result<_>>()?;
+    for (i, v) in variants.iter().enumerate() {
+        check_opts(1, &v.opts).map_err(|e| anyhow!("--variant {}: {e}", v.name))?;
+        if variants[..i].iter().any(|w| w.name == v.name) {
+            bail!("--variant {}: the name is used twice", v.name);
+        }
+    }
+    if let Some(r) = &args.reference
+        && !r.is_file()
+    {
+        bail!("{}: no such file", r.display());
+    }
+
+    // The folder and every output reserved before any rendering.
+    let dir = &args.dir;
+    let created = !dir.exists();
+    if dir.exists() && !dir.is_dir() {
+        bail!("{}: exists and is not a folder", dir.display());
+    }
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create", dir.display()))?;
+    let result = run_in(args, &budgets, &variants, dir);
+    if result.is_err() && created {
+        // Only succeeds when nothing was left in it.
+        let _ = std::fs::remove_dir(dir);
+    }
+    result
+}
+
+fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &Path) -> Result<()> {
+    let mut outputs = Outputs::new();
+    let csv_slot = outputs.reserve(&dir.join("converge.csv"))?;
+    let md_slot = outputs.reserve(&dir.join("converge.md"))?;
+    let svg_slot = outputs.reserve(&dir.join("converge.svg"))?;
+    let png_slot = outputs.reserve(&dir.join("converge.png"))?;
+    let mut image_slots = Vec::new();
+    if args.keep_images {
+        for v in variants {
+            for b in budgets {
+                let p = dir.join(format!("{}-{}.exr", v.name, b.file_tag()));
+                image_slots.push(outputs.reserve(&p)?);
+            }
+        }
+    }
+
+    let scene = load(&args.scene)?;
+    let base = render_options(&scene, &args.scene, 1, &args.opts)?;
+    let (rw, rh, reference) = match (&args.reference, args.reference_spp) {
+        (Some(p), _) => read_exr(p)?,
+        (None, Some(n)) => reference_image(&args.scene, &scene, &base, n, &args.opts)?,
+        (None, None) => unreachable!("clap requires one of --reference and --reference-spp"),
+    };
+    let ref_name = args
+        .reference
+        .as_ref()
+        .map(|p| p.display().to_string())
+        .unwrap_or_else(|| "the reference".into());
+    let reference_img = ImageRef::new(rw, rh, &reference)?;
+
+    let mut rows = Vec::new();
+    let mut devices = Vec::new();
+    let mut films: Vec<Film> = Vec::new();
+    for v in variants {
+        for &b in budgets {
+            let (spp, time_limit) = match b {
+                Budget::Spp(n) => (n, None),
+                Budget::Seconds(t) => (TIME_LIMIT_MAX_SPP, Some(t)),
+            };
+            let mut opts = render_options(&scene, &args.scene, spp, &v.opts)?;
+            opts.time_limit = time_limit;
+            if (opts.width, opts.height) != (rw, rh) {
+                bail!(
+                    "{ref_name} is {rw}x{rh} but variant {} renders {}x{} (set --width/--height to match)",
+                    v.name,
+                    opts.width,
+                    opts.height
+                );
+            }
+            let r: BackendRender = render_on(v.backend, &args.scene, &v.opts, &scene, &opts)?;
+            let means = r.film.means();
+            let img = ImageRef::new(opts.width, opts.height, &means)?;
+            let m = metrics::compute(&img, &reference_img)?;
+            eprintln!(
+                "glint: converge: {} {} spp: relMSE {:.3e} in {:.3} s",
+                v.name, r.film.spp, m.relmse, r.render_seconds
+            );
+            devices.push((v.backend, r.device.clone()));
+            rows.push(Row {
+                variant: v.name.clone(),
+                backend: v.backend,
+                spp: r.film.spp,
+                seconds: r.render_seconds,
+                metrics: m,
+            });
+            if args.keep_images {
+                films.push(r.film);
+            }
+        }
+    }
+
+    let command = std::env::args().collect::<Vec<_>>().join(" ");
+    let title = title(&args.scene, &devices);
+    let spec = ChartSpec {
+        title: format!("{title}"),
+        x_label: "render time (seconds, log)".into(),
+        y_label: "relMSE (log)".into(),
+        curves: variants
+            .iter()
+            .map(|v| Curve {
+                label: v.name.clone(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.variant == v.name)
+                    .map(|r| (r.seconds, r.metrics.relmse))
+                    .collect(),
+            })
+            .collect(),
+        guides: true,
+    };
+    let md = markdown(&title, &command, &rows, variants);
+    let svg = glint::chart::svg(&spec)?;
+    let png = glint::chart::png(&spec)?;
+    use std::io::Write;
+    outputs.write(csv_slot, |w| Ok(w.write_all(csv(&rows).as_bytes())?))?;
+    outputs.write(md_slot, |w| Ok(w.write_all(md.as_bytes())?))?;
+    outputs.write(svg_slot, |w| Ok(w.write_all(svg.as_bytes())?))?;
+    outputs.write(png_slot, |w| Ok(w.write_all(&png)?))?;
+    for (slot, film) in image_slots.iter().zip(&films) {
+        outputs.write(*slot, |w| encode(film, w, OutputFormat::Exr))?;
+    }
+    outputs.commit()?;
+    print!("{md}");
+    Ok(())
+}

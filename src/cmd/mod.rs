@@ -1,0 +1,204 @@
+//! One module per verb, and what they share: loading a scene with the
+//! render options settled, progress bars, output files.
+
+pub mod bench;
+pub mod compare;
+pub mod converge;
+pub mod outputs;
+pub mod render;
+
+use std::io::IsTerminal;
+use std::path::Path;
+
+use anyhow::{Result, anyhow, bail};
+use glint::backend::{self, Backend, BackendRender, GpuOptions};
+use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
+use indicatif::{ProgressBar, ProgressStyle};
+
+use crate::cli::{OnOff, RenderOpts, SceneArgs};
+
+/// Largest image side accepted.
+pub const MAX_SIZE: u32 = 16384;
+/// Width used when neither --width nor --height is given.
+pub const DEFAULT_WIDTH: u32 = 512;
+/// Samples per pixel when --spp is not given.
+pub const DEFAULT_SPP: u32 = 64;
+/// The most samples a time-limited render takes when --spp is not given.
+pub const TIME_LIMIT_MAX_SPP: u32 = 1 << 24;
+
+/// Whitespace (newlines included) folded to single spaces.
+pub fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// Pick the camera (the loader's rule: a name first, then an index).
+fn resolve_camera(scene: &Scene, path: &Path, camera: Option<&str>) -> Result<usize> {
+    match camera {
+        None => Ok(0),
+        Some(c) => glint::cpu::loader::select_camera(scene, c)
+            .map_err(|e| anyhow!("{}: {e}", path.display())),
+    }
+}
+
+/// The image size: both given, or one given and the other from the
+/// camera's aspect ratio (glTF `aspectRatio`, else 1:1), or 512 wide.
+fn image_size(opts: &RenderOpts, aspect: f32) -> Result<(u32, u32)> {
+    let check = |name: &str, v: u32| -> Result<u32> {
+        if (1..=MAX_SIZE).contains(&v) {
+            Ok(v)
+        } else {
+            bail!("--{name} {v} is out of range (1..={MAX_SIZE})")
+        }
+    };
+    let from = |v: u32, r: f32| ((v as f32 * r).round() as u32).clamp(1, MAX_SIZE);
+    Ok(match (opts.width, opts.height) {
+        (Some(w), Some(h)) => (check("width", w)?, check("height", h)?),
+        (Some(w), None) => {
+            let w = check("width", w)?;
+            (w, from(w, 1.0 / aspect))
+        }
+        (None, Some(h)) => {
+            let h = check("height", h)?;
+            (from(h, aspect), h)
+        }
+        (None, None) => (DEFAULT_WIDTH, from(DEFAULT_WIDTH, 1.0 / aspect)),
+    })
+}
+
+pub fn progress_bar() -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let pb = ProgressBar::new(1);
+    if let Ok(style) =
+        ProgressStyle::with_template("{elapsed_precise} [{wide_bar}] {percent:>3}% eta {eta}")
+    {
+        pb.set_style(style.progress_chars("=> "));
+    }
+    Some(pb)
+}
+
+/// The samples per pixel a render takes: --spp, else the default, else
+/// (time-limited) as many as fit.
+pub fn spp_of(spp: Option<u32>, opts: &RenderOpts) -> u32 {
+    match (spp, opts.time_limit) {
+        (Some(n), _) => n,
+        (None, Some(_)) => TIME_LIMIT_MAX_SPP,
+        (None, None) => DEFAULT_SPP,
+    }
+}
+
+/// Parameter checks that need no file: nothing is read or created for a
+/// bad command line.
+pub fn check_opts(spp: u32, opts: &RenderOpts) -> Result<()> {
+    if spp == 0 {
+        bail!("--spp must be at least 1");
+    }
+    if opts.max_depth == 0 || opts.max_depth < -1 {
+        bail!(
+            "--max-depth {} is out of range (-1 for unbounded, or at least 1)",
+            opts.max_depth
+        );
+    }
+    if let Some(t) = opts.time_limit
+        && !(t > 0.0 && t.is_finite())
+    {
+        bail!("--time-limit {t} is out of range (a positive number of seconds)");
+    }
+    Ok(())
+}
+
+pub fn check_params(args: &SceneArgs) -> Result<()> {
+    check_opts(spp_of(args.spp, &args.opts), &args.opts)
+}
+
+/// The scene file must be a readable regular file.
+pub fn check_scene_path(path: &Path) -> Result<()> {
+    if !path.is_file() {
+        bail!("{}: no such file", path.display());
+    }
+    Ok(())
+}
+
+/// Load the scene.
+pub fn load(path: &Path) -> Result<Scene> {
+    check_scene_path(path)?;
+    Ok(glint::cpu::loader::load(path)?)
+}
+
+/// Settle the render options for `scene` (camera, image size, methods).
+pub fn render_options(
+    scene: &Scene,
+    path: &Path,
+    spp: u32,
+    o: &RenderOpts,
+) -> Result<RenderOptions> {
+    let camera = resolve_camera(scene, path, o.camera.as_deref())?;
+    let aspect = scene
+        .cameras
+        .get(camera)
+        .and_then(|c| c.aspect_ratio)
+        .filter(|a| a.is_finite() && *a > 0.0)
+        .unwrap_or(1.0);
+    let (width, height) = image_size(o, aspect)?;
+    let opts = RenderOptions {
+        spp,
+        max_depth: o.max_depth,
+        seed: o.seed,
+        camera,
+        nee: o.nee == OnOff::On,
+        mis: o.mis.into(),
+        sampler: o.sampler.into(),
+        time_limit: o.time_limit,
+        ..RenderOptions::new(width, height)
+    };
+    glint::cpu::integrator::validate_options(scene, &opts)
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    Ok(opts)
+}
+
+/// Load the scene and settle the render options.
+pub fn load_scene(args: &SceneArgs) -> Result<(Scene, RenderOptions)> {
+    let scene = load(&args.scene)?;
+    let opts = render_options(
+        &scene,
+        &args.scene,
+        spp_of(args.spp, &args.opts),
+        &args.opts,
+    )?;
+    Ok((scene, opts))
+}
+
+/// Render with a progress bar on a terminal; errors name the scene.
+pub fn render_on(
+    backend: Backend,
+    path: &Path,
+    ro: &RenderOpts,
+    scene: &Scene,
+    opts: &RenderOptions,
+) -> Result<BackendRender> {
+    let pb = progress_bar();
+    let progress = |done: u32, total: u32| {
+        if let Some(pb) = &pb {
+            pb.set_length(total as u64);
+            pb.set_position(done as u64);
+        }
+    };
+    let gpu = GpuOptions {
+        device: ro.device.clone(),
+    };
+    let r = backend::render(backend, scene, opts, &gpu, &progress)
+        .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    if let Some(pb) = pb {
+        pb.finish_and_clear();
+    }
+    Ok(r)
+}
+
+pub fn encode(
+    film: &Film,
+    w: &mut std::io::BufWriter<std::fs::File>,
+    format: OutputFormat,
+) -> Result<()> {
+    film.encode(w, format).map_err(|e| anyhow!("{e}"))
+}
