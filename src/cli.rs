@@ -132,7 +132,7 @@ pub struct RenderOpts {
     /// Stop at the last whole sample pass that fits this many seconds of
     /// sampling (--spp, when given, caps the samples; --stats reports the
     /// spp reached).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
 }
 

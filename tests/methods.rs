@@ -1,0 +1,114 @@
+//! The method switches are real code paths that converge to the same
+//! image: for every bundled scene, `--mis balance` and `--mis none` (light
+//! sampling alone for area lights and the background) agree statistically
+//! with the default (power heuristic) on both backends, and so does
+//! `--nee off` (BSDF sampling alone) wherever it is unbiased: scenes
+//! without punctual lights, which BSDF sampling can never hit.
+//!
+//! Each comparison is Welch's block test of `glint_cpu::compare` between
+//! independent seeds. The test of the test: `--nee off` on a scene lit by a
+//! point light misses that light and must be told apart.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use glint::cpu::compare::compare_films;
+use glint::cpu::{Film, Mis, RenderOptions, Scene};
+use glint::gpu::render::render_on;
+
+const SIZE: u32 = 32;
+const SPP: u32 = 64;
+
+fn asset(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(name)
+}
+
+fn opts(seed: u64, nee: bool, mis: Mis) -> RenderOptions {
+    RenderOptions {
+        spp: SPP,
+        seed,
+        nee,
+        mis,
+        ..RenderOptions::new(SIZE, SIZE)
+    }
+}
+
+fn cpu(scene: &Scene, o: &RenderOptions) -> Film {
+    glint::cpu::render(scene, o, &|_, _| {}).unwrap().0
+}
+
+fn gpu(ctx: &common::ValidatedContext, scene: &Scene, o: &RenderOptions) -> Film {
+    render_on(ctx, scene, o, &|_, _| {}).unwrap().film
+}
+
+fn load(file: &str) -> Scene {
+    let mut s = glint::cpu::loader::load(&asset(file)).unwrap();
+    if s.lights.is_empty() && s.emitter_triangles().is_empty() {
+        s.background = glam::Vec3::ONE;
+    }
+    s
+}
+
+fn check(file: &str) {
+    let ctx = common::context();
+    let scene = load(file);
+    let reference = cpu(&scene, &opts(1, true, Mis::Power));
+    let mut variants = vec![
+        ("mis balance", true, Mis::Balance),
+        ("mis none", true, Mis::None),
+    ];
+    if scene.lights.is_empty() {
+        variants.push(("nee off", false, Mis::Power));
+    }
+    for (i, (name, nee, mis)) in variants.into_iter().enumerate() {
+        let seed = 10 + 2 * i as u64;
+        for (backend, film) in [
+            ("cpu", cpu(&scene, &opts(seed, nee, mis))),
+            ("gpu", gpu(&ctx, &scene, &opts(seed + 1, nee, mis))),
+        ] {
+            let r = compare_films(&film, &reference).unwrap();
+            assert!(r.pass, "{file} {name} ({backend}) vs default: {r}");
+        }
+    }
+}
+
+#[test]
+fn cornell() {
+    check("cornell.gltf");
+}
+#[test]
+fn diffuse() {
+    check("diffuse.gltf");
+}
+#[test]
+fn conductor() {
+    check("conductor.gltf");
+}
+#[test]
+fn roughconductor() {
+    check("roughconductor.gltf");
+}
+#[test]
+fn dielectric() {
+    check("dielectric.gltf");
+}
+#[test]
+fn roughdielectric() {
+    check("roughdielectric.gltf");
+}
+#[test]
+fn bunny() {
+    check("bunny.glb");
+}
+
+#[test]
+fn nee_off_misses_a_point_light_and_is_told_apart() {
+    let scene = load("conductor.gltf");
+    assert!(!scene.lights.is_empty());
+    let reference = cpu(&scene, &opts(1, true, Mis::Power));
+    let off = cpu(&scene, &opts(2, false, Mis::Power));
+    assert!(!compare_films(&off, &reference).unwrap().pass);
+}
