@@ -20,6 +20,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let json_slot = args.json.as_ref().map(|p| outputs.reserve(p)).transpose()?;
     let (scene, opts) = load_scene(&args.scene)?;
     let pixels = opts.width as f64 * opts.height as f64;
+    // The BVH build again, timed alone (loading built it once already).
+    let t = std::time::Instant::now();
+    let (bvh, _) = glint::cpu::Bvh::build(&scene.triangles);
+    let bvh_seconds = t.elapsed().as_secs_f64();
     let mut rows = Vec::new();
     for backend in [Backend::Gpu, Backend::Cpu] {
         let mut best: Option<BackendRender> = None;
@@ -35,13 +39,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         rows.push((backend, best.expect("repeat >= 1")));
     }
     println!(
-        "{}: {}x{}, {} spp, max depth {}, {} triangles",
+        "{}: {}x{}, {} spp, max depth {}, {} triangles; BVH {} nodes, depth {}, built in {:.4} s",
         args.scene.scene.display(),
         opts.width,
         opts.height,
         opts.spp,
         opts.max_depth,
-        scene.triangles.len()
+        scene.triangles.len(),
+        bvh.nodes.len(),
+        bvh.depth(),
+        bvh_seconds
     );
     println!(
         "{:<8} {:>9} {:>10} {:>14} {:>14}  device",
@@ -74,6 +81,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "scene": args.scene.scene.display().to_string(),
             "width": opts.width, "height": opts.height, "spp": opts.spp,
             "max_depth": opts.max_depth, "triangles": scene.triangles.len(),
+            "bvh_nodes": bvh.nodes.len(), "bvh_depth": bvh.depth(),
+            "bvh_build_seconds": bvh_seconds,
             "backends": json, "gpu_over_cpu_samples_per_second": ratio,
         });
         let slot = json_slot;
