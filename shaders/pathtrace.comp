@@ -8,6 +8,7 @@
 // the rays traced to ray_counts.
 layout(local_size_x = 8, local_size_y = 8) in;
 
+#include "features.glsl"
 #include "bindings.glsl"
 #include "bvh.glsl"
 #include "bsdf/bsdf.glsl"
@@ -99,7 +100,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         rays += 1u;
         Hit hit;
         if (!bvh_intersect(ray_o, ray_d, GLINT_FLT_MAX, hit)) {
-            if (params.p_background > 0.0) {
+            if (HAS(F_BACKGROUND) && params.p_background > 0.0) {
                 float w = 1.0;
                 if (prev_mis) {
                     float lp = lights_background_pdf(prev_bg_normal, ray_d);
@@ -114,7 +115,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 wo = -ray_d;
 
         vec3 le;
-        if (floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, wo, le)) {
+        if (HAS(F_AREA_LIGHTS) && floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, wo, le)) {
             float w = 1.0;
             if (prev_mis) {
                 float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
@@ -124,7 +125,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         }
 
         // depth + 1 >= max_depth, saturating (max_depth 0xffffffff: never).
-        if (depth >= params.max_depth - 1u) {
+        if (!HAS(F_BOUNCES) || depth >= params.max_depth - 1u) {
             break;
         }
 
@@ -141,7 +142,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));
 
         bool lights_present = params.p_area + params.p_punctual + params.p_background > 0.0;
-        bool sample_lights = nee && lights_present && !bsdf_is_delta(m);
+        bool sample_lights = HAS(F_NEE) && nee && lights_present && !bsdf_is_delta(m);
         LightSample ls;
         if (sample_lights
             && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls)) {

@@ -6,6 +6,7 @@
 
 use std::time::Instant;
 
+use glint_cpu::features::Features;
 use glint_cpu::{Film, RenderOptions, Scene};
 
 /// Which renderer runs the path tracer.
@@ -26,11 +27,17 @@ impl Backend {
     }
 }
 
+pub use crate::gpu::render::KernelChoice;
+
 /// Options only the GPU backend reads.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct GpuOptions {
     /// Use the Vulkan device whose name contains this.
     pub device: Option<String>,
+    /// The kernel built for the scene's features, or the generic one.
+    pub kernel: KernelChoice,
+    /// Keep the driver's compiled pipelines in the user's cache folder.
+    pub pipeline_cache: bool,
 }
 
 /// A finished render on either backend.
@@ -48,6 +55,10 @@ pub struct BackendRender {
     pub device: String,
     pub driver: Option<String>,
     pub threads: Option<usize>,
+    /// GPU: the kernel that rendered.
+    pub kernel: Option<KernelChoice>,
+    /// What the scene uses (the GPU's specialized kernel is built for it).
+    pub features: Features,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -82,10 +93,21 @@ pub fn render(
                 device: cpu_device_name(threads),
                 driver: None,
                 threads: Some(threads),
+                kernel: None,
+                features: Features::of(scene, opts),
             }
         }
         Backend::Gpu => {
-            let r = crate::gpu::render(scene, opts, gpu.device.as_deref(), progress)?;
+            let config = crate::gpu::render::GpuConfig {
+                device: gpu.device.as_deref(),
+                kernel: gpu.kernel,
+                pipeline_cache: if gpu.pipeline_cache {
+                    crate::cache::pipeline_cache_path()
+                } else {
+                    None
+                },
+            };
+            let r = crate::gpu::render(scene, opts, &config, progress)?;
             BackendRender {
                 backend,
                 film: r.film,
@@ -95,6 +117,8 @@ pub fn render(
                 device: r.device,
                 driver: Some(r.driver),
                 threads: None,
+                kernel: Some(r.kernel),
+                features: Features::of(scene, opts),
             }
         }
     })

@@ -83,6 +83,24 @@ impl From<SamplerArg> for SamplerKind {
     }
 }
 
+/// `--kernel`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum KernelArg {
+    /// Built for the scene's features (Vulkan specialization constants).
+    Specialized,
+    /// The kernel that handles every scene.
+    Generic,
+}
+
+impl From<KernelArg> for glint::backend::KernelChoice {
+    fn from(k: KernelArg) -> Self {
+        match k {
+            KernelArg::Specialized => Self::Specialized,
+            KernelArg::Generic => Self::Generic,
+        }
+    }
+}
+
 /// Render options every verb shares (all but the scene, the sample count
 /// and the outputs). `to_args` writes them back as arguments, so converge
 /// can lay a variant's options over them: an option added here must be
@@ -129,6 +147,11 @@ pub struct RenderOpts {
     #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
     pub sampler: SamplerArg,
 
+    /// GPU: the kernel built for what the scene uses, or the one that
+    /// handles every scene.
+    #[arg(long, value_enum, default_value_t = KernelArg::Specialized)]
+    pub kernel: KernelArg,
+
     /// Stop at the last whole sample pass that fits this many seconds of
     /// sampling (--spp, when given, caps the samples; --stats reports the
     /// spp reached).
@@ -164,6 +187,7 @@ impl RenderOpts {
         push("nee", name(&|| self.nee.to_possible_value()));
         push("mis", name(&|| self.mis.to_possible_value()));
         push("sampler", name(&|| self.sampler.to_possible_value()));
+        push("kernel", name(&|| self.kernel.to_possible_value()));
         if let Some(t) = self.time_limit {
             push("time-limit", t.to_string());
         }

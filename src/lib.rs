@@ -3,5 +3,6 @@
 pub use glint_cpu as cpu;
 
 pub mod backend;
+pub mod cache;
 pub mod chart;
 pub mod gpu;

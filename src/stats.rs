@@ -26,6 +26,10 @@ pub struct Stats<'a> {
     pub rays: u64,
     /// The methods (nee, mis, sampler, time limit, sample range).
     pub options: &'a RenderOptions,
+    /// GPU: the kernel that rendered ("specialized" or "generic").
+    pub kernel: Option<&'static str>,
+    /// What the scene uses.
+    pub features: Vec<&'static str>,
 }
 
 impl Stats<'_> {
@@ -68,6 +72,10 @@ impl Stats<'_> {
         v["sample_start"] = json!(self.options.sample_start);
         if let Some(t) = self.options.time_limit {
             v["time_limit"] = json!(t);
+        }
+        v["features"] = json!(self.features);
+        if let Some(k) = self.kernel {
+            v["kernel"] = json!(k);
         }
         if let Some(d) = &self.driver {
             v["driver"] = json!(d);

@@ -8,6 +8,7 @@
 #ifndef GLINT_BSDF_BSDF_GLSL
 #define GLINT_BSDF_BSDF_GLSL
 
+#include "features.glsl"
 #include "bsdf/material.glsl"
 #include "bsdf/fresnel.glsl"
 #include "bsdf/microfacet.glsl"
@@ -27,8 +28,10 @@ struct BsdfSample {
     bool delta;   // sampled a Dirac lobe
 };
 
+// A kernel built without rough lobes (features.glsl) knows every lobe is
+// smooth, and drops the microfacet code.
 bool roughness_is_smooth(float alpha_u, float alpha_v) {
-    return max(alpha_u, alpha_v) < SMOOTH_ALPHA_THRESHOLD;
+    return !HAS(F_ROUGH) || max(alpha_u, alpha_v) < SMOOTH_ALPHA_THRESHOLD;
 }
 
 vec2 rough_alphas(Material m) {
@@ -36,7 +39,10 @@ vec2 rough_alphas(Material m) {
 }
 
 bool material_separable(Material m) {
-    return m.shadowing == SHADOWING_SEPARABLE;
+    if (!HAS(F_SMITH_CORRELATED)) {
+        return true;
+    }
+    return HAS(F_SMITH_SEPARABLE) && m.shadowing == SHADOWING_SEPARABLE;
 }
 
 // Mirror both directions to the upper hemisphere when wo is below it.
@@ -360,51 +366,60 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
 // ---------------------------------------------------------------- dispatch
 
 vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
-    if (m.kind == KIND_DIFFUSE) {
+    if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return diffuse_eval(m.reflectance.xyz, wo, wi);
-    } else if (m.kind == KIND_CONDUCTOR) {
+    } else if (HAS(F_CONDUCTOR) && m.kind == KIND_CONDUCTOR) {
         return conductor_eval(m, wo, wi);
-    } else if (m.kind == KIND_DIELECTRIC) {
+    } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_eval(m.eta.x, m, wo, wi);
     }
-    return metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+    if (HAS(F_METALLIC)) {
+        return metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+    }
+    return vec3(0.0);
 }
 
 float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
-    if (m.kind == KIND_DIFFUSE) {
+    if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return diffuse_pdf(wo, wi);
-    } else if (m.kind == KIND_CONDUCTOR) {
+    } else if (HAS(F_CONDUCTOR) && m.kind == KIND_CONDUCTOR) {
         return conductor_pdf(m, wo, wi);
-    } else if (m.kind == KIND_DIELECTRIC) {
+    } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_pdf(m.eta.x, m, wo, wi);
     }
-    return metallic_pdf(m.reflectance.w, m, wo, wi);
+    if (HAS(F_METALLIC)) {
+        return metallic_pdf(m.reflectance.w, m, wo, wi);
+    }
+    return 0.0;
 }
 
 bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
-    if (m.kind == KIND_DIFFUSE) {
+    if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return diffuse_sample(m.reflectance.xyz, wo, u, s);
-    } else if (m.kind == KIND_CONDUCTOR) {
+    } else if (HAS(F_CONDUCTOR) && m.kind == KIND_CONDUCTOR) {
         return conductor_sample(m, wo, u, s);
-    } else if (m.kind == KIND_DIELECTRIC) {
+    } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_sample(m.eta.x, m, wo, uc, u, s);
     }
-    return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
+    if (HAS(F_METALLIC)) {
+        return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
+    }
+    return false;
 }
 
 bool bsdf_is_delta(Material m) {
-    if (m.kind == KIND_DIFFUSE) {
+    if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return false;
-    } else if (m.kind == KIND_CONDUCTOR) {
+    } else if (HAS(F_CONDUCTOR) && m.kind == KIND_CONDUCTOR) {
         return roughness_is_smooth(m.alpha_u, m.alpha_v);
-    } else if (m.kind == KIND_DIELECTRIC) {
+    } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_is_smooth(m.eta.x, m);
     }
-    return m.reflectance.w >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
+    return HAS(F_METALLIC) && m.reflectance.w >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
 }
 
 bool bsdf_has_transmission(Material m) {
-    return m.kind == KIND_DIELECTRIC;
+    return HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC;
 }
 
 #endif

@@ -130,7 +130,7 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
     ls.pdf = 0.0;
     ls.delta = false;
     ls.at_infinity = false;
-    if (u_cat < params.p_area) {
+    if (HAS(F_AREA_LIGHTS) && u_cat < params.p_area) {
         uint i = sample_emitter_cdf(params.emitter_count, u_idx);
         Emitter e = emitters[i];
         Triangle t = triangles[e.tri];
@@ -157,13 +157,13 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         ls.weight = le / pdf;
         ls.pdf = pdf;
         return true;
-    } else if (u_cat < params.p_area + params.p_punctual) {
+    } else if ((HAS(F_POINT_SPOT) || HAS(F_DIRECTIONAL)) && u_cat < params.p_area + params.p_punctual) {
         uint n = params.light_count;
         uint i = min(uint(u_idx * float(n)), n - 1u);
         Light l = lights[i];
         float sel = params.p_punctual / float(n);
         vec3 li;
-        if (l.kind == LIGHT_DIRECTIONAL) {
+        if (!HAS(F_POINT_SPOT) || (HAS(F_DIRECTIONAL) && l.kind == LIGHT_DIRECTIONAL)) {
             ls.wi = -l.direction;
             ls.at_infinity = true;
             li = l.intensity;
@@ -187,7 +187,7 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         ls.weight = li / sel;
         ls.delta = true;
         return true;
-    } else if (params.p_background > 0.0) {
+    } else if (HAS(F_BACKGROUND) && params.p_background > 0.0) {
         vec3 wi;
         float dir_pdf;
         if (all(equal(bg_normal, vec3(0.0)))) {

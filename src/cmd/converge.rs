@@ -5,7 +5,7 @@
 //! equal-time view and the log-log chart are written to DIR.
 
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Parser;
@@ -212,18 +212,6 @@ pub fn markdown(title: &str, command: &str, rows: &[Row], variants: &[Variant]) 
     s
 }
 
-/// The folder references are cached in: `$GLINT_CACHE_DIR`, else
-/// `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`.
-pub fn cache_dir() -> Option<PathBuf> {
-    if let Some(d) = std::env::var_os("GLINT_CACHE_DIR") {
-        return Some(PathBuf::from(d));
-    }
-    if let Some(d) = std::env::var_os("XDG_CACHE_HOME").filter(|d| !d.is_empty()) {
-        return Some(PathBuf::from(d).join("glint"));
-    }
-    std::env::var_os("HOME").map(|h| PathBuf::from(h).join(".cache").join("glint"))
-}
-
 /// 64-bit FNV-1a: a stable content key (std's hasher may change between
 /// Rust releases, which would silently orphan every cached reference).
 struct Fnv(u64);
@@ -308,7 +296,7 @@ fn reference_image(
         ..base.clone()
     };
     let key = reference_key(scene, &opts);
-    let cached = cache_dir().map(|d| d.join("references").join(format!("{key}.exr")));
+    let cached = glint::cache::cache_dir().map(|d| d.join("references").join(format!("{key}.exr")));
     if let Some(c) = &cached
         && c.is_file()
     {

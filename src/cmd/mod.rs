@@ -120,10 +120,13 @@ pub fn check_scene_path(path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Load the scene.
+/// Load the scene, with the exact simplifications of
+/// `glint_cpu::features::simplify`.
 pub fn load(path: &Path) -> Result<Scene> {
     check_scene_path(path)?;
-    Ok(glint::cpu::loader::load(path)?)
+    let mut scene = glint::cpu::loader::load(path)?;
+    glint::cpu::features::simplify(&mut scene);
+    Ok(scene)
 }
 
 /// Settle the render options for `scene` (camera, image size, methods).
@@ -186,6 +189,8 @@ pub fn render_on(
     };
     let gpu = GpuOptions {
         device: ro.device.clone(),
+        kernel: ro.kernel.into(),
+        pipeline_cache: true,
     };
     let r = backend::render(backend, scene, opts, &gpu, &progress)
         .map_err(|e| anyhow!("{}: {e}", path.display()))?;

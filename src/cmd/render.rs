@@ -78,6 +78,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             render_seconds: r.render_seconds,
             rays: r.rays,
             options: &opts,
+            kernel: r.kernel.map(|k| k.name()),
+            features: r.features.names(),
         };
         outputs.write(slot, |w| {
             serde_json::to_writer_pretty(&mut *w, &st.to_json())?;

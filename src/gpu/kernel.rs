@@ -39,6 +39,16 @@ use super::GpuError;
 use super::buffer::{Buffer, BufferKind};
 use super::context::Context;
 
+/// How a kernel's pipeline is built.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct KernelOptions<'s> {
+    /// Values of the shader's specialization constants 0, 1, ... (4 bytes
+    /// each: `uint`, `int`, `float` or `bool` as a 32-bit value).
+    pub specialization: &'s [u32],
+    /// A pipeline cache to create through (null: none).
+    pub cache: vk::PipelineCache,
+}
+
 /// Workgroups needed to cover `n` items with `local_size` per group.
 pub fn groups(n: u32, local_size: u32) -> u32 {
     n.div_ceil(local_size.max(1))
@@ -81,6 +91,24 @@ impl<'a> Kernel<'a> {
         name: &str,
         bindings: &[BufferKind],
         push_constant_size: u32,
+    ) -> Result<Self, GpuError> {
+        Self::with_options(
+            ctx,
+            name,
+            bindings,
+            push_constant_size,
+            &KernelOptions::default(),
+        )
+    }
+
+    /// [`Kernel::with_bindings`] with specialization constants and a
+    /// pipeline cache.
+    pub fn with_options(
+        ctx: &'a Context,
+        name: &str,
+        bindings: &[BufferKind],
+        push_constant_size: u32,
+        options: &KernelOptions<'_>,
     ) -> Result<Self, GpuError> {
         let code =
             super::shaders::spirv(name).ok_or_else(|| GpuError::UnknownKernel(name.to_string()))?;
@@ -140,15 +168,31 @@ impl<'a> Kernel<'a> {
         }
         .map_err(|e| GpuError::from_vk("vkCreateShaderModule", e))?;
         let entry: &CStr = c"main";
-        let stage = vk::PipelineShaderStageCreateInfo::default()
+        // Constant i of the shader (`layout(constant_id = i)`) is the 4
+        // bytes options.specialization[i].
+        let map: Vec<vk::SpecializationMapEntry> = (0..options.specialization.len() as u32)
+            .map(|i| {
+                vk::SpecializationMapEntry::default()
+                    .constant_id(i)
+                    .offset(4 * i)
+                    .size(4)
+            })
+            .collect();
+        let data: &[u8] = bytemuck::cast_slice(options.specialization);
+        let spec = vk::SpecializationInfo::default()
+            .map_entries(&map)
+            .data(data);
+        let mut stage = vk::PipelineShaderStageCreateInfo::default()
             .stage(vk::ShaderStageFlags::COMPUTE)
             .module(module)
             .name(entry);
+        if !options.specialization.is_empty() {
+            stage = stage.specialization_info(&spec);
+        }
         let info = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
             .layout(kernel.pipeline_layout)];
-        let pipelines =
-            unsafe { device.create_compute_pipelines(vk::PipelineCache::null(), &info, None) };
+        let pipelines = unsafe { device.create_compute_pipelines(options.cache, &info, None) };
         unsafe { device.destroy_shader_module(module, None) };
         kernel.pipeline =
             pipelines.map_err(|(_, e)| GpuError::from_vk("vkCreateComputePipelines", e))?[0];

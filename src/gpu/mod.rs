@@ -9,6 +9,7 @@
 pub mod buffer;
 pub mod context;
 pub mod kernel;
+pub mod pipeline_cache;
 pub mod render;
 pub mod shaders;
 
@@ -17,7 +18,7 @@ use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 pub use buffer::{Buffer, BufferKind};
 pub use context::{Context, ContextDesc, DeviceInfo, Validation, ValidationLog};
-pub use kernel::{Kernel, groups};
+pub use kernel::{Kernel, KernelOptions, groups};
 
 #[derive(Debug, thiserror::Error)]
 pub enum GpuError {
@@ -102,16 +103,19 @@ pub struct GpuRender {
     pub driver: String,
     /// Instance, device, pipeline creation and scene upload.
     pub setup_seconds: f64,
+    /// Which kernel rendered, and the features it was built for.
+    pub kernel: render::KernelChoice,
+    pub features: glint_cpu::features::Features,
 }
 
-/// Render `scene` on the Vulkan device whose name contains `device` (or the
-/// best one: discrete, integrated, then CPU). `progress(done, total)` is
-/// called after each batch of samples.
+/// Render `scene` on the Vulkan device `config` names (or the best one:
+/// discrete, integrated, then CPU). `progress(done, total)` is called after
+/// each batch of samples.
 pub fn render(
     scene: &Scene,
     opts: &RenderOptions,
-    device: Option<&str>,
+    config: &render::GpuConfig<'_>,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
-    render::render(scene, opts, device, progress)
+    render::render(scene, opts, config, progress)
 }

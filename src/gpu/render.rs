@@ -19,12 +19,14 @@ use std::time::Instant;
 use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use glint_cpu::features::Features;
 use glint_cpu::integrator::{GpuSceneData, gpu_scene_data};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::buffer::{Buffer, BufferKind};
 use super::context::{Context, ContextDesc};
-use super::kernel::{Kernel, groups};
+use super::kernel::{Kernel, KernelOptions, groups};
+use super::pipeline_cache::PipelineCache;
 use super::{GpuError, GpuRender};
 
 /// Aim for dispatches of about this long: well under any watchdog, long
@@ -185,14 +187,25 @@ pub fn render_film(
         spp,
         time_limit: None,
     };
-    render_film_range(ctx, kernel_name, scene, width, height, range, progress)
+    let kernel = KernelConfig {
+        name: kernel_name,
+        options: KernelOptions::default(),
+    };
+    render_film_range(ctx, &kernel, scene, width, height, range, progress)
+}
+
+/// Which kernel renders, and how its pipeline is built.
+#[derive(Clone, Copy, Debug)]
+pub struct KernelConfig<'k> {
+    pub name: &'k str,
+    pub options: KernelOptions<'k>,
 }
 
 /// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
 /// of samples taken.
 pub fn render_film_range(
     ctx: &Context,
-    kernel_name: &str,
+    kernel_cfg: &KernelConfig<'_>,
     scene: &SceneBytes<'_>,
     width: u32,
     height: u32,
@@ -231,7 +244,7 @@ pub fn render_film_range(
 
     let mut bindings = vec![BufferKind::Uniform];
     bindings.extend([BufferKind::Storage; 8]);
-    let mut kernel = Kernel::with_bindings(ctx, kernel_name, &bindings, 8)?;
+    let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &kernel_cfg.options)?;
     kernel.bind(&[
         &params, &triangles, &nodes, &shading, &materials, &emitters, &lights, &accum, &rays,
     ])?;
@@ -332,6 +345,35 @@ pub fn render_film_range(
     })
 }
 
+/// Which path tracing kernel a render uses.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum KernelChoice {
+    /// Built for the scene's features (specialization constants).
+    #[default]
+    Specialized,
+    /// The kernel that handles every scene.
+    Generic,
+}
+
+impl KernelChoice {
+    pub fn name(self) -> &'static str {
+        match self {
+            KernelChoice::Specialized => "specialized",
+            KernelChoice::Generic => "generic",
+        }
+    }
+}
+
+/// GPU-only render settings.
+#[derive(Clone, Debug, Default)]
+pub struct GpuConfig<'a> {
+    /// The Vulkan device whose name contains this.
+    pub device: Option<&'a str>,
+    pub kernel: KernelChoice,
+    /// A persistent pipeline cache file (none: no cache).
+    pub pipeline_cache: Option<std::path::PathBuf>,
+}
+
 /// The whole GPU render behind `glint render --backend gpu`: context,
 /// upload, sampling, readback. Under `GLINT_VALIDATION` any validation
 /// error fails the render (after the context is destroyed, so leaks count),
@@ -339,18 +381,31 @@ pub fn render_film_range(
 pub fn render(
     scene: &Scene,
     opts: &RenderOptions,
-    device: Option<&str>,
+    config: &GpuConfig<'_>,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
     let start = Instant::now();
     let ctx = Context::new(&ContextDesc {
-        device,
+        device: config.device,
         ..Default::default()
     })?;
     let log = ctx.validation_log();
     let context_seconds = start.elapsed().as_secs_f64();
-    let mut r = render_on(&ctx, scene, opts, progress)?;
-    r.setup_seconds += context_seconds;
+    let r = {
+        let cache = match &config.pipeline_cache {
+            Some(p) => Some(PipelineCache::open(&ctx, p)?),
+            None => None,
+        };
+        let handle = cache
+            .as_ref()
+            .map_or(vk::PipelineCache::null(), |c| c.handle());
+        let mut r = render_with(&ctx, scene, opts, config.kernel, handle, progress)?;
+        r.setup_seconds += context_seconds;
+        if let Some(c) = &cache {
+            c.save();
+        }
+        r
+    };
     drop(ctx);
     if let Some(log) = log {
         if log.errors() > 0 {
@@ -361,32 +416,56 @@ pub fn render(
 }
 
 /// [`render`] on an existing context (tests share one validated context
-/// across scenes). `setup_seconds` covers scene preparation, upload and
-/// pipeline creation, not the context.
+/// across scenes), with the specialized kernel and no pipeline cache.
+/// `setup_seconds` covers scene preparation, upload and pipeline creation,
+/// not the context.
 pub fn render_on(
     ctx: &Context,
     scene: &Scene,
     opts: &RenderOptions,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
+    render_with(
+        ctx,
+        scene,
+        opts,
+        KernelChoice::Specialized,
+        vk::PipelineCache::null(),
+        progress,
+    )
+}
+
+/// [`render_on`] with a choice of kernel and a pipeline cache.
+pub fn render_with(
+    ctx: &Context,
+    scene: &Scene,
+    opts: &RenderOptions,
+    kernel: KernelChoice,
+    cache: vk::PipelineCache,
+    progress: &dyn Fn(u32, u32),
+) -> Result<GpuRender, GpuError> {
     let start = Instant::now();
     let data = gpu_scene_data(scene, opts).map_err(|e| GpuError::Invalid(e.to_string()))?;
     let bytes = SceneBytes::new(scene, &data);
+    let features = match kernel {
+        KernelChoice::Specialized => Features::of(scene, opts),
+        KernelChoice::Generic => Features::ALL,
+    };
     let prepare_seconds = start.elapsed().as_secs_f64();
     let range = SampleRange {
         start: opts.sample_start,
         spp: opts.spp,
         time_limit: opts.time_limit,
     };
-    let r = render_film_range(
-        ctx,
-        "pathtrace",
-        &bytes,
-        opts.width,
-        opts.height,
-        range,
-        progress,
-    )?;
+    let spec = [features.0];
+    let cfg = KernelConfig {
+        name: "pathtrace",
+        options: KernelOptions {
+            specialization: &spec,
+            cache,
+        },
+    };
+    let r = render_film_range(ctx, &cfg, &bytes, opts.width, opts.height, range, progress)?;
     let info = ctx.info();
     Ok(GpuRender {
         film: r.film,
@@ -394,5 +473,7 @@ pub fn render_on(
         device: info.name.clone(),
         driver: info.driver.clone(),
         setup_seconds: prepare_seconds + r.setup_seconds,
+        kernel,
+        features,
     })
 }
