@@ -122,6 +122,46 @@ pub fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
         .collect()
 }
 
+/// Rays leaving the surface, as a path's bounces do but without the
+/// integrator's offset: origins at random points of random triangles (so
+/// within rounding of the triangle's plane, on either side), directions
+/// uniform on the sphere, a tenth with one zero component, a quarter with a
+/// short tmax. The origin's own triangle may be hit at a tiny t or missed,
+/// depending on rounding: every traversal that shares the triangle test must
+/// decide it the same way.
+pub fn rays_from_surfaces(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
+    let (lo, hi) = bounds_of(tris);
+    let size = (hi - lo).length();
+    (0..count)
+        .map(|_| {
+            let t = &tris[rng.below(tris.len())];
+            let [a, b, c] = t.vertices();
+            let (mut u, mut v) = (rng.f(), rng.f());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let o = a + u * (b - a) + v * (c - a);
+            let mut d = rng.unit();
+            if rng.f() < 0.1 {
+                d[rng.below(3)] = 0.0;
+            }
+            if d == Vec3::ZERO || !d.is_finite() || !o.is_finite() {
+                return Ray {
+                    o: lo,
+                    d: Vec3::X,
+                    tmax: f32::INFINITY,
+                };
+            }
+            let tmax = if rng.f() < 0.25 {
+                rng.range(0.0, 0.2) * size
+            } else {
+                f32::INFINITY
+            };
+            Ray { o, d, tmax }
+        })
+        .collect()
+}
+
 /// The bunny's triangles in file order, positions only (repository copy,
 /// read by the loader without building its BVH).
 pub fn bunny() -> Vec<Triangle> {
