@@ -17,7 +17,9 @@ use glint_cpu::bvh::{
 use glint_cpu::{Bvh, Bvh4, Bvh4Node, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-use geometry::{Rng, bounds_of, bunny, grid_cube, random_rays, rays_from_surfaces, tri};
+use geometry::{
+    Rng, bounds_of, bunny, grid_cube, nasty_soup, random_rays, random_soup, rays_from_surfaces, tri,
+};
 
 /// Builds and applies the order, as `Scene::build_bvh` does.
 fn build(input: &[Triangle]) -> (Bvh, Vec<Triangle>, Vec<u32>) {
@@ -366,54 +368,6 @@ fn brute_any_t(tris: &[Triangle], ray: &Ray) -> Option<f32> {
     let r = PreparedRay::new(ray.o, ray.d);
     tris.iter()
         .find_map(|t| intersect_triangle(&r, t, ray.tmax).map(|h| h.0))
-}
-
-fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
-    (0..n)
-        .map(|_| {
-            let c = rng.vec_in(Vec3::ZERO, Vec3::ONE);
-            tri(
-                c + size * rng.unit(),
-                c + size * rng.unit(),
-                c + size * rng.unit(),
-            )
-        })
-        .collect()
-}
-
-/// A soup of the awkward cases: exact duplicates, zero-area triangles
-/// (repeated and collinear vertices), axis-aligned triangles sharing planes.
-fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
-    let mut tris = random_soup(rng, 400, 0.05);
-    for i in 0..100 {
-        let t = tris[i];
-        tris.push(t);
-    }
-    for _ in 0..100 {
-        let a = rng.vec_in(Vec3::ZERO, Vec3::ONE);
-        let b = rng.vec_in(Vec3::ZERO, Vec3::ONE);
-        tris.push(tri(a, a, b));
-        tris.push(tri(a, 0.5 * (a + b), b));
-        tris.push(tri(a, a, a));
-    }
-    for i in 0..8 {
-        for j in 0..8 {
-            let (x, y) = (i as f32 / 8.0, j as f32 / 8.0);
-            let s = 1.0 / 8.0;
-            let z = 0.5;
-            tris.push(tri(
-                Vec3::new(x, y, z),
-                Vec3::new(x + s, y, z),
-                Vec3::new(x, y + s, z),
-            ));
-            tris.push(tri(
-                Vec3::new(x + s, y, 0.25),
-                Vec3::new(x + s, y + s, 0.25),
-                Vec3::new(x, y + s, 0.25),
-            ));
-        }
-    }
-    tris
 }
 
 #[test]

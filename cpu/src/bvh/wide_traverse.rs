@@ -146,6 +146,22 @@ where
                     cur = node.child[mask.trailing_zeros() as usize];
                     continue;
                 }
+                let (near, far) = (
+                    mask.trailing_zeros() as usize,
+                    31 - mask.leading_zeros() as usize,
+                );
+                if mask.count_ones() == 2 {
+                    // sort4's answer for two hits, with one comparison.
+                    let (a, b) = if dist[far] < dist[near] {
+                        (far, near)
+                    } else {
+                        (near, far)
+                    };
+                    stack[sp] = (node.child[b], dist[b]);
+                    sp += 1;
+                    cur = node.child[a];
+                    continue;
+                }
                 let order = sort4(&dist);
                 for &s in order[1..mask.count_ones() as usize].iter().rev() {
                     stack[sp] = (node.child[s], dist[s]);
@@ -194,6 +210,21 @@ where
             if mask != 0 {
                 if mask.is_power_of_two() {
                     cur = node.child[mask.trailing_zeros() as usize];
+                    continue;
+                }
+                let (near, far) = (
+                    mask.trailing_zeros() as usize,
+                    31 - mask.leading_zeros() as usize,
+                );
+                if mask.count_ones() == 2 {
+                    let (a, b) = if dist[far] < dist[near] {
+                        (far, near)
+                    } else {
+                        (near, far)
+                    };
+                    stack[sp] = node.child[b];
+                    sp += 1;
+                    cur = node.child[a];
                     continue;
                 }
                 let order = sort4(&dist);
