@@ -3,7 +3,7 @@
 //
 //   binding 0  uniform Params          glint_cpu::integrator::GpuParams (std140, 144 B)
 //   binding 1  Triangle triangles[]    glint_cpu::Triangle (48 B), BVH leaf order
-//   binding 2  BvhNode bvh_nodes[]     glint_cpu::BvhNode (32 B)
+//   binding 2  Bvh4Node bvh_nodes[]    glint_cpu::Bvh4Node (128 B), the 4-wide BVH
 //   binding 3  TriangleShading shading[]  glint_cpu::TriangleShading (96 B)
 //   binding 4  Material materials[]    glint_cpu::GpuMaterial (96 B)
 //   binding 5  Emitter emitters[]      glint_cpu::lights::GpuEmitter (16 B), emitter order
@@ -75,7 +75,7 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
 } params;
 
 layout(std430, set = 0, binding = 1) readonly buffer TriangleBuffer { Triangle triangles[]; };
-layout(std430, set = 0, binding = 2) readonly buffer BvhNodeBuffer { BvhNode bvh_nodes[]; };
+layout(std430, set = 0, binding = 2) readonly buffer BvhNodeBuffer { Bvh4Node bvh_nodes[]; };
 layout(std430, set = 0, binding = 3) readonly buffer ShadingBuffer { TriangleShading shading[]; };
 layout(std430, set = 0, binding = 4) readonly buffer MaterialBuffer { Material materials[]; };
 layout(std430, set = 0, binding = 5) readonly buffer EmitterBuffer { Emitter emitters[]; };

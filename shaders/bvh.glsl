@@ -1,9 +1,15 @@
-// BVH traversal: the GLSL mirror of glint_cpu::bvh (cpu/src/bvh/traverse.rs),
-// function for function under the same names, so a CPU/GPU difference can be
-// pinned to one of them by a kernel test (shaders/tests/bvh_test.comp).
+// BVH traversal: the GLSL mirror of glint_cpu::bvh (cpu/src/bvh/traverse.rs
+// and wide_traverse.rs), function for function under the same names, so a
+// CPU/GPU difference can be pinned to one of them by a kernel test
+// (shaders/tests/bvh_test.comp, bvh2_test.comp).
+//
+// bvh_intersect / bvh_occluded traverse the 4-wide BVH (glint_cpu::Bvh4,
+// what renders use); with BVH_BINARY defined, the binary one (glint_cpu::Bvh,
+// kept as the reference the wide one is measured and tested against).
 //
 // The including kernel must, BEFORE including this file, declare
-//   - a buffer array `BvhNode bvh_nodes[]` (include "bvh_types.glsl" first),
+//   - a buffer array `Bvh4Node bvh_nodes[]` (`BvhNode bvh_nodes[]` with
+//     BVH_BINARY; include "bvh_types.glsl" first),
 //   - a buffer array `Triangle triangles[]`, in the BVH's leaf order,
 //   - `#define BVH_NODE_COUNT <expression>`: the number of nodes; 0 for an
 //     empty scene (Vulkan buffers cannot be empty, so the array's length
@@ -149,6 +155,10 @@ bool intersect_triangle(PreparedRay r, Triangle tri, float tmax, out float t, ou
     return true;
 }
 
+#ifdef BVH_BINARY
+
+// The binary BVH (cpu/src/bvh/traverse.rs).
+
 // Closest hit in (0, tmax): front-to-back, nearer child first and the other
 // pushed, the interval shrinking to the best hit so far.
 bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
@@ -258,5 +268,182 @@ bool bvh_occluded(vec3 o, vec3 d, float tmax) {
     }
     return false;
 }
+
+#else
+
+// The 4-wide BVH (cpu/src/bvh/wide_traverse.rs).
+
+// glint_cpu::bvh::WIDE_STACK_SIZE: a node visited pushes at most 3 children,
+// and at most MAX_WIDE_DEPTH + 1 = 24 nodes lie on a path.
+#define BVH4_STACK_SIZE 72
+#define BVH4_SLOT_EMPTY 0xffffffffu
+#define BVH4_LEAF_BIT 0x80000000u
+#define BVH4_LEAF_FIRST_MASK 0x07ffffffu
+
+// intersect_aabb for the four child boxes at once, lane i computing exactly
+// what intersect_aabb computes for slot i's box: the entry distance, or
+// BVH_INF for a missed box or an empty slot.
+vec4 intersect_aabb4(PreparedRay r, Bvh4Node n, float tmax) {
+    vec4 t1x = (n.lo_x - r.o.x) * r.inv_d.x;
+    vec4 t2x = (n.hi_x - r.o.x) * r.inv_d.x;
+    vec4 t1y = (n.lo_y - r.o.y) * r.inv_d.y;
+    vec4 t2y = (n.hi_y - r.o.y) * r.inv_d.y;
+    vec4 t1z = (n.lo_z - r.o.z) * r.inv_d.z;
+    vec4 t2z = (n.hi_z - r.o.z) * r.inv_d.z;
+    vec4 tlox = min(t1x, t2x), thix = max(t1x, t2x);
+    vec4 tloy = min(t1y, t2y), thiy = max(t1y, t2y);
+    vec4 tloz = min(t1z, t2z), thiz = max(t1z, t2z);
+    // 1 in a lane whose box misses because the origin lies outside the slab
+    // of an axis along which d is exactly zero (see intersect_aabb); such an
+    // axis then bounds nothing.
+    uvec4 outside = uvec4(0u);
+    if (any(r.zero_d)) {
+        if (r.zero_d.x) {
+            outside |= uvec4(lessThan(vec4(r.o.x), n.lo_x)) | uvec4(greaterThan(vec4(r.o.x), n.hi_x));
+            tlox = vec4(-BVH_INF);
+            thix = vec4(BVH_INF);
+        }
+        if (r.zero_d.y) {
+            outside |= uvec4(lessThan(vec4(r.o.y), n.lo_y)) | uvec4(greaterThan(vec4(r.o.y), n.hi_y));
+            tloy = vec4(-BVH_INF);
+            thiy = vec4(BVH_INF);
+        }
+        if (r.zero_d.z) {
+            outside |= uvec4(lessThan(vec4(r.o.z), n.lo_z)) | uvec4(greaterThan(vec4(r.o.z), n.hi_z));
+            tloz = vec4(-BVH_INF);
+            thiz = vec4(BVH_INF);
+        }
+    }
+    vec4 tnear = max(max(max(tlox, tloy), tloz), vec4(0.0));
+    vec4 tfar = min(min(min(thix, thiy), thiz), vec4(tmax)) * BVH_SLAB_PAD;
+    uvec4 hit = uvec4(lessThanEqual(tnear, tfar)) & uvec4(lessThan(tnear, vec4(BVH_INF))) &
+                uvec4(notEqual(n.child, uvec4(BVH4_SLOT_EMPTY))) & (uvec4(1u) - outside);
+    return mix(vec4(BVH_INF), tnear, bvec4(hit));
+}
+
+// One compare-exchange of sort4's network, on (distance, slot).
+#define BVH4_CX(a, b)                                         \
+    if (k.b < k.a || (k.b == k.a && o.b < o.a)) {             \
+        float tk = k.a;                                       \
+        k.a = k.b;                                            \
+        k.b = tk;                                             \
+        uint to = o.a;                                        \
+        o.a = o.b;                                            \
+        o.b = to;                                             \
+    }
+
+// The slots in order of (distance, slot): misses (BVH_INF) last, ties to the
+// lower slot; the same five compare-exchanges as the Rust.
+uvec4 sort4(vec4 dist) {
+    vec4 k = dist;
+    uvec4 o = uvec4(0u, 1u, 2u, 3u);
+    BVH4_CX(x, y)
+    BVH4_CX(z, w)
+    BVH4_CX(x, z)
+    BVH4_CX(y, w)
+    BVH4_CX(y, z)
+    return o;
+}
+
+// Closest hit in (0, tmax): children nearest first, the others on the stack
+// with their entry distance, dropped when popped if the best hit has moved in
+// front of them (the box test's own criterion).
+bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
+    hit = Hit(tmax, BVH_NO_HIT, 0.0, 0.0);
+    if (uint(BVH_NODE_COUNT) == 0u) {
+        return false;
+    }
+    PreparedRay r = prepare_ray(o, d);
+    uint stack_ref[BVH4_STACK_SIZE];
+    float stack_t[BVH4_STACK_SIZE];
+    uint sp = 0u;
+    uint cur = 0u;
+    while (true) {
+        if ((cur & BVH4_LEAF_BIT) != 0u) {
+            uint first = cur & BVH4_LEAF_FIRST_MASK;
+            uint count = ((cur >> 27) & 0xfu) + 1u;
+            for (uint i = first; i < first + count; i++) {
+                float t, u, v;
+                if (intersect_triangle(r, triangles[i], hit.t, t, u, v)) {
+                    hit = Hit(t, i, u, v);
+                }
+            }
+        } else {
+            Bvh4Node n = bvh_nodes[cur];
+            vec4 dist = intersect_aabb4(r, n, hit.t);
+            uvec4 hits = uvec4(lessThan(dist, vec4(BVH_INF)));
+            uint count = hits.x + hits.y + hits.z + hits.w;
+            if (count > 0u) {
+                uvec4 order = sort4(dist);
+                for (uint k = count - 1u; k >= 1u; k--) {
+                    stack_ref[sp] = n.child[order[k]];
+                    stack_t[sp] = dist[order[k]];
+                    sp++;
+                }
+                cur = n.child[order.x];
+                continue;
+            }
+        }
+        bool next = false;
+        while (sp > 0u) {
+            sp--;
+            if (stack_t[sp] <= hit.t * BVH_SLAB_PAD) {
+                cur = stack_ref[sp];
+                next = true;
+                break;
+            }
+        }
+        if (!next) {
+            break;
+        }
+    }
+    return hit.tri != BVH_NO_HIT;
+}
+
+// Any hit in (0, tmax): the first triangle hit ends the search; children
+// still nearest first.
+bool bvh_occluded(vec3 o, vec3 d, float tmax) {
+    if (uint(BVH_NODE_COUNT) == 0u) {
+        return false;
+    }
+    PreparedRay r = prepare_ray(o, d);
+    uint stack_ref[BVH4_STACK_SIZE];
+    uint sp = 0u;
+    uint cur = 0u;
+    while (true) {
+        if ((cur & BVH4_LEAF_BIT) != 0u) {
+            uint first = cur & BVH4_LEAF_FIRST_MASK;
+            uint count = ((cur >> 27) & 0xfu) + 1u;
+            for (uint i = first; i < first + count; i++) {
+                float t, u, v;
+                if (intersect_triangle(r, triangles[i], tmax, t, u, v)) {
+                    return true;
+                }
+            }
+        } else {
+            Bvh4Node n = bvh_nodes[cur];
+            vec4 dist = intersect_aabb4(r, n, tmax);
+            uvec4 hits = uvec4(lessThan(dist, vec4(BVH_INF)));
+            uint count = hits.x + hits.y + hits.z + hits.w;
+            if (count > 0u) {
+                uvec4 order = sort4(dist);
+                for (uint k = count - 1u; k >= 1u; k--) {
+                    stack_ref[sp] = n.child[order[k]];
+                    sp++;
+                }
+                cur = n.child[order.x];
+                continue;
+            }
+        }
+        if (sp == 0u) {
+            return false;
+        }
+        sp--;
+        cur = stack_ref[sp];
+    }
+    return false;
+}
+
+#endif
 
 #endif

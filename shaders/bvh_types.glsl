@@ -1,5 +1,6 @@
 // The scene structs BVH traversal reads, mirrors of glint_cpu::bvh::BvhNode
-// (32 B) and glint_cpu::scene::Triangle (48 B) in std430. Kept apart from
+// (32 B), glint_cpu::bvh::Bvh4Node (128 B) and glint_cpu::scene::Triangle
+// (48 B) in std430. Kept apart from
 // bvh.glsl so a kernel can declare its buffers of these types first, then
 // include bvh.glsl (which needs those buffers).
 #ifndef GLINT_BVH_TYPES_GLSL
@@ -12,6 +13,24 @@
 struct BvhNode {
     vec4 min_left;
     vec4 max_count;
+};
+
+// glint_cpu::bvh::Bvh4Node: the 4-wide node, one coordinate of the four
+// child boxes per vec4 (slot i's box: (lo_x[i], lo_y[i], lo_z[i]) ..
+// (hi_x[i], hi_y[i], hi_z[i])). child[i]: a node index (bit 31 clear), a leaf
+// (bit 31 set; bits 0..27 first triangle, bits 27..31 count - 1) or
+// 0xffffffff, an empty slot (always after the used ones). Node 0 is the root.
+// pad is zero. Pinned to the Rust layout by tests/gpu_bvh.rs
+// (shaders/tests/bvh4_layout.comp).
+struct Bvh4Node {
+    vec4 lo_x;
+    vec4 hi_x;
+    vec4 lo_y;
+    vec4 hi_y;
+    vec4 lo_z;
+    vec4 hi_z;
+    uvec4 child;
+    uvec4 pad;
 };
 
 // World-space vertices; .w of p0, p1, p2 hold the material index, the

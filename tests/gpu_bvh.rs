@@ -1,26 +1,50 @@
-//! shaders/bvh.glsl through shaders/tests/bvh_test.comp against the CPU
-//! traversal (glint_cpu::bvh) on the bunny, under the validation layer.
+//! shaders/bvh.glsl through the kernel tests against the CPU traversals
+//! (glint_cpu::bvh), under the validation layer: the 4-wide traversal
+//! (`tests/bvh_test`, what renders use) and the binary one (`tests/bvh2_test`,
+//! the reference), on the bunny, degenerate soups and closed meshes; the
+//! `Bvh4Node` layout pinned by `tests/bvh4_layout`; and the throughput of
+//! both kernels in one run (printed, never asserted).
 //!
-//! Tolerance: the GLSL mirrors the Rust step by step, and `precise` keeps the
-//! edge functions free of FMA, but Vulkan only requires division to 2.5 ulp,
-//! and the shear constants, reciprocals and t are quotients. A one-ulp
-//! difference in the shear moves the sheared vertices by an ulp, which can
-//! flip a ray passing within rounding of an edge to the neighbouring triangle
-//! (same t to a few ulps), or, at the silhouette, from a grazing hit to a
-//! miss. Such rays are a tiny fraction of random rays (each needs the ray to
-//! pass within ~1e-7 relative of an edge): at most 1 in 10^4 may differ, and
-//! every other ray must report the same triangle with t within 1e-5
-//! relative and the same occlusion.
+//! Tolerance against the CPU: the GLSL mirrors the Rust step by step, and
+//! `precise` keeps the edge functions free of FMA, but Vulkan only requires
+//! division to 2.5 ulp, and the shear constants, reciprocals and t are
+//! quotients. A one-ulp difference in the shear moves the sheared vertices by
+//! an ulp, which can flip a ray passing within rounding of an edge to the
+//! neighbouring triangle (same t to a few ulps), or, at the silhouette, from a
+//! grazing hit to a miss. Such rays are a tiny fraction of random rays (each
+//! needs the ray to pass within ~1e-7 relative of an edge): at most 1 in 10^4
+//! may differ, and every other ray must report the same triangle (or an exact
+//! duplicate of it) with t within 1e-5 relative and the same occlusion.
+//! Between the two GPU kernels, which share the triangle test, the closest
+//! hit must be the same exactly, as on the CPU.
 
 mod common;
 #[path = "../cpu/tests/support/geometry.rs"]
 mod geometry;
 
+use std::time::Instant;
+
 use glam::Vec3;
-use glint::cpu::{Bvh, Ray, Triangle};
+use glint::cpu::{Bvh, Bvh4, Ray, Triangle};
 use glint::gpu::groups;
 
-use geometry::{Rng, bunny, grid_cube, random_rays};
+use geometry::{
+    Rng, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays, random_soup,
+    rays_from_surfaces,
+};
+
+/// Which traversal a kernel runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Binary,
+    Wide,
+}
+const KINDS: [Kind; 2] = [Kind::Binary, Kind::Wide];
+
+/// Closest hit, any hit, or both per ray (the kernel's `mode`).
+const CLOSEST: u32 = 1;
+const ANY: u32 = 2;
+const BOTH: u32 = CLOSEST | ANY;
 
 struct GpuResult {
     /// (t, tri, u, v); tri = u32::MAX for a miss.
@@ -28,19 +52,45 @@ struct GpuResult {
     occluded: Vec<u32>,
 }
 
-fn run_gpu(ctx: &glint::gpu::Context, bvh: &Bvh, tris: &[Triangle], rays: &[Ray]) -> GpuResult {
+/// A triangle soup, reordered into leaf order, with both hierarchies.
+struct Built {
+    bin: Bvh,
+    wide: Bvh4,
+    tris: Vec<Triangle>,
+}
+
+fn build(input: &[Triangle]) -> Built {
+    let (bin, order) = Bvh::build(input);
+    let wide = Bvh4::collapse(&bin);
+    let tris = order.iter().map(|&i| input[i as usize]).collect();
+    Built { bin, wide, tris }
+}
+
+fn run_gpu(ctx: &glint::gpu::Context, b: &Built, kind: Kind, rays: &[Ray], mode: u32) -> GpuResult {
     let packed: Vec<[f32; 8]> = rays
         .iter()
         .map(|r| [r.o.x, r.o.y, r.o.z, r.tmax, r.d.x, r.d.y, r.d.z, 0.0])
         .collect();
     let mut hits = vec![[0u32; 4]; rays.len()];
     let mut occluded = vec![7u32; rays.len()];
-    let push = [rays.len() as u32, bvh.nodes.len() as u32];
+    let (kernel, nodes, count): (_, &[u8], _) = match kind {
+        Kind::Binary => (
+            "tests/bvh2_test",
+            bytemuck::cast_slice(&b.bin.nodes),
+            b.bin.nodes.len(),
+        ),
+        Kind::Wide => (
+            "tests/bvh_test",
+            bytemuck::cast_slice(&b.wide.nodes),
+            b.wide.nodes.len(),
+        ),
+    };
+    let push = [rays.len() as u32, count as u32, mode];
     ctx.run_kernel(
-        "tests/bvh_test",
+        kernel,
         &[
-            bytemuck::cast_slice(&bvh.nodes),
-            bytemuck::cast_slice(tris),
+            nodes,
+            bytemuck::cast_slice(&b.tris),
             bytemuck::cast_slice(&packed),
         ],
         &mut [
@@ -50,99 +100,202 @@ fn run_gpu(ctx: &glint::gpu::Context, bvh: &Bvh, tris: &[Triangle], rays: &[Ray]
         bytemuck::bytes_of(&push),
         [groups(rays.len() as u32, 64), 1, 1],
     )
-    .expect("bvh_test kernel");
+    .expect("bvh kernel");
     GpuResult { hits, occluded }
 }
 
-#[test]
-fn gpu_traversal_matches_cpu_on_bunny() {
-    let ctx = common::context();
-    let input = bunny();
-    let (bvh, order) = Bvh::build(&input);
-    let tris: Vec<Triangle> = order.iter().map(|&i| input[i as usize]).collect();
-    let mut rng = Rng(0x5eed);
-    let rays = random_rays(&tris, 100_000, &mut rng);
-    let gpu = run_gpu(&ctx, &bvh, &tris, &rays);
-    // Informative only: a second, warm run (pipeline compiled and cached),
-    // upload and readback included; each ray is traced twice (closest, any).
-    let start = std::time::Instant::now();
-    let again = run_gpu(&ctx, &bvh, &tris, &rays);
-    eprintln!(
-        "bvh_test kernel on {}: {:.2} M(closest + any-hit) rays/s, warm, with transfers",
-        ctx.info().name,
-        rays.len() as f64 / start.elapsed().as_secs_f64() / 1e6
-    );
-    assert!(
-        again.hits == gpu.hits && again.occluded == gpu.occluded,
-        "not deterministic"
-    );
+#[derive(Debug, Default)]
+struct Counts {
+    hits: usize,
+    edge_swaps: usize,
+    hit_miss: usize,
+    occl_diff: usize,
+}
 
-    let (mut hits, mut edge_swaps, mut hit_miss, mut occl_diff) = (0, 0, 0, 0);
+/// GPU results against the CPU wide traversal (equal to the binary one, as
+/// cpu/tests/bvh.rs proves), with the tolerance the module comment explains.
+fn compare_with_cpu(name: &str, b: &Built, rays: &[Ray], gpu: &GpuResult) -> Counts {
+    let mut c = Counts::default();
     for (i, ray) in rays.iter().enumerate() {
-        let cpu = bvh.intersect(&tris, ray);
+        let cpu = b.wide.intersect(&b.tris, ray);
         let [t, tri, u, v] = gpu.hits[i];
         let (t, u, v) = (f32::from_bits(t), f32::from_bits(u), f32::from_bits(v));
         match cpu {
-            Some(c) if tri == c.tri => {
-                hits += 1;
+            Some(h) if tri == h.tri => {
+                c.hits += 1;
                 assert!(
-                    (t - c.t).abs() <= 1e-5 * c.t,
-                    "ray {i} {ray:?}: gpu t {t}, cpu {c:?}"
+                    (t - h.t).abs() <= 1e-5 * h.t,
+                    "{name} ray {i} {ray:?}: gpu t {t}, cpu {h:?}"
                 );
                 assert!(
-                    (u - c.u).abs() <= 1e-4 && (v - c.v).abs() <= 1e-4,
-                    "ray {i} {ray:?}: gpu (u, v) ({u}, {v}), cpu {c:?}"
+                    (u - h.u).abs() <= 1e-4 && (v - h.v).abs() <= 1e-4,
+                    "{name} ray {i} {ray:?}: gpu (u, v) ({u}, {v}), cpu {h:?}"
                 );
             }
-            Some(c) if tri != u32::MAX => {
-                // Another triangle: only legitimate at a shared edge, where
-                // both triangles are hit at the same distance.
+            Some(h) if tri != u32::MAX => {
+                // Another triangle: only legitimate at a shared edge or on an
+                // exact duplicate, where both are hit at the same distance.
                 assert!(
-                    (t - c.t).abs() <= 1e-5 * c.t,
-                    "ray {i} {ray:?}: gpu tri {tri} at {t}, cpu {c:?}"
+                    (t - h.t).abs() <= 1e-5 * h.t,
+                    "{name} ray {i} {ray:?}: gpu tri {tri} at {t}, cpu {h:?}"
                 );
-                edge_swaps += 1;
+                if b.tris[tri as usize].vertices() == b.tris[h.tri as usize].vertices() {
+                    c.hits += 1;
+                } else {
+                    c.edge_swaps += 1;
+                }
             }
             None if tri == u32::MAX => {}
-            _ => hit_miss += 1,
+            _ => c.hit_miss += 1,
         }
-        let cpu_occluded = bvh.occluded(&tris, ray);
-        assert!(gpu.occluded[i] <= 1, "ray {i}: occluded flag not written");
-        if (gpu.occluded[i] == 1) != cpu_occluded {
-            occl_diff += 1;
+        assert!(
+            gpu.occluded[i] <= 1,
+            "{name} ray {i}: occluded flag not written"
+        );
+        if (gpu.occluded[i] == 1) != b.wide.occluded(&b.tris, ray) {
+            c.occl_diff += 1;
+        }
+    }
+    eprintln!("{name}, {} rays: {c:?}", rays.len());
+    let allowed = rays.len() / 10_000;
+    assert!(
+        c.edge_swaps + c.hit_miss <= allowed && c.occl_diff <= allowed,
+        "{name}: more than {allowed} rays differ: {c:?}"
+    );
+    c
+}
+
+/// The wide kernel against the binary kernel: the same closest hit exactly
+/// (or another triangle at exactly the same distance), the same occlusion
+/// except for a hit within rounding of tmax.
+fn compare_kernels(name: &str, b: &Built, rays: &[Ray], wide: &GpuResult, bin: &GpuResult) {
+    let mut ties = 0;
+    for (i, ray) in rays.iter().enumerate() {
+        let (w, r) = (wide.hits[i], bin.hits[i]);
+        if w[1] != r[1] {
+            assert!(
+                w[0] == r[0] && w[1] != u32::MAX && r[1] != u32::MAX,
+                "{name} ray {i} {ray:?}: wide {w:?}, binary {r:?}"
+            );
+            ties += 1;
+        } else {
+            assert_eq!(w, r, "{name} ray {i} {ray:?}");
+        }
+        if wide.occluded[i] != bin.occluded[i] {
+            let near_tmax = b
+                .wide
+                .intersect(&b.tris, ray)
+                .is_some_and(|h| (h.t - ray.tmax).abs() <= 1e-5 * ray.tmax);
+            assert!(near_tmax, "{name} ray {i} {ray:?}: occlusion differs");
         }
     }
     eprintln!(
-        "gpu vs cpu, {} rays: {hits} identical hits, {edge_swaps} edge swaps, \
-         {hit_miss} hit/miss differences, {occl_diff} occlusion differences",
+        "{name}: wide and binary kernels agree on {} rays ({ties} exact ties)",
         rays.len()
     );
-    assert!(hits > rays.len() / 3, "too few hits ({hits}) to prove much");
-    let allowed = rays.len() / 10_000;
+}
+
+/// 10^5 random rays against the bunny: both kernels against the CPU and
+/// against each other.
+#[test]
+fn gpu_traversal_matches_cpu_on_bunny() {
+    let ctx = common::context();
+    let b = build(&bunny());
+    let mut rng = Rng(0x5eed);
+    let rays = random_rays(&b.tris, 100_000, &mut rng);
+    let wide = run_gpu(&ctx, &b, Kind::Wide, &rays, BOTH);
+    let again = run_gpu(&ctx, &b, Kind::Wide, &rays, BOTH);
     assert!(
-        edge_swaps + hit_miss <= allowed && occl_diff <= allowed,
-        "more than {allowed} rays differ"
+        again.hits == wide.hits && again.occluded == wide.occluded,
+        "not deterministic"
     );
+    let bin = run_gpu(&ctx, &b, Kind::Binary, &rays, BOTH);
+    let c = compare_with_cpu("bunny wide", &b, &rays, &wide);
+    assert!(
+        c.hits > rays.len() / 3,
+        "too few hits ({}) to prove much",
+        c.hits
+    );
+    compare_with_cpu("bunny binary", &b, &rays, &bin);
+    compare_kernels("bunny", &b, &rays, &wide, &bin);
     eprintln!("validation layer active: {}", ctx.validated());
     let messages = ctx.finish();
     assert!(messages.is_empty(), "validation: {messages:?}");
 }
 
-/// Watertightness on the GPU: from inside a closed grid cube, rays at every
-/// grid vertex and edge midpoint, and axis-aligned rays along the grid lines
-/// (zero direction components, origins on box faces), must all hit, at the
-/// distance the CPU finds.
+/// Degenerate soups (duplicates, zero-area triangles, shared planes, slivers)
+/// with random rays (zero direction components, short tmax), and rays that
+/// start on the triangles: both kernels against the CPU and each other.
+/// Rays leaving a surface decide the origin's own triangle by rounding, so
+/// they are compared between the kernels (same triangle test), not with the
+/// CPU.
+#[test]
+fn gpu_traversal_on_degenerate_soups_and_surface_rays() {
+    let ctx = common::context();
+    let mut rng = Rng(0xd1ce);
+    let soups = [
+        ("nasty", nasty_soup(&mut rng)),
+        ("small", random_soup(&mut rng, 3000, 0.04)),
+        ("slivers", random_soup(&mut rng, 300, 0.6)),
+        ("bunny", bunny()),
+    ];
+    for (name, soup) in soups {
+        let b = build(&soup);
+        if name != "bunny" {
+            let rays = random_rays(&b.tris, 20_000, &mut rng);
+            let wide = run_gpu(&ctx, &b, Kind::Wide, &rays, BOTH);
+            let bin = run_gpu(&ctx, &b, Kind::Binary, &rays, BOTH);
+            compare_with_cpu(&format!("{name} wide"), &b, &rays, &wide);
+            compare_with_cpu(&format!("{name} binary"), &b, &rays, &bin);
+            compare_kernels(name, &b, &rays, &wide, &bin);
+        }
+        let rays = rays_from_surfaces(&b.tris, 20_000, &mut rng);
+        let wide = run_gpu(&ctx, &b, Kind::Wide, &rays, BOTH);
+        let bin = run_gpu(&ctx, &b, Kind::Binary, &rays, BOTH);
+        compare_kernels(&format!("{name} from surfaces"), &b, &rays, &wide, &bin);
+    }
+    let messages = ctx.finish();
+    assert!(messages.is_empty(), "validation: {messages:?}");
+}
+
+/// `Bvh4Node` in GLSL reads the bytes of `glint_cpu::bvh::Bvh4Node` field by
+/// field: each node's fields, named in GLSL, come back in the Rust order.
+#[test]
+fn gpu_bvh4_layout_matches_rust() {
+    let ctx = common::context();
+    let b = build(&bunny());
+    let nodes = &b.wide.nodes;
+    let mut words = vec![0u32; nodes.len() * 32];
+    ctx.run_kernel(
+        "tests/bvh4_layout",
+        &[bytemuck::cast_slice(nodes)],
+        &mut [bytemuck::cast_slice_mut(&mut words)],
+        bytemuck::bytes_of(&(nodes.len() as u32)),
+        [groups(nodes.len() as u32, 64), 1, 1],
+    )
+    .expect("bvh4_layout kernel");
+    let want: &[u32] = bytemuck::cast_slice(nodes);
+    assert_eq!(words.len(), want.len());
+    for (i, (g, w)) in words.chunks(32).zip(want.chunks(32)).enumerate() {
+        assert_eq!(g, w, "node {i}: {:?}", nodes[i]);
+    }
+    let messages = ctx.finish();
+    assert!(messages.is_empty(), "validation: {messages:?}");
+}
+
+/// Watertightness on the GPU, both kernels: from inside a closed grid cube,
+/// rays at every grid vertex and edge midpoint, and axis-aligned rays along
+/// the grid lines (zero direction components, origins on box faces), must all
+/// hit, at the distance the CPU finds.
 #[test]
 fn gpu_closed_cube_does_not_leak() {
     let ctx = common::context();
     let n = 8;
-    let (bvh, order) = Bvh::build(&grid_cube(n));
-    let cube = grid_cube(n);
-    let tris: Vec<Triangle> = order.iter().map(|&i| cube[i as usize]).collect();
+    let b = build(&grid_cube(n));
     let coord = |i: usize| -1.0 + 2.0 * i as f32 / n as f32;
     let mut rays = Vec::new();
     let mut targets = Vec::new();
-    for t in &tris {
+    for t in &b.tris {
         let v = t.vertices();
         for k in 0..3 {
             targets.push(v[k]);
@@ -181,24 +334,27 @@ fn gpu_closed_cube_does_not_leak() {
             }
         }
     }
-    let gpu = run_gpu(&ctx, &bvh, &tris, &rays);
-    let mut leaks = 0;
-    for (i, ray) in rays.iter().enumerate() {
-        let [t, tri, _, _] = gpu.hits[i];
-        if tri == u32::MAX || gpu.occluded[i] != 1 {
-            leaks += 1;
-            continue;
+    for kind in KINDS {
+        let gpu = run_gpu(&ctx, &b, kind, &rays, BOTH);
+        let mut leaks = 0;
+        for (i, ray) in rays.iter().enumerate() {
+            let [t, tri, _, _] = gpu.hits[i];
+            if tri == u32::MAX || gpu.occluded[i] != 1 {
+                leaks += 1;
+                continue;
+            }
+            let cpu = b
+                .wide
+                .intersect(&b.tris, ray)
+                .expect("the CPU tests prove it hits");
+            let t = f32::from_bits(t);
+            assert!(
+                (t - cpu.t).abs() <= 1e-5 * cpu.t,
+                "{kind:?} ray {ray:?}: gpu {t}, cpu {cpu:?}"
+            );
         }
-        let cpu = bvh
-            .intersect(&tris, ray)
-            .expect("the CPU tests prove it hits");
-        let t = f32::from_bits(t);
-        assert!(
-            (t - cpu.t).abs() <= 1e-5 * cpu.t,
-            "ray {ray:?}: gpu {t}, cpu {cpu:?}"
-        );
+        assert_eq!(leaks, 0, "{kind:?}: {leaks} of {} rays leaked", rays.len());
     }
-    assert_eq!(leaks, 0, "{leaks} of {} rays leaked", rays.len());
 }
 
 /// Axis-aligned rays whose origins lie exactly on the box's faces (zero
@@ -207,13 +363,12 @@ fn gpu_closed_cube_does_not_leak() {
 #[test]
 fn gpu_zero_direction_rays_on_box_faces() {
     let ctx = common::context();
-    let tris = [Triangle {
+    let b = build(&[Triangle {
         p0: [0.0, 0.0, 1.0],
         p1: [1.0, 0.0, 1.0],
         p2: [0.0, 1.0, 1.0],
         ..Default::default()
-    }];
-    let (bvh, _) = Bvh::build(&tris);
+    }]);
     let cases = [
         (Vec3::new(0.0, 0.25, 0.0), Vec3::Z, 1.0),
         (Vec3::new(0.25, 0.0, 0.0), Vec3::Z, 1.0),
@@ -230,24 +385,88 @@ fn gpu_zero_direction_rays_on_box_faces() {
             tmax: f32::INFINITY,
         })
         .collect();
-    let gpu = run_gpu(&ctx, &bvh, &tris, &rays);
-    for (i, &(_, _, t)) in cases.iter().enumerate() {
-        assert_eq!(gpu.hits[i][1], 0, "ray {:?} missed", rays[i]);
-        assert_eq!(f32::from_bits(gpu.hits[i][0]), t, "ray {:?}", rays[i]);
-        assert_eq!(gpu.occluded[i], 1, "ray {:?}", rays[i]);
+    for kind in KINDS {
+        let gpu = run_gpu(&ctx, &b, kind, &rays, BOTH);
+        for (i, &(_, _, t)) in cases.iter().enumerate() {
+            assert_eq!(gpu.hits[i][1], 0, "{kind:?} ray {:?} missed", rays[i]);
+            assert_eq!(
+                f32::from_bits(gpu.hits[i][0]),
+                t,
+                "{kind:?} ray {:?}",
+                rays[i]
+            );
+            assert_eq!(gpu.occluded[i], 1, "{kind:?} ray {:?}", rays[i]);
+        }
     }
 }
 
 #[test]
 fn gpu_empty_scene_misses() {
     let ctx = common::context();
-    let bvh = Bvh::default();
+    let b = build(&[]);
     let rays = [Ray {
         o: Vec3::ZERO,
         d: Vec3::X,
         tmax: f32::INFINITY,
     }; 70];
-    let gpu = run_gpu(&ctx, &bvh, &[], &rays);
-    assert!(gpu.hits.iter().all(|h| h[1] == u32::MAX));
-    assert!(gpu.occluded.iter().all(|&o| o == 0));
+    for kind in KINDS {
+        let gpu = run_gpu(&ctx, &b, kind, &rays, BOTH);
+        assert!(gpu.hits.iter().all(|h| h[1] == u32::MAX), "{kind:?}");
+        assert!(gpu.occluded.iter().all(|&o| o == 0), "{kind:?}");
+    }
+}
+
+/// Rays/s of the binary and the wide kernel in one run, on the bunny:
+/// coherent primary rays (384 x 384) and incoherent diffuse bounces off their
+/// hits, closest and any hit apart. Each figure is the best of three warm
+/// runs, upload and readback included; only the ratios mean much on a shared
+/// machine. Release figures: `cargo test --release --test gpu_bvh
+/// gpu_bvh_throughput -- --nocapture`. What is asserted: both kernels give
+/// the same answers.
+#[test]
+fn gpu_bvh_throughput() {
+    let ctx = common::context();
+    let b = build(&bunny());
+    let (lo, hi) = geometry::bounds_of(&b.tris);
+    let primary = primary_rays(lo, hi, 384, 384);
+    let hits: Vec<_> = primary
+        .iter()
+        .map(|r| b.wide.intersect(&b.tris, r))
+        .collect();
+    let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Rng(9));
+    eprintln!("bvh kernels on {}:", ctx.info().name);
+    for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
+        for (query, mode) in [("closest", CLOSEST), ("any-hit", ANY)] {
+            let mut rates = Vec::new();
+            let mut results = Vec::new();
+            for kind in KINDS {
+                run_gpu(&ctx, &b, kind, rays, mode); // compile and warm up
+                let mut best = f64::INFINITY;
+                let mut out = None;
+                for _ in 0..3 {
+                    let start = Instant::now();
+                    out = Some(run_gpu(&ctx, &b, kind, rays, mode));
+                    best = best.min(start.elapsed().as_secs_f64());
+                }
+                rates.push(rays.len() as f64 / best / 1e6);
+                results.push(out.unwrap());
+            }
+            compare_kernels(
+                &format!("{set} {query}"),
+                &b,
+                rays,
+                &results[1],
+                &results[0],
+            );
+            eprintln!(
+                "  {set:7} {query}: {} rays, binary {:.2} M rays/s, wide {:.2} M rays/s (x{:.2})",
+                rays.len(),
+                rates[0],
+                rates[1],
+                rates[1] / rates[0]
+            );
+        }
+    }
+    let messages = ctx.finish();
+    assert!(messages.is_empty(), "validation: {messages:?}");
 }

@@ -19,7 +19,7 @@ pub mod sampling;
 pub mod scene;
 
 pub use bsdf::{Bsdf, BsdfSample};
-pub use bvh::{Bvh, BvhNode, Hit, Ray};
+pub use bvh::{Bvh, Bvh4, Bvh4Node, BvhNode, Hit, Ray};
 pub use film::{Film, Mis, OutputFormat, RenderOptions, RenderStats, SamplerKind};
 pub use frame::Frame;
 pub use integrator::{PathTracer, RenderError, render};

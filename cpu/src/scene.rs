@@ -11,7 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
 use crate::bsdf::{Bsdf, ConductorParams, Shadowing};
-use crate::bvh::Bvh;
+use crate::bvh::Bvh4;
 
 /// Sentinel for "no emissive-triangle index".
 pub const NO_LIGHT: u32 = u32::MAX;
@@ -207,7 +207,9 @@ pub struct Scene {
     pub cameras: Vec<Camera>,
     /// `scene.extras.background`: constant radiance (default black).
     pub background: Vec3,
-    pub bvh: Bvh,
+    /// The 4-wide BVH both backends traverse (`Bvh4::nodes` is the GPU's
+    /// binding 2 unchanged).
+    pub bvh: Bvh4,
 }
 
 impl Scene {
@@ -215,7 +217,7 @@ impl Scene {
     /// leaves address contiguous ranges of the triangle array (the layout the
     /// GPU reads unchanged); then number the emitters in that final order.
     pub fn build_bvh(&mut self) {
-        let (bvh, order) = Bvh::build(&self.triangles);
+        let (bvh, order) = Bvh4::build(&self.triangles);
         self.triangles = order.iter().map(|&i| self.triangles[i as usize]).collect();
         self.shading = order.iter().map(|&i| self.shading[i as usize]).collect();
         self.bvh = bvh;

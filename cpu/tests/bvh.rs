@@ -1,5 +1,7 @@
 //! BVH tests: structure invariants, differential closest/any-hit against brute
-//! force (tinybvh's test), watertightness on closed meshes and the bunny.
+//! force (tinybvh's test), watertightness on closed meshes and the bunny; each
+//! for the binary BVH and for the 4-wide BVH with every box-test kernel the
+//! CPU runs (scalar, SSE2, AVX), which must agree with the binary one.
 
 #[path = "support/geometry.rs"]
 mod geometry;
@@ -8,11 +10,16 @@ use std::collections::HashMap;
 use std::time::Instant;
 
 use glam::Vec3;
-use glint_cpu::bvh::{MAX_DEPTH, MAX_LEAF_SIZE, PreparedRay, STACK_SIZE, intersect_triangle};
-use glint_cpu::{Bvh, Hit, Ray, Triangle};
+use glint_cpu::bvh::{
+    Kernel, MAX_DEPTH, MAX_LEAF_SIZE, MAX_WIDE_DEPTH, PreparedRay, SLOT_EMPTY, STACK_SIZE,
+    WIDE_STACK_SIZE, WIDTH, intersect_triangle, is_leaf_ref, leaf_range,
+};
+use glint_cpu::{Bvh, Bvh4, Bvh4Node, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-use geometry::{Rng, bounds_of, bunny, grid_cube, random_rays, tri};
+use geometry::{
+    Rng, bounds_of, bunny, grid_cube, nasty_soup, random_rays, random_soup, rays_from_surfaces, tri,
+};
 
 /// Builds and applies the order, as `Scene::build_bvh` does.
 fn build(input: &[Triangle]) -> (Bvh, Vec<Triangle>, Vec<u32>) {
@@ -117,6 +124,152 @@ fn check_structure(bvh: &Bvh, tris: &[Triangle], order: &[u32]) -> (usize, usize
     (leaves, depth)
 }
 
+/// The binary BVH and its 4-wide collapse, traversed every way there is.
+struct Traversals {
+    bin: Bvh,
+    wide: Bvh4,
+    kernels: Vec<Kernel>,
+}
+
+impl Traversals {
+    fn new(bin: Bvh) -> Self {
+        let wide = Bvh4::collapse(&bin);
+        Traversals {
+            bin,
+            wide,
+            kernels: Kernel::available(),
+        }
+    }
+
+    /// (name, closest hit, occluded) of each traversal, the binary first.
+    fn each(&self, tris: &[Triangle], ray: &Ray) -> Vec<(String, Option<Hit>, bool)> {
+        let mut out = vec![(
+            "binary".to_string(),
+            self.bin.intersect(tris, ray),
+            self.bin.occluded(tris, ray),
+        )];
+        for &k in &self.kernels {
+            out.push((
+                format!("wide {k:?}"),
+                self.wide.intersect_with(k, tris, ray),
+                self.wide.occluded_with(k, tris, ray),
+            ));
+        }
+        out
+    }
+}
+
+/// The wide BVH's invariants against the binary tree it was collapsed from:
+/// exactly the binary leaves (so every triangle in exactly one leaf), child
+/// boxes inside the parent's box, full nodes (>= 2 children, empty slots last
+/// and empty), the node count between ceil((L - 1) / 3) and L - 1 for L binary
+/// leaves (each wide node absorbs 1..=3 binary interior nodes), and the depth
+/// within MAX_WIDE_DEPTH and about half the binary depth. Returns the depth.
+fn check_wide_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle]) -> usize {
+    if bin.nodes.is_empty() {
+        assert!(wide.nodes.is_empty());
+        return 0;
+    }
+    let nodes = &wide.nodes;
+    let mut bin_leaves: Vec<(usize, usize)> = bin
+        .nodes
+        .iter()
+        .filter(|n| n.is_leaf())
+        .map(|n| (n.left_or_first as usize, n.tri_count as usize))
+        .collect();
+    let mut leaves = Vec::new();
+    let mut visited = vec![false; nodes.len()];
+    let mut depth = 0;
+    let (root_lo, root_hi) = (
+        Vec3::from(bin.nodes[0].aabb_min),
+        Vec3::from(bin.nodes[0].aabb_max),
+    );
+    let mut stack = vec![(0usize, 0usize, root_lo, root_hi)];
+    while let Some((i, d, plo, phi)) = stack.pop() {
+        assert!(
+            !std::mem::replace(&mut visited[i], true),
+            "wide node {i} reached twice"
+        );
+        depth = depth.max(d);
+        let node: &Bvh4Node = &nodes[i];
+        assert_eq!(node._pad, [0; 4]);
+        let used = node.child_count();
+        assert!(
+            used >= 2 || (nodes.len() == 1 && used == 1),
+            "node {i} has {used} children"
+        );
+        for s in 0..WIDTH {
+            let (lo, hi) = node.child_box(s);
+            let c = node.child[s];
+            if s >= used {
+                assert_eq!(c, SLOT_EMPTY, "node {i}: a used slot after an empty one");
+                assert!(lo == Vec3::INFINITY && hi == Vec3::NEG_INFINITY);
+                continue;
+            }
+            assert!(
+                lo.cmpge(plo).all() && hi.cmple(phi).all() && lo.cmple(hi).all(),
+                "child {s} of wide node {i} outside its parent"
+            );
+            if is_leaf_ref(c) {
+                let (first, count) = leaf_range(c);
+                leaves.push((first, count));
+                for t in &tris[first..first + count] {
+                    if t.vertices().iter().all(|p| p.is_finite()) {
+                        for p in t.vertices() {
+                            assert!(p.cmpge(lo).all() && p.cmple(hi).all());
+                        }
+                    }
+                }
+            } else {
+                assert!((c as usize) < nodes.len() && c as usize > i);
+                stack.push((c as usize, d + 1, lo, hi));
+            }
+        }
+    }
+    assert!(visited.iter().all(|&v| v), "unreachable wide nodes");
+    bin_leaves.sort();
+    leaves.sort();
+    assert_eq!(
+        leaves, bin_leaves,
+        "the wide leaves are not the binary leaves"
+    );
+    let l = bin_leaves.len();
+    assert!(
+        nodes.len() >= (l - 1).div_ceil(3) && nodes.len() <= (l - 1).max(1),
+        "{} wide nodes for {l} leaves",
+        nodes.len()
+    );
+    let bin_depth = bin.depth();
+    assert!(depth <= MAX_WIDE_DEPTH && depth <= bin_depth.saturating_sub(1) / 2);
+    assert!((WIDTH - 1) * (MAX_WIDE_DEPTH + 1) <= WIDE_STACK_SIZE);
+    assert_eq!(wide.depth(), depth);
+    depth
+}
+
+/// Every traversal of `t` against the binary one on `ray`: the same closest
+/// hit exactly (the wide BVH tests the same boxes and triangles), except
+/// another triangle at exactly the same distance (visit order decides exact
+/// ties); the same occlusion, except for a hit within rounding of tmax.
+fn assert_traversals_agree(name: &str, t: &Traversals, tris: &[Triangle], ray: &Ray) {
+    let all = t.each(tris, ray);
+    let (_, want, want_occ) = &all[0];
+    for (which, got, occ) in &all[1..] {
+        match (got, want) {
+            (Some(g), Some(w)) if g.tri != w.tri => {
+                assert_eq!(g.t, w.t, "{name} {which}: {ray:?}: {g:?} binary {w:?}")
+            }
+            _ => assert_eq!(got, want, "{name} {which}: {ray:?}"),
+        }
+        if occ != want_occ {
+            let near_tmax = |t: f32| (t - ray.tmax).abs() <= 1e-5 * ray.tmax;
+            assert!(
+                brute_any_t(tris, ray).is_some_and(near_tmax),
+                "{name} {which}: occluded {occ}, binary {want_occ}, {ray:?}"
+            );
+        }
+    }
+}
+
 #[derive(Default, Debug)]
 struct Diff {
     rays: usize,
@@ -132,6 +285,8 @@ struct Diff {
 fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
     let (bvh, tris, order) = build(input);
     check_structure(&bvh, &tris, &order);
+    let all = Traversals::new(bvh.clone());
+    check_wide_structure(&all.wide, &bvh, &tris);
     let results: Vec<Diff> = rays
         .par_chunks(256)
         .map(|chunk| {
@@ -141,6 +296,7 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
                 let got = bvh.intersect(&tris, ray);
                 let want = brute_closest(&tris, ray);
                 let occluded = bvh.occluded(&tris, ray);
+                assert_traversals_agree(name, &all, &tris, ray);
                 match (got, want) {
                     (None, None) => {}
                     (Some(g), Some(w)) => {
@@ -200,9 +356,10 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
         total.near_swaps += d.near_swaps;
     }
     eprintln!(
-        "{name}: {} triangles, {} nodes, {total:?}",
+        "{name}: {} triangles, {} nodes, {} wide nodes, {total:?}",
         input.len(),
-        bvh.nodes.len()
+        bvh.nodes.len(),
+        all.wide.nodes.len()
     );
     total
 }
@@ -211,54 +368,6 @@ fn brute_any_t(tris: &[Triangle], ray: &Ray) -> Option<f32> {
     let r = PreparedRay::new(ray.o, ray.d);
     tris.iter()
         .find_map(|t| intersect_triangle(&r, t, ray.tmax).map(|h| h.0))
-}
-
-fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
-    (0..n)
-        .map(|_| {
-            let c = rng.vec_in(Vec3::ZERO, Vec3::ONE);
-            tri(
-                c + size * rng.unit(),
-                c + size * rng.unit(),
-                c + size * rng.unit(),
-            )
-        })
-        .collect()
-}
-
-/// A soup of the awkward cases: exact duplicates, zero-area triangles
-/// (repeated and collinear vertices), axis-aligned triangles sharing planes.
-fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
-    let mut tris = random_soup(rng, 400, 0.05);
-    for i in 0..100 {
-        let t = tris[i];
-        tris.push(t);
-    }
-    for _ in 0..100 {
-        let a = rng.vec_in(Vec3::ZERO, Vec3::ONE);
-        let b = rng.vec_in(Vec3::ZERO, Vec3::ONE);
-        tris.push(tri(a, a, b));
-        tris.push(tri(a, 0.5 * (a + b), b));
-        tris.push(tri(a, a, a));
-    }
-    for i in 0..8 {
-        for j in 0..8 {
-            let (x, y) = (i as f32 / 8.0, j as f32 / 8.0);
-            let s = 1.0 / 8.0;
-            let z = 0.5;
-            tris.push(tri(
-                Vec3::new(x, y, z),
-                Vec3::new(x + s, y, z),
-                Vec3::new(x, y + s, z),
-            ));
-            tris.push(tri(
-                Vec3::new(x + s, y, 0.25),
-                Vec3::new(x + s, y + s, 0.25),
-                Vec3::new(x, y + s, 0.25),
-            ));
-        }
-    }
-    tris
 }
 
 #[test]
@@ -273,6 +382,11 @@ fn empty_scene_misses() {
     };
     assert_eq!(bvh.intersect(&[], &ray), None);
     assert!(!bvh.occluded(&[], &ray));
+    let all = Traversals::new(bvh);
+    assert!(all.wide.nodes.is_empty() && all.wide.depth() == 0);
+    for (which, hit, occ) in all.each(&[], &ray) {
+        assert!(hit.is_none() && !occ, "{which}");
+    }
 }
 
 #[test]
@@ -286,6 +400,10 @@ fn single_triangle() {
     assert_eq!(order, vec![0]);
     assert_eq!(bvh.nodes.len(), 1);
     check_structure(&bvh, &tris, &order);
+    let all = Traversals::new(bvh.clone());
+    // A lone leaf root becomes a wide root with one child.
+    assert_eq!(all.wide.nodes.len(), 1);
+    check_wide_structure(&all.wide, &bvh, &tris);
     let ray = |o: Vec3, d: Vec3, tmax: f32| Ray { o, d, tmax };
     let h = bvh
         .intersect(
@@ -343,8 +461,20 @@ fn single_triangle() {
         (Vec3::new(0.5, 0.5, 0.0), Vec3::Z, 1.0),
     ] {
         let r = ray(o, d, f32::INFINITY);
-        assert_eq!(bvh.intersect(&tris, &r).map(|h| h.t), Some(t), "{r:?}");
-        assert!(bvh.occluded(&tris, &r), "{r:?}");
+        for (which, hit, occ) in all.each(&tris, &r) {
+            assert_eq!(hit.map(|h| h.t), Some(t), "{which} {r:?}");
+            assert!(occ, "{which} {r:?}");
+        }
+    }
+    // The other cases above, on the wide traversals too.
+    for r in [
+        ray(Vec3::new(0.25, 0.25, 0.0), Vec3::Z, 1.0),
+        ray(Vec3::new(0.25, 0.25, 0.0), Vec3::Z, 1.0001),
+        ray(Vec3::new(0.25, 0.25, 3.0), -Vec3::Z, f32::INFINITY),
+        ray(Vec3::new(0.75, 0.75, 0.0), Vec3::Z, 5.0),
+        ray(Vec3::new(-1.0, 0.25, 1.0), Vec3::X, 5.0),
+    ] {
+        assert_traversals_agree("single", &all, &tris, &r);
     }
 }
 
@@ -401,13 +531,14 @@ fn differential_random_soups() {
     let nasty = nasty_soup(&mut rng);
     let mut total = Diff::default();
     for (name, soup) in [("small", small), ("slivers", slivers), ("nasty", nasty)] {
-        let rays = random_rays(&soup, 7000, &mut rng);
+        let mut rays = random_rays(&soup, 24_000, &mut rng);
+        rays.extend(rays_from_surfaces(&soup, 10_000, &mut rng));
         let d = differential(name, &soup, &rays);
         total.rays += d.rays;
         total.hits += d.hits;
         total.near_swaps += d.near_swaps;
     }
-    assert!(total.rays >= 20_000);
+    assert!(total.rays >= 100_000);
     // The rays must mostly hit, or the comparison proves little.
     assert!(total.hits * 2 > total.rays, "{total:?}");
     // A different triangle at a different (if close) distance means the BVH
@@ -423,17 +554,17 @@ fn degenerate_inputs_build_and_traverse() {
     let same = vec![t; 5000];
     let (bvh, tris, order) = build(&same);
     check_structure(&bvh, &tris, &order);
-    let h = bvh
-        .intersect(
-            &tris,
-            &Ray {
-                o: Vec3::new(0.2, 0.2, -1.0),
-                d: Vec3::Z,
-                tmax: f32::INFINITY,
-            },
-        )
-        .unwrap();
-    assert_eq!(h.t, 1.0);
+    let all = Traversals::new(bvh.clone());
+    check_wide_structure(&all.wide, &bvh, &tris);
+    let ray = Ray {
+        o: Vec3::new(0.2, 0.2, -1.0),
+        d: Vec3::Z,
+        tmax: f32::INFINITY,
+    };
+    for (which, hit, occ) in all.each(&tris, &ray) {
+        assert_eq!(hit.map(|h| h.t), Some(1.0), "{which}");
+        assert!(occ, "{which}");
+    }
 
     // Geometrically spaced triangles over 16 decades: SAH peels them off a
     // few at a time (the depth guard itself is tested in bvh::build, with a
@@ -463,18 +594,21 @@ fn degenerate_inputs_build_and_traverse() {
     }
     let (bvh, tris, order) = build(&soup);
     check_structure(&bvh, &tris, &order);
+    let all = Traversals::new(bvh.clone());
+    check_wide_structure(&all.wide, &bvh, &tris);
     let (fb, ftris, _) = build(&finite);
     for ray in &rays {
-        let got = bvh.intersect(&tris, ray);
         let want = fb.intersect(&ftris, ray);
-        assert_eq!(got.map(|h| h.t), want.map(|h| h.t), "{ray:?}");
-        if let Some(h) = got {
-            assert!(
-                tris[h.tri as usize]
-                    .vertices()
-                    .iter()
-                    .all(|p| p.is_finite())
-            );
+        for (which, got, _) in all.each(&tris, ray) {
+            assert_eq!(got.map(|h| h.t), want.map(|h| h.t), "{which} {ray:?}");
+            if let Some(h) = got {
+                assert!(
+                    tris[h.tri as usize]
+                        .vertices()
+                        .iter()
+                        .all(|p| p.is_finite())
+                );
+            }
         }
     }
 }
@@ -487,6 +621,7 @@ fn build_is_deterministic() {
     let (b, ob) = Bvh::build(&soup);
     assert_eq!(a.nodes, b.nodes);
     assert_eq!(oa, ob);
+    assert_eq!(Bvh4::collapse(&a).nodes, Bvh4::collapse(&b).nodes);
 }
 
 /// A closed icosphere: shared vertices are bit-identical between triangles.
@@ -585,6 +720,7 @@ fn edges_and_vertices(tris: &[Triangle]) -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
 /// grid lines: every one must hit. Returns the number of rays.
 fn assert_no_leaks(name: &str, mesh: &[Triangle], origins: &[Vec3], rng: &mut Rng) -> usize {
     let (bvh, tris, _) = build(mesh);
+    let all = Traversals::new(bvh);
     let (verts, edges) = edges_and_vertices(mesh);
     let mut targets = verts.clone();
     for &(a, b) in &edges {
@@ -602,13 +738,15 @@ fn assert_no_leaks(name: &str, mesh: &[Triangle], origins: &[Vec3], rng: &mut Rn
                     tmax: f32::INFINITY,
                 };
                 rays += 1;
-                let hit = bvh.intersect(&tris, &ray);
-                if hit.is_none() || !bvh.occluded(&tris, &ray) {
-                    leaks += 1;
-                } else if let Some(h) = hit {
-                    // Many triangles meet at the aimed point: a near tie.
-                    let want = brute_closest(&tris, &ray).unwrap();
-                    assert!((h.t - want.t).abs() <= 2e-5 * want.t, "{name}: {ray:?}");
+                let want = brute_closest(&tris, &ray);
+                for (which, hit, occ) in all.each(&tris, &ray) {
+                    match (hit, want) {
+                        (Some(h), Some(w)) if occ => {
+                            // Many triangles meet at the aimed point: a near tie.
+                            assert!((h.t - w.t).abs() <= 2e-5 * w.t, "{name} {which}: {ray:?}");
+                        }
+                        _ => leaks += 1,
+                    }
                 }
             }
         }
@@ -636,6 +774,7 @@ fn watertight_closed_meshes() {
     // grid lines, from inside: they cross the faces at edges and vertices of
     // the grid and run inside flat (zero-thickness) boxes.
     let (bvh, tris, _) = build(&cube);
+    let all = Traversals::new(bvh);
     let coord = |i: usize| -1.0 + 2.0 * i as f32 / 8.0;
     let mut leaks = 0;
     let mut axis_rays = 0;
@@ -656,14 +795,16 @@ fn watertight_closed_meshes() {
                             tmax: f32::INFINITY,
                         };
                         axis_rays += 1;
-                        match bvh.intersect(&tris, &ray) {
-                            Some(h) if bvh.occluded(&tris, &ray) => {
-                                assert!(
-                                    (h.t - (1.0 - sign * o[axis])).abs() < 1e-6,
-                                    "{ray:?} {h:?}"
-                                );
+                        for (which, hit, occ) in all.each(&tris, &ray) {
+                            match hit {
+                                Some(h) if occ => {
+                                    assert!(
+                                        (h.t - (1.0 - sign * o[axis])).abs() < 1e-6,
+                                        "{which} {ray:?} {h:?}"
+                                    );
+                                }
+                                _ => leaks += 1,
                             }
-                            _ => leaks += 1,
                         }
                     }
                 }
@@ -683,7 +824,7 @@ fn watertight_closed_meshes() {
 /// before it.
 fn bunny_edge_leaks(
     input: &[Triangle],
-    bvh: &Bvh,
+    all: &Traversals,
     tris: &[Triangle],
     rng: &mut Rng,
 ) -> (usize, usize) {
@@ -733,9 +874,11 @@ fn bunny_edge_leaks(
             d,
             tmax: f32::INFINITY,
         };
-        match bvh.intersect(tris, &ray) {
-            Some(h) if h.t <= 1.0 + 1e-4 => {}
-            _ => leaks += 1,
+        for (_, hit, occ) in all.each(tris, &ray) {
+            match hit {
+                Some(h) if h.t <= 1.0 + 1e-4 && occ => {}
+                _ => leaks += 1,
+            }
         }
     }
     (rays, leaks)
@@ -750,21 +893,56 @@ fn bunny_build_differential_and_watertight() {
     let build_s = start.elapsed().as_secs_f64();
     let tris: Vec<Triangle> = order.iter().map(|&i| input[i as usize]).collect();
     let (leaves, depth) = check_structure(&bvh, &tris, &order);
+    let start = Instant::now();
+    let all = Traversals::new(bvh.clone());
+    let collapse_s = start.elapsed().as_secs_f64();
+    let wide_depth = check_wide_structure(&all.wide, &bvh, &tris);
     eprintln!(
-        "bunny: build {:.1} ms, {} nodes, {leaves} leaves, depth {depth}",
+        "bunny: build {:.1} ms, {} nodes, {leaves} leaves, depth {depth}; \
+         collapse {:.1} ms, {} wide nodes, wide depth {wide_depth}",
         build_s * 1e3,
-        bvh.nodes.len()
+        bvh.nodes.len(),
+        collapse_s * 1e3,
+        all.wide.nodes.len(),
     );
 
     let mut rng = Rng(2);
-    let (rays, leaks) = bunny_edge_leaks(&input, &bvh, &tris, &mut rng);
-    assert_eq!(leaks, 0, "bunny: {leaks} of {rays} edge rays leaked");
+    let (rays, leaks) = bunny_edge_leaks(&input, &all, &tris, &mut rng);
+    assert_eq!(
+        leaks, 0,
+        "bunny: {leaks} of {rays} edge rays x traversals leaked"
+    );
 
     // Brute force costs 69k triangle tests a ray: 3,000 rays keep this test
-    // to a few seconds; the soups above take the 20,000-ray load, and the GPU
-    // kernel test compares 10^5 bunny rays against this traversal.
+    // to a few seconds; the soups above take the 10^5-ray load, and the wide
+    // BVH is compared with the binary one on 10^5 bunny rays below.
     let rays = random_rays(&input, 3_000, &mut rng);
     let d = differential("bunny", &input, &rays);
     assert!(d.hits * 2 > d.rays, "{d:?}");
     assert!(d.near_swaps * 10_000 <= d.rays, "{d:?}");
+}
+
+/// 10^5 random bunny rays (zero direction components, origins inside and
+/// out, short tmax): every wide kernel gives the binary traversal's closest
+/// hit and occlusion.
+#[test]
+fn bunny_wide_matches_binary() {
+    let input = bunny();
+    let (bvh, tris, _) = build(&input);
+    let all = Traversals::new(bvh);
+    let mut rng = Rng(0xb0b);
+    let mut rays = random_rays(&tris, 80_000, &mut rng);
+    rays.extend(rays_from_surfaces(&tris, 20_000, &mut rng));
+    let hits: usize = rays
+        .par_chunks(1024)
+        .map(|chunk| {
+            let mut hits = 0;
+            for ray in chunk {
+                assert_traversals_agree("bunny", &all, &tris, ray);
+                hits += all.bin.intersect(&tris, ray).is_some() as usize;
+            }
+            hits
+        })
+        .sum();
+    assert!(hits * 2 > rays.len(), "{hits} hits");
 }

@@ -7,13 +7,20 @@
 //! - traversal: a robust slab test (Ize 2013, "Robust BVH ray traversal") and
 //!   the watertight ray/triangle test (Woop, Benthin, Wald 2013, JCGT 2(1)).
 //!
+//! - [`Bvh4`]: the binary tree collapsed into 4-wide nodes ([`Bvh4Node`],
+//!   `wide.rs`), traversed with one SIMD box test per node (`wide_traverse.rs`).
+//!   Renders use it on both backends; the binary tree stays the reference the
+//!   wide one is tested against.
+//!
 //! `shaders/bvh.glsl` mirrors this module function for function with the same
 //! names (`prepare_ray`, `intersect_aabb`, `intersect_triangle`,
-//! `bvh_intersect`, `bvh_occluded`), so a CPU/GPU mismatch can be pinned to one
-//! of them.
+//! `intersect_aabb4`, `sort4`, `bvh_intersect`, `bvh_occluded`), so a CPU/GPU
+//! mismatch can be pinned to one of them.
 
 mod build;
 mod traverse;
+mod wide;
+mod wide_traverse;
 
 use std::mem::size_of;
 
@@ -22,7 +29,11 @@ use glam::Vec3;
 
 use crate::scene::Triangle;
 
-pub use traverse::{PreparedRay, intersect_aabb, intersect_triangle};
+pub use traverse::{PreparedRay, SLAB_PAD, intersect_aabb, intersect_triangle};
+pub use wide::{
+    Bvh4Node, LEAF_BIT, MAX_WIDE_DEPTH, SLOT_EMPTY, WIDE_STACK_SIZE, WIDTH, is_leaf_ref, leaf_range,
+};
+pub use wide_traverse::Kernel;
 
 /// Entries of the traversal stack (CPU and GPU). The builder guarantees every
 /// leaf is at depth `<= MAX_DEPTH < STACK_SIZE`, and front-to-back traversal
@@ -112,6 +123,70 @@ impl Bvh {
                 let l = n.left_or_first as usize;
                 stack.push((l, d + 1));
                 stack.push((l + 1, d + 1));
+            }
+        }
+        deepest
+    }
+}
+
+/// The 4-wide BVH the renderers traverse (see `wide.rs`): the binary tree's
+/// leaves and boxes regrouped four to a node. Node 0 is the root; empty for
+/// an empty scene.
+#[derive(Clone, Debug, Default)]
+pub struct Bvh4 {
+    pub nodes: Vec<Bvh4Node>,
+}
+
+impl Bvh4 {
+    /// [`Bvh::build`], then [`Bvh4::collapse`]: the same triangle order.
+    pub fn build(tris: &[Triangle]) -> (Bvh4, Vec<u32>) {
+        let (bvh, order) = Bvh::build(tris);
+        (Bvh4::collapse(&bvh), order)
+    }
+
+    /// Regroups a binary BVH four children to a node; leaves, their triangle
+    /// ranges and every child box are kept unchanged.
+    pub fn collapse(bvh: &Bvh) -> Bvh4 {
+        Bvh4 {
+            nodes: wide::collapse(&bvh.nodes),
+        }
+    }
+
+    /// Closest hit in (0, ray.tmax), the binary traversal's answer
+    /// ([`Bvh::intersect`]) with the fastest box test this CPU has.
+    pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
+        wide_traverse::intersect(&self.nodes, tris, ray, Kernel::best())
+    }
+
+    /// Any hit in (0, ray.tmax).
+    pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
+        wide_traverse::any_hit(&self.nodes, tris, ray, Kernel::best())
+    }
+
+    /// [`Bvh4::intersect`] with a given box-test kernel (for tests and
+    /// benchmarks; an unsupported one falls back to one the CPU has).
+    pub fn intersect_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
+        wide_traverse::intersect(&self.nodes, tris, ray, kernel)
+    }
+
+    /// [`Bvh4::occluded`] with a given box-test kernel.
+    pub fn occluded_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> bool {
+        wide_traverse::any_hit(&self.nodes, tris, ray, kernel)
+    }
+
+    /// Depth of the deepest wide node (root = 0); 0 for an empty hierarchy.
+    pub fn depth(&self) -> usize {
+        if self.nodes.is_empty() {
+            return 0;
+        }
+        let mut deepest = 0;
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((i, d)) = stack.pop() {
+            deepest = deepest.max(d);
+            for &c in &self.nodes[i].child {
+                if c != SLOT_EMPTY && !is_leaf_ref(c) {
+                    stack.push((c as usize, d + 1));
+                }
             }
         }
         deepest

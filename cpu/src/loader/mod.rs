@@ -40,7 +40,7 @@ pub use material::{
 };
 pub use source::{MAX_FILE_BYTES, SUPPORTED_REQUIRED_EXTENSIONS};
 
-use crate::bvh::Bvh;
+use crate::bvh::Bvh4;
 use crate::scene::{Camera, Scene};
 
 /// One clear error naming the file and the problem.
@@ -101,7 +101,7 @@ fn parse_inner(path: &Path) -> Result<Scene, String> {
         lights: collected.lights,
         cameras: collected.cameras,
         background,
-        bvh: Bvh::default(),
+        bvh: Bvh4::default(),
     };
     scene.assign_emitters();
     Ok(scene)

@@ -6,7 +6,7 @@
 use std::path::Path;
 
 use glam::Vec3;
-use glint_cpu::{Ray, Triangle};
+use glint_cpu::{Hit, Ray, Triangle};
 
 /// SplitMix64: a small, seedable generator, so each test has its own stream.
 pub struct Rng(pub u64);
@@ -118,6 +118,153 @@ pub fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
                 _ => f32::INFINITY,
             };
             Ray { o, d, tmax }
+        })
+        .collect()
+}
+
+/// Rays leaving the surface, as a path's bounces do but without the
+/// integrator's offset: origins at random points of random triangles (so
+/// within rounding of the triangle's plane, on either side), directions
+/// uniform on the sphere, a tenth with one zero component, a quarter with a
+/// short tmax. The origin's own triangle may be hit at a tiny t or missed,
+/// depending on rounding: every traversal that shares the triangle test must
+/// decide it the same way.
+pub fn rays_from_surfaces(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
+    let (lo, hi) = bounds_of(tris);
+    let size = (hi - lo).length();
+    (0..count)
+        .map(|_| {
+            let t = &tris[rng.below(tris.len())];
+            let [a, b, c] = t.vertices();
+            let (mut u, mut v) = (rng.f(), rng.f());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let o = a + u * (b - a) + v * (c - a);
+            let mut d = rng.unit();
+            if rng.f() < 0.1 {
+                d[rng.below(3)] = 0.0;
+            }
+            if d == Vec3::ZERO || !d.is_finite() || !o.is_finite() {
+                return Ray {
+                    o: lo,
+                    d: Vec3::X,
+                    tmax: f32::INFINITY,
+                };
+            }
+            let tmax = if rng.f() < 0.25 {
+                rng.range(0.0, 0.2) * size
+            } else {
+                f32::INFINITY
+            };
+            Ray { o, d, tmax }
+        })
+        .collect()
+}
+
+/// Triangles of random shape and orientation, centres uniform in the unit cube.
+pub fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let c = rng.vec_in(Vec3::ZERO, Vec3::ONE);
+            tri(
+                c + size * rng.unit(),
+                c + size * rng.unit(),
+                c + size * rng.unit(),
+            )
+        })
+        .collect()
+}
+
+/// A soup of the awkward cases: exact duplicates, zero-area triangles
+/// (repeated and collinear vertices), axis-aligned triangles sharing planes.
+pub fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
+    let mut tris = random_soup(rng, 400, 0.05);
+    for i in 0..100 {
+        let t = tris[i];
+        tris.push(t);
+    }
+    for _ in 0..100 {
+        let a = rng.vec_in(Vec3::ZERO, Vec3::ONE);
+        let b = rng.vec_in(Vec3::ZERO, Vec3::ONE);
+        tris.push(tri(a, a, b));
+        tris.push(tri(a, 0.5 * (a + b), b));
+        tris.push(tri(a, a, a));
+    }
+    for i in 0..8 {
+        for j in 0..8 {
+            let (x, y) = (i as f32 / 8.0, j as f32 / 8.0);
+            let s = 1.0 / 8.0;
+            let z = 0.5;
+            tris.push(tri(
+                Vec3::new(x, y, z),
+                Vec3::new(x + s, y, z),
+                Vec3::new(x, y + s, z),
+            ));
+            tris.push(tri(
+                Vec3::new(x + s, y, 0.25),
+                Vec3::new(x + s, y + s, 0.25),
+                Vec3::new(x, y + s, 0.25),
+            ));
+        }
+    }
+    tris
+}
+
+/// A pinhole camera framing the bounds from +z: the rays a render's first
+/// bounce traces.
+pub fn primary_rays(lo: Vec3, hi: Vec3, w: usize, h: usize) -> Vec<Ray> {
+    let c = 0.5 * (lo + hi);
+    let r = 0.5 * (hi - lo).length();
+    let eye = c + Vec3::new(0.3, 0.2, 1.0).normalize() * 2.5 * r;
+    let fwd = (c - eye).normalize();
+    let right = fwd.cross(Vec3::Y).normalize();
+    let up = right.cross(fwd);
+    let tan = (0.5f32 * 40f32.to_radians()).tan();
+    (0..w * h)
+        .map(|i| {
+            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            let sx = (2.0 * x / w as f32 - 1.0) * tan;
+            let sy = (1.0 - 2.0 * y / h as f32) * tan;
+            Ray {
+                o: eye,
+                d: (fwd + sx * right + sy * up).normalize(),
+                tmax: f32::INFINITY,
+            }
+        })
+        .collect()
+}
+
+/// A cosine-distributed bounce off every primary hit, on the side the ray
+/// came from, its origin offset along the normal as the integrator does.
+pub fn diffuse_rays(
+    tris: &[Triangle],
+    primary: &[Ray],
+    hits: &[Option<Hit>],
+    rng: &mut Rng,
+) -> Vec<Ray> {
+    primary
+        .iter()
+        .zip(hits)
+        .filter_map(|(r, h)| {
+            let h = (*h)?;
+            let [a, b, c] = tris[h.tri as usize].vertices();
+            let mut n = (b - a).cross(c - a).normalize();
+            if n.dot(r.d) > 0.0 {
+                n = -n;
+            }
+            let p = r.o + h.t * r.d;
+            let eps = 1e-4 * p.abs().max_element().max(1.0);
+            // Cosine-weighted hemisphere (Malley's method) about n.
+            let (u1, u2) = (rng.f(), rng.f());
+            let (rad, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
+            let (s, t) = n.any_orthonormal_pair();
+            let d = rad * phi.cos() * s + rad * phi.sin() * t + (1.0 - u1).max(0.0).sqrt() * n;
+            Some(Ray {
+                o: p + eps * n,
+                d,
+                tmax: f32::INFINITY,
+            })
         })
         .collect()
 }
