@@ -16,6 +16,7 @@ pub mod loader;
 pub mod metrics;
 pub mod sampling;
 pub mod scene;
+pub mod sobol;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, BvhNode, Hit, Ray};
