@@ -13,6 +13,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "bvh.glsl"
 #include "bsdf/bsdf.glsl"
 #include "integrator/rng.glsl"
+#include "integrator/sobol.glsl"
 #include "integrator/frame.glsl"
 #include "integrator/camera.glsl"
 #include "integrator/lights.glsl"
@@ -80,10 +81,10 @@ void shadow_ray(vec3 p, vec3 ng, LightSample ls, out vec3 o, out vec3 d, out flo
 
 vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
     uint pixel = y * params.width + x;
-    Rng rng = rng_new(params.seed_key, pixel, s);
+    Sampler rng = sampler_new(params.sampler_kind, params.seed_key, pixel, s);
     vec3 ray_o;
     vec3 ray_d;
-    camera_ray(x, y, rng_next_2d(rng), ray_o, ray_d);
+    camera_ray(x, y, sampler_pixel_2d(rng), ray_o, ray_d);
 
     vec3 radiance = vec3(0.0);
     vec3 throughput = vec3(1.0);
@@ -129,12 +130,13 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
             break;
         }
 
-        float u_light_cat = rng_next_f32(rng);
-        float u_light_idx = rng_next_f32(rng);
-        vec2 u_light = rng_next_2d(rng);
-        float u_bsdf_lobe = rng_next_f32(rng);
-        vec2 u_bsdf = rng_next_2d(rng);
-        float u_rr = rng_next_f32(rng);
+        BounceSamples u = sampler_bounce(rng);
+        float u_light_cat = u.light_cat;
+        float u_light_idx = u.light_idx;
+        vec2 u_light = u.light;
+        float u_bsdf_lobe = u.bsdf_lobe;
+        vec2 u_bsdf = u.bsdf;
+        float u_rr = u.rr;
 
         SurfaceFrame sf = surface(hit.tri, hit.u, hit.v);
         Material m = materials[floatBitsToUint(tri.p0.w)];

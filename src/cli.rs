@@ -71,6 +71,8 @@ impl From<MisArg> for Mis {
 /// `--sampler`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum SamplerArg {
+    /// Owen-scrambled Sobol points (Burley 2020), scrambled per pixel.
+    Sobol,
     /// Independent uniform random numbers.
     Independent,
 }
@@ -78,6 +80,7 @@ pub enum SamplerArg {
 impl From<SamplerArg> for SamplerKind {
     fn from(s: SamplerArg) -> Self {
         match s {
+            SamplerArg::Sobol => SamplerKind::Sobol,
             SamplerArg::Independent => SamplerKind::Independent,
         }
     }
@@ -144,7 +147,7 @@ pub struct RenderOpts {
     pub mis: MisArg,
 
     /// Where the random numbers come from.
-    #[arg(long, value_enum, default_value_t = SamplerArg::Independent)]
+    #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
 
     /// GPU: the kernel built for what the scene uses, or the one that

@@ -30,6 +30,22 @@
 //!
 //! With a correct renderer the images pass with probability about
 //! 1 - alpha (the z's are only approximately normal at low spp).
+//!
+//! Quasi-Monte Carlo films (`--sampler sobol`): a pixel's samples are then
+//! a scrambled net, not independent, so the film's sample variance over n
+//! is not the variance V of the pixel mean. Each sample is still uniformly
+//! distributed (Owen scrambling), with per-sample variance s^2, so the
+//! expected sample variance is (n s^2 - n V) / (n - 1) and the estimate
+//! averages (s^2 - V) / (n - 1): at least V exactly when V <= s^2 / n, i.e.
+//! when the scrambled points do no worse than independent ones. Pixels
+//! stay independent of each other (each has its own scrambles and index
+//! shuffles, `sobol`), so block variances still add, and a block's z is
+//! then smaller than its true standardised difference: the tests stay
+//! valid and conservative (less power only where QMC actually removed
+//! noise). Measured rather than assumed: `cpu/tests/render_stats.rs`
+//! (`the_film_variance_overestimates_a_sobol_mean`) renders scenes under
+//! many seeds and finds the film's estimate above the seed-to-seed
+//! variance of the pixel means.
 
 // `!(a <= b)` on floats is meant: it is true for NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]

@@ -72,9 +72,11 @@ impl Mis {
 /// The source of each path's random numbers.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum SamplerKind {
+    /// Owen-scrambled Sobol points, per-pixel scrambles (`sobol`).
+    #[default]
+    Sobol,
     /// Independent uniform numbers from a counter-based hash
     /// (`sampling::Rng`).
-    #[default]
     Independent,
 }
 
@@ -83,11 +85,13 @@ impl SamplerKind {
     pub fn code(self) -> u32 {
         match self {
             SamplerKind::Independent => 0,
+            SamplerKind::Sobol => 1,
         }
     }
     pub fn name(self) -> &'static str {
         match self {
             SamplerKind::Independent => "independent",
+            SamplerKind::Sobol => "sobol",
         }
     }
 }
@@ -116,7 +120,7 @@ pub struct RenderStats {
 
 impl RenderOptions {
     /// The contract's defaults for a given image size: 64 spp, unbounded
-    /// depth, seed 0, the first camera.
+    /// depth, seed 0, the first camera, the Sobol sampler.
     pub fn new(width: u32, height: u32) -> Self {
         Self {
             width,

@@ -17,6 +17,7 @@ pub mod loader;
 pub mod metrics;
 pub mod sampling;
 pub mod scene;
+pub mod sobol;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, Bvh4, Bvh4Node, BvhNode, Hit, Ray};

@@ -18,7 +18,8 @@
 //!   survival odds, as Mitsuba does).
 //! - Random numbers: a fixed budget per vertex (2 for the pixel position,
 //!   then 4 light + 3 BSDF + 1 roulette per bounce) whether used or not, so
-//!   both backends walk the same stream.
+//!   both backends walk the same stream; `sobol::PathSampler` gives them
+//!   from independent numbers or Owen-scrambled Sobol pairs (`--sampler`).
 //! - Ray offsets: new rays start at `p + ng * sign(wi . ng) * eps(p)`, with
 //!   eps(p) = 1e-4 max|p_i| + 1e-6 * scene extent (relative to the
 //!   position's own magnitude, where float error of the interpolated hit
@@ -47,11 +48,12 @@ pub use gpu::{GpuParams, GpuSceneData, gpu_scene_data};
 use crate::bsdf::Bsdf;
 use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
-use crate::film::{Film, Mis, RenderOptions, RenderStats};
+use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind};
 use crate::frame::Frame;
 use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
-use crate::sampling::{Rng, mis_bsdf, mis_light, seed_key};
+use crate::sampling::{mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene};
+use crate::sobol::PathSampler;
 
 /// Mitsuba's default `rr_depth`.
 pub const RR_DEPTH: u32 = 5;
@@ -147,6 +149,8 @@ pub struct PathTracer<'a> {
     pub nee: bool,
     /// MIS weighting of light against BSDF samples.
     pub mis: Mis,
+    /// Where the random numbers come from.
+    pub sampler: SamplerKind,
     /// First sample index (`RenderOptions::sample_start`).
     pub sample_start: u32,
     /// Sampling budget in seconds (`RenderOptions::time_limit`).
@@ -179,6 +183,7 @@ impl<'a> PathTracer<'a> {
             eps_abs: RAY_EPS_SCENE * extent,
             nee: opts.nee,
             mis: opts.mis,
+            sampler: opts.sampler,
             sample_start: opts.sample_start,
             time_limit: opts.time_limit,
         })
@@ -237,8 +242,8 @@ impl<'a> PathTracer<'a> {
     pub fn sample(&self, x: u32, y: u32, s: u32, rays: &mut u64) -> Vec3 {
         let scene = self.scene;
         let pixel = y * self.camera.width + x;
-        let mut rng = Rng::new(self.key, pixel, s);
-        let mut ray = self.camera.ray(x, y, rng.next_2d());
+        let mut rng = PathSampler::new(self.sampler, self.key, pixel, s);
+        let mut ray = self.camera.ray(x, y, rng.pixel_2d());
 
         let mut radiance = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
@@ -289,12 +294,9 @@ impl<'a> PathTracer<'a> {
             }
 
             // The fixed per-bounce budget of random numbers.
-            let u_light_cat = rng.next_f32();
-            let u_light_idx = rng.next_f32();
-            let u_light = rng.next_2d();
-            let u_bsdf_lobe = rng.next_f32();
-            let u_bsdf = rng.next_2d();
-            let u_rr = rng.next_f32();
+            let u = rng.bounce();
+            let (u_light_cat, u_light_idx, u_light) = (u.light_cat, u.light_idx, u.light);
+            let (u_bsdf_lobe, u_bsdf, u_rr) = (u.bsdf_lobe, u.bsdf, u.rr);
 
             let sf = self.surface(hit.tri, hit.u, hit.v);
             let bsdf: &Bsdf = &scene.materials[tri.material as usize].bsdf;
