@@ -8,6 +8,7 @@ pub mod bsdf;
 pub mod bvh;
 pub mod camera;
 pub mod compare;
+pub mod envmap;
 pub mod film;
 pub mod frame;
 pub mod integrator;
@@ -16,6 +17,7 @@ pub mod loader;
 pub mod metrics;
 pub mod sampling;
 pub mod scene;
+pub mod texture;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, BvhNode, Hit, Ray};

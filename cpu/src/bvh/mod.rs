@@ -90,12 +90,33 @@ impl Bvh {
     /// Closest hit in (0, ray.tmax), watertight (Woop, Benthin, Wald 2013).
     /// `tris` must be in the order [`Bvh::build`] returned.
     pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        traverse::intersect(&self.nodes, tris, ray)
+        traverse::intersect(&self.nodes, tris, ray, |_, _, _| true)
     }
 
     /// Any hit in (0, ray.tmax).
     pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
-        traverse::occluded(&self.nodes, tris, ray)
+        traverse::occluded(&self.nodes, tris, ray, |_, _, _| true)
+    }
+
+    /// [`Bvh::intersect`] skipping hits where `present(tri, u, v)` is false
+    /// (alpha masks).
+    pub fn intersect_masked(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        traverse::intersect(&self.nodes, tris, ray, present)
+    }
+
+    /// [`Bvh::occluded`] skipping hits where `present(tri, u, v)` is false.
+    pub fn occluded_masked(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> bool {
+        traverse::occluded(&self.nodes, tris, ray, present)
     }
 
     /// Depth of the deepest node (root = 0); 0 for an empty hierarchy.
