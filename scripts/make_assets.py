@@ -20,6 +20,14 @@ Scenes:
   dielectric.gltf       bk7 glass sphere; directional light and background.
   roughdielectric.gltf  rough glass sphere; emissive area light and a point
                         light.
+  textured.gltf         glTF textures, procedural PNGs embedded in the buffer:
+                        a checker baseColor floor, a metal panel whose
+                        roughness ramps across it (metallicRoughness G), a
+                        panel with a normal map of 4x4 hemispherical bumps, and
+                        an alpha-masked leaf (MASK, cutoff 0.5); a sun and a
+                        background.
+  bunny.glb             (not generated: the shared Stanford Bunny) gets a
+                        directional light and a background added to its JSON.
 
 Materials name their BSDF in extras.bsdf (Mitsuba 3 names) and also carry
 approximate glTF metallic-roughness factors so other viewers show something
@@ -32,6 +40,7 @@ import math
 import os
 import struct
 import sys
+import zlib
 
 FLOAT = 5126
 USHORT = 5123
@@ -110,6 +119,24 @@ class Builder:
         self.doc["materials"].append(m)
         return len(self.doc["materials"]) - 1
 
+    def image_png(self, name, width, height, rgba):
+        """A PNG texture (rgba: rows top first, 4 bytes a pixel) embedded in
+        the buffer; returns the texture index."""
+        data = png(width, height, rgba)
+        while len(self.buf) % 4:
+            self.buf.append(0)
+        self.doc["bufferViews"].append({"buffer": 0, "byteOffset": len(self.buf), "byteLength": len(data)})
+        self.buf.extend(data)
+        images = self.doc.setdefault("images", [])
+        images.append({"name": name, "bufferView": len(self.doc["bufferViews"]) - 1, "mimeType": "image/png"})
+        textures = self.doc.setdefault("textures", [])
+        textures.append({"source": len(images) - 1})
+        return len(textures) - 1
+
+    def raw_material(self, m):
+        self.doc["materials"].append(m)
+        return len(self.doc["materials"]) - 1
+
     def mesh(self, name, geometry, material):
         attrs, indices = geometry
         self.doc["meshes"].append({"name": name, "primitives": [
@@ -156,6 +183,15 @@ class Builder:
             json.dump(self.doc, f, indent=1)
             f.write("\n")
         print(f"{path}: {os.path.getsize(path)} bytes")
+
+
+def png(width, height, rgba):
+    """A minimal RGBA8 PNG (zlib level 9, filter 0 on every row)."""
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+    raw = b"".join(b"\x00" + bytes(rgba[y * width * 4:(y + 1) * width * 4]) for y in range(height))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw, 9)) + chunk(b"IEND", b""))
 
 
 def normalize(v):
@@ -324,6 +360,123 @@ def single(path, name, lights, background=None):
     b.write(path, background)
 
 
+def checker_image(n=64, tiles=8, a=(230, 200, 120), b=(40, 60, 110)):
+    out = []
+    for y in range(n):
+        for x in range(n):
+            c = a if ((x * tiles // n) + (y * tiles // n)) % 2 == 0 else b
+            out += [*c, 255]
+    return out
+
+
+def roughness_ramp(n=64):
+    """metallicRoughness: G (roughness) ramps 0 -> 1 left to right, B
+    (metallic) 1."""
+    out = []
+    for y in range(n):
+        for x in range(n):
+            out += [0, round(255 * x / (n - 1)), 255, 255]
+    return out
+
+
+def bump_normals(n=64, bumps=4):
+    """Tangent-space normals of `bumps` x `bumps` hemispherical domes of
+    radius 0.4 cells: glTF convention, +X right, +Y up the image."""
+    out = []
+    cell = n / bumps
+    for y in range(n):
+        for x in range(n):
+            cx = ((x + 0.5) % cell) / cell - 0.5
+            cy = ((y + 0.5) % cell) / cell - 0.5
+            r2 = cx * cx + cy * cy
+            if r2 < 0.16:
+                # Sphere of radius 0.4 centred in the cell; image y runs
+                # down, tangent-space +Y up.
+                nz = math.sqrt(0.16 - r2)
+                v = normalize([cx, -cy, nz])
+            else:
+                v = [0.0, 0.0, 1.0]
+            out += [round((c + 1) * 127.5) for c in v] + [255]
+    return out
+
+
+def leaf_image(n=64):
+    """A leaf: an ellipse (alpha 255) with a paler midrib; alpha 0 outside."""
+    out = []
+    for y in range(n):
+        for x in range(n):
+            u, v = (x + 0.5) / n - 0.5, (y + 0.5) / n - 0.5
+            inside = (u / 0.22) ** 2 + (v / 0.47) ** 2 <= 1.0
+            rib = abs(u) < 0.015
+            c = (150, 200, 90) if rib else (50, 130, 40)
+            out += [*c, 255 if inside else 0]
+    return out
+
+
+def textured(path):
+    b = Builder()
+    checker_tex = b.image_png("checker", 64, 64, checker_image())
+    ramp_tex = b.image_png("roughness ramp", 64, 64, roughness_ramp())
+    bump_tex = b.image_png("bumps", 64, 64, bump_normals())
+    leaf_tex = b.image_png("leaf", 64, 64, leaf_image())
+    b.doc["samplers"] = [{"magFilter": 9728, "wrapS": 10497, "wrapT": 10497}]
+    b.doc["textures"][checker_tex]["sampler"] = 0
+    floor = b.raw_material({"name": "checker floor", "pbrMetallicRoughness": {
+        "baseColorTexture": {"index": checker_tex}, "metallicFactor": 0, "roughnessFactor": 1}})
+    metal = b.raw_material({"name": "roughness ramp metal", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.95, 0.93, 0.88, 1], "metallicRoughnessTexture": {"index": ramp_tex},
+        "metallicFactor": 1, "roughnessFactor": 1}})
+    bumpy = b.raw_material({"name": "bumps", "pbrMetallicRoughness": {
+        "baseColorFactor": [0.7, 0.3, 0.25, 1], "metallicFactor": 0},
+        "normalTexture": {"index": bump_tex, "scale": 1.0}})
+    leaf = b.raw_material({"name": "leaf", "doubleSided": True, "alphaMode": "MASK", "alphaCutoff": 0.5,
+                           "pbrMetallicRoughness": {"baseColorTexture": {"index": leaf_tex}, "metallicFactor": 0}})
+    # Floor: 4 x 4 at y = 0, UVs tiled twice (REPEAT).
+    p, n, t, i = quad([-2, 0, 2], [4, 0, 0], [0, 0, -4])
+    t = [[0, 2], [2, 2], [2, 0], [0, 0]]
+    b.node(name="floor", mesh=b.mesh("floor", b.geometry(p, n, t, i), floor))
+    # Upright panels facing +Z; glTF UVs: (0, 0) at the top-left.
+    uv = [[0, 1], [1, 1], [1, 0], [0, 0]]
+    for name, mat, x in [("ramp panel", metal, -0.65), ("bump panel", bumpy, 0.65)]:
+        p, n, _, i = quad([x - 0.55, 0.05, -0.6], [1.1, 0, 0], [0, 1.1, 0])
+        b.node(name=name, mesh=b.mesh(name, b.geometry(p, n, uv, i), mat))
+    # The leaf leans in front of the panels.
+    p, n, _, i = quad([-0.3, 0.02, 0.55], [0.6, 0, 0], [0, 0.9, -0.35])
+    b.node(name="leaf", mesh=b.mesh("leaf", b.geometry(p, n, uv, i), leaf))
+    b.camera("main", [0, 1.2, 3.0], [0, 0.5, 0], 0.65, aspect=4 / 3)
+    b.light("sun", "directional", (1.0, 0.96, 0.9), 3.0,
+            rotation=look_rotation([0, 0, 0], [-0.4, -1.0, -0.7]))
+    b.write(path, background=(0.25, 0.3, 0.4))
+
+
+def light_bunny(path):
+    """Give the bundled bunny a light and a background (it had none, so it
+    rendered black): a directional sun and a sky colour, added to the GLB's
+    JSON chunk (idempotent: an existing light is replaced)."""
+    data = open(path, "rb").read()
+    json_len = struct.unpack("<I", data[12:16])[0]
+    doc = json.loads(data[20:20 + json_len])
+    rest = data[20 + json_len:]
+    nodes = [n for n in doc["nodes"] if "extensions" not in n]
+    doc["nodes"] = nodes
+    doc["scenes"][0]["nodes"] = list(range(len(nodes)))
+    doc["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"name": "sun", "type": "directional", "color": [1.0, 0.97, 0.92], "intensity": 3.0}]}}
+    doc["extensionsUsed"] = ["KHR_lights_punctual"]
+    doc["nodes"].append({"name": "sun", "rotation": look_rotation([0, 0, 0], [-0.5, -1.0, -0.6]),
+                         "extensions": {"KHR_lights_punctual": {"light": 0}}})
+    doc["scenes"][0]["nodes"].append(len(doc["nodes"]) - 1)
+    doc["scenes"][0]["extras"] = {"background": [0.3, 0.35, 0.45]}
+    js = json.dumps(doc, separators=(",", ":")).encode()
+    while len(js) % 4:
+        js += b" "
+    body = struct.pack("<I", len(js)) + b"JSON" + js + rest
+    out = b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
+    with open(path, "wb") as f:
+        f.write(out)
+    print(f"{path}: {len(out)} bytes")
+
+
 def main():
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "assets")
     out = sys.argv[1] if len(sys.argv) > 1 else root
@@ -334,6 +487,10 @@ def main():
     single(os.path.join(out, "roughconductor.gltf"), "roughconductor", ["spot"], background=(0.2, 0.2, 0.25))
     single(os.path.join(out, "dielectric.gltf"), "dielectric", ["directional"], background=(0.4, 0.45, 0.55))
     single(os.path.join(out, "roughdielectric.gltf"), "roughdielectric", ["area", "point"])
+    textured(os.path.join(out, "textured.gltf"))
+    bunny = os.path.join(out, "bunny.glb")
+    if os.path.exists(bunny):
+        light_bunny(bunny)
 
 
 if __name__ == "__main__":

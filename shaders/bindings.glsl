@@ -1,7 +1,7 @@
 // The path tracer's binding table (descriptor set 0), shared by
 // shaders/pathtrace.comp and the host (src/gpu/render.rs). Rust mirrors:
 //
-//   binding 0  uniform Params          glint_cpu::integrator::GpuParams (std140, 144 B)
+//   binding 0  uniform Params          glint_cpu::integrator::GpuParams (std140, 176 B)
 //   binding 1  Triangle triangles[]    glint_cpu::Triangle (48 B), BVH leaf order
 //   binding 2  Bvh4Node bvh_nodes[]    glint_cpu::Bvh4Node (128 B), the 4-wide BVH
 //   binding 3  TriangleShading shading[]  glint_cpu::TriangleShading (96 B)
@@ -11,6 +11,14 @@
 //   binding 7  vec4 accum[]            2 per pixel: (sum, sum of squares); ADDED to,
 //                                      sample by sample in sample order (the host zeroes it)
 //   binding 8  uint ray_counts[]       1 per pixel; ADDED to
+//   binding 9  uint texels[]           glint_cpu::texture::SceneTextures::texels (RGBA8)
+//   binding 10 Texture textures[]      glint_cpu::texture::GpuTexture (16 B)
+//   binding 11 MaterialTextures material_textures[]  glint_cpu::texture::MaterialTextures (240 B)
+//   binding 12 TriangleUv triangle_uvs[]  glint_cpu::texture::TriangleUv (64 B), triangle order
+//   (bindings 9-12 hold one dummy element when params.textured == 0)
+//   binding 13 vec4 env_texels[]       glint_cpu::envmap::EnvMap::texels (radiance, row 0 the top)
+//   binding 14 float env_dist[]        EnvMap::marginal then EnvMap::conditional
+//   (bindings 13-14 hold one dummy element when params.env_width == 0)
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders
 // samples [sample_start, sample_start + sample_count) of every pixel, one
@@ -22,6 +30,7 @@
 
 #include "bvh_types.glsl"
 #include "bsdf/material.glsl"
+#include "texture_types.glsl"
 
 struct TriangleShading {
     // .w of each normal: 1 when the mesh had NORMAL (else use the
@@ -72,6 +81,14 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
     float p_punctual;
     float p_background;
     float eps_abs;
+    uint textured;    // 1: some material has textures (bindings 9-12 are real)
+    uint masked;      // 1: some material has an alpha mask (traversal tests it)
+    uint env_width;   // environment map size; 0: none (bindings 13-14 dummies)
+    uint env_height;
+    float env_rot_sin; // the environment map's rotation about +Y
+    float env_rot_cos;
+    uint env_pad0;
+    uint env_pad1;
 } params;
 
 layout(std430, set = 0, binding = 1) readonly buffer TriangleBuffer { Triangle triangles[]; };
@@ -82,6 +99,12 @@ layout(std430, set = 0, binding = 5) readonly buffer EmitterBuffer { Emitter emi
 layout(std430, set = 0, binding = 6) readonly buffer LightBuffer { Light lights[]; };
 layout(std430, set = 0, binding = 7) buffer AccumBuffer { vec4 accum[]; };
 layout(std430, set = 0, binding = 8) buffer RayCountBuffer { uint ray_counts[]; };
+layout(std430, set = 0, binding = 9) readonly buffer TexelBuffer { uint texels[]; };
+layout(std430, set = 0, binding = 10) readonly buffer TextureBuffer { Texture textures[]; };
+layout(std430, set = 0, binding = 11) readonly buffer MaterialTextureBuffer { MaterialTextures material_textures[]; };
+layout(std430, set = 0, binding = 12) readonly buffer TriangleUvBuffer { TriangleUv triangle_uvs[]; };
+layout(std430, set = 0, binding = 13) readonly buffer EnvTexelBuffer { vec4 env_texels[]; };
+layout(std430, set = 0, binding = 14) readonly buffer EnvDistBuffer { float env_dist[]; };
 
 layout(push_constant) uniform SamplePush {
     uint sample_start;

@@ -10,12 +10,19 @@ layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "features.glsl"
 #include "bindings.glsl"
+#include "texture.glsl"
+// The alpha-mask hook at bvh.glsl's leaf triangle test.
+bool bvh_present(uint tri, float u, float v) {
+    return params.masked == 0u || alpha_pass(floatBitsToUint(triangles[tri].p0.w), tri, u, v);
+}
+#define BVH_PRESENT(tri, u, v) bvh_present(tri, u, v)
 #include "bvh.glsl"
 #include "bsdf/bsdf.glsl"
 #include "integrator/rng.glsl"
 #include "integrator/sobol.glsl"
 #include "integrator/frame.glsl"
 #include "integrator/camera.glsl"
+#include "integrator/envmap.glsl"
 #include "integrator/lights.glsl"
 
 // glint_cpu::integrator constants.
@@ -63,6 +70,21 @@ SurfaceFrame surface(uint tri, float u, float v) {
     return sf;
 }
 
+// PathTracer::apply_textures: the normal map tilts the shading frame, the
+// other textures set the material's parameters.
+void apply_textures(uint material, uint tri, float u, float v, inout SurfaceFrame sf, inout Material m) {
+    MaterialTextures mt = material_textures[material];
+    if (!material_textures_used(mt)) {
+        return;
+    }
+    vec3 ns = normal_mapped(mt, tri, u, v, sf.ng, sf.frame.s, sf.frame.t, sf.frame.n);
+    if (ns != sf.ns) {
+        sf.frame = frame_from_normal_tangent(ns, sf.frame.s);
+        sf.ns = ns;
+    }
+    m = textured_bsdf(mt, m, tri, u, v);
+}
+
 // The shadow ray toward a light sample, from the offset origin to eps(q)
 // short of the light point q (PathTracer::shadow_ray).
 void shadow_ray(vec3 p, vec3 ng, LightSample ls, out vec3 o, out vec3 d, out float tmax) {
@@ -107,7 +129,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
                     float lp = lights_background_pdf(prev_bg_normal, ray_d);
                     w = mis_bsdf(params.mis, prev_bsdf_pdf, lp);
                 }
-                radiance += throughput * w * params.background.xyz;
+                radiance += throughput * w * lights_background_radiance(ray_d);
             }
             break;
         }
@@ -116,7 +138,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         vec3 wo = -ray_d;
 
         vec3 le;
-        if (HAS(F_AREA_LIGHTS) && floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, wo, le)) {
+        if (HAS(F_AREA_LIGHTS) && floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, hit.tri, hit.u, hit.v, wo, le)) {
             float w = 1.0;
             if (prev_mis) {
                 float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
@@ -139,7 +161,11 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         float u_rr = u.rr;
 
         SurfaceFrame sf = surface(hit.tri, hit.u, hit.v);
-        Material m = materials[floatBitsToUint(tri.p0.w)];
+        uint material = floatBitsToUint(tri.p0.w);
+        Material m = materials[material];
+        if (params.textured != 0u) {
+            apply_textures(material, hit.tri, hit.u, hit.v, sf, m);
+        }
         vec3 wo_local = frame_to_local(sf.frame, wo);
         vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));
 

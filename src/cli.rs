@@ -35,10 +35,33 @@ pub enum Command {
     /// several sample counts or time budgets, measure each image against a
     /// reference, write DIR/converge.csv, .md, .svg and .png.
     Converge(ConvergeArgs),
+    /// What a scene holds and what glint will use: cameras, materials and
+    /// the models they map to, textures, lights, triangles, bounds, kernel
+    /// features, GPU memory, warnings.
+    Info(InfoArgs),
 }
 
 /// The verbs, for messages ("missing command: ...").
-pub const VERBS: &[&str] = &["render", "compare", "bench", "converge"];
+pub const VERBS: &[&str] = &["render", "compare", "bench", "converge", "info"];
+
+#[derive(clap::Args, Debug)]
+pub struct InfoArgs {
+    /// The scene: a glTF 2.0 file.
+    #[arg(value_name = "SCENE")]
+    pub scene: PathBuf,
+
+    /// Let buffer and image URIs name files outside the scene's folder.
+    #[arg(long)]
+    pub allow_any_path: bool,
+
+    /// Constant radiance R,G,B replacing the scene's background.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub background: Option<[f32; 3]>,
+
+    /// Every warning is an error.
+    #[arg(long)]
+    pub strict: bool,
+}
 
 /// `--nee on|off`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -160,6 +183,55 @@ pub struct RenderOpts {
     /// spp reached).
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     pub time_limit: Option<f64>,
+
+    /// Constant radiance R,G,B from every direction, replacing the
+    /// scene's background.
+    #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
+    pub background: Option<[f32; 3]>,
+
+    /// Equirectangular environment light (.exr or .hdr, linear RGB, +Y up),
+    /// importance sampled; replaces the scene's background.
+    #[arg(long, value_name = "FILE")]
+    pub envmap: Option<PathBuf>,
+
+    /// Multiplies the environment map's radiance.
+    #[arg(long, value_name = "S", default_value_t = 1.0)]
+    pub envmap_scale: f32,
+
+    /// Turns the environment map about +Y by this many degrees.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub envmap_rotate: f32,
+
+    /// Every warning is an error.
+    #[arg(long)]
+    pub strict: bool,
+
+    /// Let buffer and image URIs name files outside the scene's folder
+    /// (absolute paths, `..`).
+    #[arg(long)]
+    pub allow_any_path: bool,
+}
+
+/// `R,G,B`: three finite numbers >= 0.
+pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    if parts.len() != 3 {
+        return Err(format!("'{s}' is not R,G,B (three numbers)"));
+    }
+    let mut c = [0.0f32; 3];
+    for (ci, p) in c.iter_mut().zip(&parts) {
+        *ci = p
+            .parse::<f32>()
+            .ok()
+            .filter(|x| x.is_finite() && *x >= 0.0)
+            .ok_or_else(|| format!("'{s}': each of R,G,B must be a finite number >= 0"))?;
+    }
+    Ok(c)
 }
 
 impl RenderOpts {
@@ -193,6 +265,20 @@ impl RenderOpts {
         push("kernel", name(&|| self.kernel.to_possible_value()));
         if let Some(t) = self.time_limit {
             push("time-limit", t.to_string());
+        }
+        if let Some([r, g, b]) = self.background {
+            push("background", format!("{r},{g},{b}"));
+        }
+        if let Some(e) = &self.envmap {
+            push("envmap", e.display().to_string());
+        }
+        push("envmap-scale", self.envmap_scale.to_string());
+        push("envmap-rotate", self.envmap_rotate.to_string());
+        if self.strict {
+            a.push("--strict".into());
+        }
+        if self.allow_any_path {
+            a.push("--allow-any-path".into());
         }
         a
     }

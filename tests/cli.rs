@@ -496,3 +496,96 @@ fn bench_reports_both_backends_and_their_ratio() {
     assert_one_line_error(&bad, "--repeat");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `write_scene` without its emitter: nothing lights it.
+fn write_unlit_scene(dir: &Path) -> PathBuf {
+    let path = write_scene(dir);
+    let mut j: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    j["scenes"][0]["nodes"] = serde_json::json!([0, 2]);
+    let unlit = dir.join("unlit.gltf");
+    std::fs::write(&unlit, serde_json::to_vec(&j).unwrap()).unwrap();
+    unlit
+}
+
+fn mean_of_exr(path: &Path) -> f32 {
+    let img = image::open(path).unwrap().to_rgb32f();
+    img.pixels().map(|p| p.0[1]).sum::<f32>() / (img.width() * img.height()) as f32
+}
+
+#[test]
+fn warnings_strict_background_and_the_no_light_rule() {
+    let dir = scratch("warnings");
+    let scene = write_unlit_scene(&dir);
+    let render = |extra: &[&str], out: &str| {
+        glint()
+            .args([
+                "render",
+                scene.to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--spp",
+                "2",
+            ])
+            .args(["--width", "12", "--height", "8", "-o"])
+            .arg(dir.join(out))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    // No light: rendered under a white sky, with one warning line.
+    let out = render(&[], "white.exr");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    let warning = format!(
+        "glint: warning: {}: the scene has no light",
+        scene.display()
+    );
+    assert!(err.contains(&warning), "{err}");
+    let white = mean_of_exr(&dir.join("white.exr"));
+    assert!(white > 0.5, "{white}");
+    // --strict: the warning is the error, and no image is left.
+    let out = render(&["--strict"], "strict.exr");
+    assert_one_line_error(&out, "the scene has no light");
+    assert!(!dir.join("strict.exr").exists());
+    // --background replaces it: no warning, a dimmer image.
+    let out = render(&["--background", "0.1,0.1,0.1"], "dim.exr");
+    assert!(out.status.success());
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let dim = mean_of_exr(&dir.join("dim.exr"));
+    assert!((dim / white - 0.1).abs() < 0.03, "{dim} vs {white}");
+    let out = render(&["--background", "1,2"], "bad.exr");
+    assert_one_line_error(&out, "R,G,B");
+}
+
+#[test]
+fn info_describes_the_textured_asset() {
+    let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textured.gltf");
+    let out = glint().arg("info").arg(&asset).output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "cameras: 1",
+        "materials: 4",
+        "textures: 4",
+        "checker 64x64 wrap repeat/repeat nearest",
+        "roughness ramp 64x64",
+        "alpha mask < 0.5",
+        "lights: 0 emissive triangles, 1 punctual",
+        "directional toward",
+        "triangles: 8",
+        "texels: 65536 B",
+        "warnings: 0",
+    ] {
+        assert!(text.contains(needle), "info lacks '{needle}':\n{text}");
+    }
+    let out = glint().args(["info", "missing.gltf"]).output().unwrap();
+    assert_one_line_error(&out, "missing.gltf");
+}

@@ -155,7 +155,28 @@ scene_tests! {
     roughconductor => "roughconductor.gltf", as_is;
     dielectric => "dielectric.gltf", as_is;
     roughdielectric => "roughdielectric.gltf", as_is;
-    bunny => "bunny.glb", lit_by_background;
+    bunny => "bunny.glb", as_is;
+    bunny_white_sky => "bunny.glb", lit_by_background;
+    textured => "textured.gltf", as_is;
+    textured_envmap => "textured.gltf", with_envmap;
+}
+
+/// A procedural sky (a blue gradient with a small bright sun) as an
+/// environment map, turned 30 degrees, in place of the background.
+fn with_envmap(scene: &mut Scene) {
+    let (w, h) = (32u32, 16u32);
+    let mut rgb = Vec::new();
+    for y in 0..h {
+        for x in 0..w {
+            let t = y as f32 / h as f32;
+            let sun = if (x, y) == (9, 4) { 40.0 } else { 0.0 };
+            rgb.push([0.2 + 0.6 * t + sun, 0.3 + 0.4 * t + sun, 0.6 + sun]);
+        }
+    }
+    scene.background = Vec3::ZERO;
+    scene.envmap = Some(std::sync::Arc::new(glint::cpu::envmap::EnvMap::new(
+        w, h, &rgb, 0.8, 0.5236,
+    )));
 }
 
 /// Scale material `name`'s reflectance (diffuse) or specular reflectance

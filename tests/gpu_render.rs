@@ -41,6 +41,12 @@ fn plumbing(ctx: common::ValidatedContext) {
         materials: f32s(&material),
         emitters: f32s(&emitter),
         lights: f32s(&light),
+        texels: &[],
+        textures: &[],
+        material_textures: &[],
+        uvs: &[],
+        env_texels: &[],
+        env_dist: &[],
     };
     let calls = std::cell::RefCell::new(Vec::new());
     let r = render_film(&ctx, "tests/render_plumbing", &scene, w, h, spp, &|d, t| {
@@ -99,6 +105,12 @@ fn empty_scene_arrays_and_tiny_images_render() {
         materials: &[],
         emitters: &[],
         lights: &[],
+        texels: &[],
+        textures: &[],
+        material_textures: &[],
+        uvs: &[],
+        env_texels: &[],
+        env_dist: &[],
     };
     let r = render_film(&ctx, "tests/render_plumbing", &scene, 1, 1, 1, &|_, _| {}).unwrap();
     assert_eq!(r.film.sum.len(), 1);

@@ -40,7 +40,7 @@ impl Features {
     pub const POINT_SPOT: u32 = 1 << 9;
     /// Directional lights.
     pub const DIRECTIONAL: u32 = 1 << 10;
-    /// A constant background that is not black.
+    /// A background that is not black: constant, or an environment map.
     pub const BACKGROUND: u32 = 1 << 11;
     /// Paths continue past the first hit (max depth other than 1).
     pub const BOUNCES: u32 = 1 << 12;
@@ -135,7 +135,7 @@ impl Features {
                 _ => Self::POINT_SPOT,
             };
         }
-        if scene.background.max_element() > 0.0 {
+        if scene.background.max_element() > 0.0 || scene.envmap.is_some() {
             f |= Self::BACKGROUND;
         }
         if opts.max_depth != 1 {
@@ -297,7 +297,7 @@ mod tests {
             lights,
             cameras: vec![],
             background,
-            bvh: Default::default(),
+            ..Default::default()
         };
         s.build_bvh();
         s

@@ -8,6 +8,7 @@ pub mod bsdf;
 pub mod bvh;
 pub mod camera;
 pub mod compare;
+pub mod envmap;
 pub mod features;
 pub mod film;
 pub mod frame;
@@ -18,6 +19,7 @@ pub mod metrics;
 pub mod sampling;
 pub mod scene;
 pub mod sobol;
+pub mod texture;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, Bvh4, Bvh4Node, BvhNode, Hit, Ray};

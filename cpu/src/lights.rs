@@ -14,7 +14,9 @@
 //!    p = P(category) P(triangle) / area * d^2 / |cos theta_light|;
 //!    within the punctual lights, one uniformly (delta lights: no MIS);
 //!    the background is sampled in direction space (see
-//!    [`background_direction_frame`]).
+//!    [`background_direction_frame`]); an environment map (`--envmap`)
+//!    replaces it and is sampled by its own 2D distribution
+//!    ([`crate::envmap`]).
 //!
 //! Every light sample draws exactly four uniform numbers (category, index,
 //! 2D position), whatever is chosen, so the GPU consumes the same stream.
@@ -27,12 +29,14 @@ use std::mem::{offset_of, size_of};
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
+use crate::envmap::EnvMap;
 use crate::frame::Frame;
 use crate::sampling::{
     UNIFORM_SPHERE_PDF, cosine_hemisphere_pdf, sample_cdf, square_to_cosine_hemisphere,
     square_to_uniform_sphere, square_to_uniform_triangle,
 };
-use crate::scene::{PunctualLight, Scene, TRI_DOUBLE_SIDED, Triangle};
+use crate::scene::{PunctualLight, Scene, TRI_DOUBLE_SIDED};
+use crate::texture::emission_factor;
 
 /// Rec. 709 / sRGB luminance.
 pub fn luminance(c: Vec3) -> f32 {
@@ -161,6 +165,8 @@ pub struct Lights {
     pub emitters: Vec<GpuEmitter>,
     pub punctual: Vec<GpuLight>,
     pub background: Vec3,
+    /// The environment map, when there is one: it is the background.
+    pub envmap: Option<std::sync::Arc<EnvMap>>,
     pub probs: CategoryProbs,
 }
 
@@ -211,7 +217,7 @@ impl Lights {
             last.cdf = 1.0;
         }
         let punctual: Vec<GpuLight> = scene.lights.iter().map(GpuLight::from).collect();
-        let has_bg = scene.background.max_element() > 0.0;
+        let has_bg = scene.background.max_element() > 0.0 || scene.envmap.is_some();
         let present = [!emitters.is_empty(), !punctual.is_empty(), has_bg];
         let n = present.iter().filter(|&&b| b).count();
         let p = if n > 0 { 1.0 / n as f32 } else { 0.0 };
@@ -224,6 +230,7 @@ impl Lights {
             emitters,
             punctual,
             background: scene.background,
+            envmap: scene.envmap.clone(),
             probs,
         }
     }
@@ -262,7 +269,7 @@ impl Lights {
                 return None;
             }
             let wi = d / dist;
-            let le = emitted(scene, t, -wi)?;
+            let le = emitted(scene, e.tri, b.x, b.y, -wi)?;
             let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
             let pdf = pr.area * e.pmf / e.area * dist2 / cos_l;
             if !(pdf > 0.0 && pdf.is_finite()) {
@@ -309,6 +316,17 @@ impl Lights {
                 delta: true,
             })
         } else if pr.background > 0.0 {
+            if let Some(env) = &self.envmap {
+                let es = env.sample(u)?;
+                let pdf = pr.background * es.pdf;
+                return Some(LightSample {
+                    wi: es.wi,
+                    dist: f32::INFINITY,
+                    weight: es.radiance / pdf,
+                    pdf,
+                    delta: false,
+                });
+            }
             let (wi, dir_pdf) = if bg_normal == Vec3::ZERO {
                 (square_to_uniform_sphere(u), UNIFORM_SPHERE_PDF)
             } else {
@@ -347,6 +365,9 @@ impl Lights {
 
     /// Solid-angle density of sampling background direction `wi`.
     pub fn background_pdf(&self, bg_normal: Vec3, wi: Vec3) -> f32 {
+        if let Some(env) = &self.envmap {
+            return self.probs.background * env.pdf(wi);
+        }
         let dir_pdf = if bg_normal == Vec3::ZERO {
             UNIFORM_SPHERE_PDF
         } else {
@@ -356,17 +377,30 @@ impl Lights {
     }
 }
 
+impl Lights {
+    /// Radiance from the background along `d` (away from the scene): the
+    /// environment map, else the constant background.
+    pub fn background_radiance(&self, d: Vec3) -> Vec3 {
+        match &self.envmap {
+            Some(env) => env.radiance(d),
+            None => self.background,
+        }
+    }
+}
+
 /// Radiance an emissive triangle sends along `w` (pointing away from it):
 /// its emission on the front face (the side the geometric normal points to)
 /// or on both faces when double-sided; `None` when it sends nothing.
-pub fn emitted(scene: &Scene, t: &Triangle, w: Vec3) -> Option<Vec3> {
+/// Times the emissive texture at barycentrics (u, v), when there is one.
+pub fn emitted(scene: &Scene, tri: u32, u: f32, v: f32, w: Vec3) -> Option<Vec3> {
+    let t = &scene.triangles[tri as usize];
     let m = &scene.materials[t.material as usize];
     if !m.is_emissive() {
         return None;
     }
     let front = t.geometric_normal().dot(w) > 0.0;
     if front || t.flags & TRI_DOUBLE_SIDED != 0 {
-        Some(m.emission)
+        Some(m.emission * emission_factor(&scene.textures, t.material, tri, u, v))
     } else {
         None
     }

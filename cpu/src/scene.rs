@@ -197,7 +197,7 @@ pub struct Camera {
 
 /// A loaded scene. Triangles and their shading data are in BVH leaf order
 /// once [`Scene::build_bvh`] has run.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, Default)]
 pub struct Scene {
     pub triangles: Vec<Triangle>,
     pub shading: Vec<TriangleShading>,
@@ -210,6 +210,13 @@ pub struct Scene {
     /// The 4-wide BVH both backends traverse (`Bvh4::nodes` is the GPU's
     /// binding 2 unchanged).
     pub bvh: Bvh4,
+    /// What the loader skipped or substituted, one line each (without the
+    /// file name): the CLI prints them as `glint: warning: FILE: ...`.
+    pub warnings: Vec<String>,
+    /// Texture data (empty for an untextured scene).
+    pub textures: crate::texture::SceneTextures,
+    /// The environment light (`--envmap`); it replaces `background`.
+    pub envmap: Option<std::sync::Arc<crate::envmap::EnvMap>>,
 }
 
 impl Scene {
@@ -220,6 +227,10 @@ impl Scene {
         let (bvh, order) = Bvh4::build(&self.triangles);
         self.triangles = order.iter().map(|&i| self.triangles[i as usize]).collect();
         self.shading = order.iter().map(|&i| self.shading[i as usize]).collect();
+        if !self.textures.uvs.is_empty() {
+            let uvs = &self.textures.uvs;
+            self.textures.uvs = order.iter().map(|&i| uvs[i as usize]).collect();
+        }
         self.bvh = bvh;
         self.assign_emitters();
     }
@@ -249,6 +260,55 @@ impl Scene {
         (0..self.triangles.len() as u32)
             .filter(|&i| self.triangles[i as usize].light != NO_LIGHT)
             .collect()
+    }
+
+    /// Closest hit, alpha masks applied when the scene has any.
+    pub fn intersect(&self, ray: &crate::bvh::Ray) -> Option<crate::bvh::Hit> {
+        if self.textures.has_masks() {
+            self.bvh
+                .intersect_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v))
+        } else {
+            self.bvh.intersect(&self.triangles, ray)
+        }
+    }
+
+    /// Any hit, alpha masks applied when the scene has any.
+    pub fn occluded(&self, ray: &crate::bvh::Ray) -> bool {
+        if self.textures.has_masks() {
+            self.bvh
+                .occluded_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v))
+        } else {
+            self.bvh.occluded(&self.triangles, ray)
+        }
+    }
+
+    /// The alpha test of triangle `tri` at barycentrics (u, v).
+    fn present(&self, tri: u32, u: f32, v: f32) -> bool {
+        let m = self.triangles[tri as usize].material;
+        self.textures.alpha_pass(m, tri, u, v)
+    }
+
+    /// Whether anything lights the scene: an emissive triangle, a punctual
+    /// light or a non-black background.
+    pub fn has_light(&self) -> bool {
+        self.background.max_element() > 0.0
+            || self.envmap.is_some()
+            || !self.lights.is_empty()
+            || self.triangles.iter().any(|t| t.light != NO_LIGHT)
+    }
+
+    /// The contract's no-light rule: a scene with nothing that emits is lit
+    /// by a constant white background of radiance 1, with a warning.
+    /// Returns whether it applied.
+    pub fn light_if_unlit(&mut self) -> bool {
+        if self.has_light() {
+            return false;
+        }
+        self.background = Vec3::ONE;
+        self.warnings.push(
+            "the scene has no light (no emitter, punctual light or background); lit by a constant white background of radiance 1".into(),
+        );
+        true
     }
 
     /// World-space bounds of all geometry (min, max); (0, 0) for an empty scene.

@@ -939,3 +939,114 @@ fn load_builds_the_bvh_and_keeps_emitters() {
         assert!(a == b, "{name}: load changed the triangle set");
     }
 }
+
+#[test]
+fn skipped_features_are_warnings() {
+    let mut d = Doc::new();
+    let tri = d.triangle_mesh(None);
+    let pos = d.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0], "VEC3");
+    let lines = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos }, "mode": 1 }),
+        json!({ "attributes": { "POSITION": pos }, "mode": 0 }),
+    ]);
+    let morph = d.floats(&[0.0; 9], "VEC3");
+    let m = d.triangle_mesh(None);
+    d.json["meshes"][m]["primitives"][0]["targets"] = json!([{ "POSITION": morph }]);
+    d.node(json!({ "mesh": tri }));
+    d.node(json!({ "mesh": lines }));
+    d.node(json!({ "mesh": m }));
+    d.json["extensionsUsed"] = json!(["EXT_unknown_optional", "KHR_materials_emissive_strength"]);
+    let s = parse_doc(&d, "warnings");
+    assert_eq!(s.triangles.len(), 2);
+    let w = s.warnings.join("\n");
+    assert!(w.contains("2 point or line primitive(s) skipped"), "{w}");
+    assert!(w.contains("morph targets"), "{w}");
+    assert!(
+        w.contains("extension EXT_unknown_optional is not supported"),
+        "{w}"
+    );
+    assert!(!w.contains("KHR_materials_emissive_strength"), "{w}");
+    assert_eq!(s.warnings.len(), 3, "{w}");
+    // A clean file has none.
+    let mut d = Doc::new();
+    let tri = d.triangle_mesh(None);
+    d.node(json!({ "mesh": tri }));
+    assert!(parse_doc(&d, "nowarnings").warnings.is_empty());
+}
+
+#[test]
+fn no_light_gets_a_white_background_with_a_warning() {
+    let mut d = Doc::new();
+    let tri = d.triangle_mesh(None);
+    d.node(json!({ "mesh": tri }));
+    let mut s = parse_doc(&d, "unlit");
+    assert!(!s.has_light());
+    assert!(s.light_if_unlit());
+    assert_eq!(s.background, Vec3::ONE);
+    assert!(s.warnings.last().unwrap().contains("no light"));
+    // Lit scenes keep their (black) background.
+    let mut d = Doc::new();
+    let mat = d.material(json!({ "emissiveFactor": [1, 1, 1] }));
+    let tri = d.triangle_mesh(Some(mat));
+    d.node(json!({ "mesh": tri }));
+    let mut s = parse_doc(&d, "lit");
+    assert!(!s.light_if_unlit());
+    assert_eq!(s.background, Vec3::ZERO);
+    assert!(s.warnings.is_empty());
+}
+
+#[test]
+fn accessors_without_views_read_as_zeros() {
+    let mut d = Doc::new();
+    let pos = d.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0], "VEC3");
+    // Indices with no buffer view: three zeros, one degenerate triangle.
+    let idx = d.accessor(json!({ "componentType": 5123, "count": 3, "type": "SCALAR" }));
+    let m = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos }, "indices": idx }),
+    ]);
+    d.node(json!({ "mesh": m }));
+    let s = parse_doc(&d, "zeros");
+    assert_eq!(s.triangles.len(), 1);
+    assert_eq!(s.triangles[0].vertices(), [Vec3::ZERO; 3]);
+}
+
+#[test]
+fn quantized_accessors_are_read() {
+    // KHR_mesh_quantization: i16 normalized positions, i8 normalized
+    // normals, u16 normalized and u8 unnormalized texcoords.
+    let mut d = Doc::new();
+    let p: [i16; 9] = [0, 0, 0, 32767, 0, 0, 0, -32767, 0];
+    let bytes: Vec<u8> = p.iter().flat_map(|x| x.to_le_bytes()).collect();
+    let v = d.view(&bytes);
+    let pos = d.accessor(json!({ "bufferView": v, "componentType": 5122, "normalized": true, "count": 3, "type": "VEC3" }));
+    // u8 positions, not normalized, padded to 4-byte stride.
+    let q: [u8; 12] = [0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0];
+    let v = d.view(&q);
+    d.json["bufferViews"][v]["byteStride"] = json!(4);
+    let pos8 =
+        d.accessor(json!({ "bufferView": v, "componentType": 5121, "count": 3, "type": "VEC3" }));
+    let n: [i8; 12] = [0, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0];
+    let v = d.view(&n.map(|x| x as u8));
+    d.json["bufferViews"][v]["byteStride"] = json!(4);
+    let nrm = d.accessor(json!({ "bufferView": v, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3" }));
+    let m = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos, "NORMAL": nrm } }),
+        json!({ "attributes": { "POSITION": pos8 } }),
+    ]);
+    d.node(json!({ "mesh": m }));
+    d.json["extensionsUsed"] = json!(["KHR_mesh_quantization"]);
+    d.json["extensionsRequired"] = json!(["KHR_mesh_quantization"]);
+    let s = parse_doc(&d, "quantized");
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let tris = tri_set(&s);
+    assert_eq!(tris[0], [Vec3::ZERO, Vec3::X, Vec3::NEG_Y]);
+    assert_eq!(
+        tris[1],
+        [
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0)
+        ]
+    );
+    assert_close(Vec3::from_slice(&s.shading[0].n[0][..3]), Vec3::Z);
+}

@@ -718,3 +718,68 @@ fn mutated_files_never_panic() {
         "only {failures} of 6000 mutations failed to load"
     );
 }
+
+#[test]
+fn uris_leaving_the_folder_are_refused() {
+    use glint_cpu::loader::{LoadOptions, parse_with};
+    let root = temp_dir("escape");
+    let inner = root.join("scene");
+    std::fs::create_dir_all(inner.join("sub")).unwrap();
+    let d = good();
+    // The buffer beside the scene's folder, named four ways.
+    std::fs::write(root.join("outside.bin"), &d.bin).unwrap();
+    std::fs::write(inner.join("sub").join("inside.bin"), &d.bin).unwrap();
+    let p = d.write_gltf(&inner, "base");
+    let j: Value = serde_json::from_slice(&std::fs::read(&p).unwrap()).unwrap();
+    let abs = root.join("outside.bin").display().to_string();
+    for (name, uri) in [
+        ("dotdot", "../outside.bin".to_string()),
+        ("deep", "sub/../../outside.bin".to_string()),
+        ("abs", abs.clone()),
+        ("fileuri", format!("file://{abs}")),
+    ] {
+        let mut j = j.clone();
+        j["buffers"][0]["uri"] = json!(uri);
+        let path = write(
+            &inner,
+            &format!("{name}.gltf"),
+            &serde_json::to_vec(&j).unwrap(),
+        );
+        let text = expect_err(&path, "outside the scene's folder");
+        assert!(text.contains("--allow-any-path"), "{text}");
+        let allowed = parse_with(
+            &path,
+            LoadOptions {
+                allow_any_path: true,
+            },
+        )
+        .unwrap_or_else(|e| panic!("{name} with allow_any_path: {e}"));
+        assert_eq!(allowed.triangles.len(), 1);
+    }
+    // `..` that stays inside the folder is fine.
+    let mut j = j.clone();
+    j["buffers"][0]["uri"] = json!("sub/../sub/inside.bin");
+    let path = write(&inner, "inside.gltf", &serde_json::to_vec(&j).unwrap());
+    assert_eq!(parse(&path).unwrap().triangles.len(), 1);
+}
+
+#[test]
+fn index_counts_and_empty_meshes() {
+    let mut d = Doc::new();
+    let pos = d.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0], "VEC3");
+    let idx = d.indices_u16(&[0, 1, 2, 0]);
+    let m = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos }, "indices": idx }),
+    ]);
+    d.node(json!({ "mesh": m }));
+    doc_err("idx4", &d, "index count 4 is not a multiple of 3");
+    let mut d = Doc::new();
+    let pos = d.floats(&[0.0; 12], "VEC3");
+    let m = d.mesh(vec![json!({ "attributes": { "POSITION": pos } })]);
+    d.node(json!({ "mesh": m }));
+    doc_err("vert4", &d, "vertex count 4 is not a multiple of 3");
+    let mut d = Doc::new();
+    let m = d.mesh(vec![]);
+    d.node(json!({ "mesh": m }));
+    doc_err("noprims", &d, "has no primitives");
+}

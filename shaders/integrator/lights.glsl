@@ -103,14 +103,22 @@ vec3 triangle_normal(Triangle t) {
 
 // Radiance an emissive triangle sends along w (away from it); false when
 // it sends nothing (not emissive, or its back face without doubleSided).
-bool emitted(Triangle t, vec3 w, out vec3 le) {
-    Material m = materials[floatBitsToUint(t.p0.w)];
+// Times the emissive texture at barycentrics (u, v) of triangle tri (= t).
+bool emitted(Triangle t, uint tri, float u, float v, vec3 w, out vec3 le) {
+    uint material = floatBitsToUint(t.p0.w);
+    Material m = materials[material];
     le = m.emission.xyz;
     if (!(max(le.x, max(le.y, le.z)) > 0.0)) {
         return false;
     }
     bool front = dot(triangle_normal(t), w) > 0.0;
-    return front || (floatBitsToUint(t.p2.w) & TRI_DOUBLE_SIDED) != 0u;
+    if (!(front || (floatBitsToUint(t.p2.w) & TRI_DOUBLE_SIDED) != 0u)) {
+        return false;
+    }
+    if (params.textured != 0u) {
+        le *= emission_factor(material, tri, u, v);
+    }
+    return true;
 }
 
 struct LightSample {
@@ -144,7 +152,7 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         }
         vec3 wi = d / dist;
         vec3 le;
-        if (!emitted(t, -wi, le)) {
+        if (!emitted(t, e.tri, b.x, b.y, -wi, le)) {
             return false;
         }
         float cos_l = abs(dot(normalize(triangle_normal(t)), -wi));
@@ -188,6 +196,20 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         ls.delta = true;
         return true;
     } else if (HAS(F_BACKGROUND) && params.p_background > 0.0) {
+        if (params.env_width > 0u) {
+            vec3 ewi;
+            float epdf;
+            vec3 erad;
+            if (!env_sample(u, ewi, epdf, erad)) {
+                return false;
+            }
+            float pdf = params.p_background * epdf;
+            ls.wi = ewi;
+            ls.at_infinity = true;
+            ls.weight = erad / pdf;
+            ls.pdf = pdf;
+            return true;
+        }
         vec3 wi;
         float dir_pdf;
         if (all(equal(bg_normal, vec3(0.0)))) {
@@ -224,9 +246,21 @@ float lights_area_pdf(uint tri, vec3 wi, float dist) {
 }
 
 float lights_background_pdf(vec3 bg_normal, vec3 wi) {
+    if (params.env_width > 0u) {
+        return params.p_background * env_pdf(wi);
+    }
     float dir_pdf = all(equal(bg_normal, vec3(0.0))) ? UNIFORM_SPHERE_PDF
                                                        : cosine_hemisphere_pdf(dot(bg_normal, wi));
     return params.p_background * dir_pdf;
+}
+
+// Radiance from the background along d: the environment map, else the
+// constant background (Lights::background_radiance).
+vec3 lights_background_radiance(vec3 d) {
+    if (params.env_width > 0u) {
+        return env_radiance(d);
+    }
+    return params.background.xyz;
 }
 
 // Axis of the background's cosine lobe, or zero (uniform sphere) for

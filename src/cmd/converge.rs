@@ -423,7 +423,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
         }
     }
 
-    let scene = load(&args.scene)?;
+    let scene = load(&args.scene, &args.opts)?;
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
     let (rw, rh, reference) = match (&args.reference, args.reference_spp) {
         (Some(p), _) => read_exr(p)?,

@@ -4,6 +4,7 @@
 pub mod bench;
 pub mod compare;
 pub mod converge;
+pub mod info;
 pub mod outputs;
 pub mod render;
 
@@ -120,13 +121,79 @@ pub fn check_scene_path(path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Load the scene, with the exact simplifications of
-/// `glint_cpu::features::simplify`.
-pub fn load(path: &Path) -> Result<Scene> {
+/// Load the scene with the options that change what it holds
+/// (`--allow-any-path`, `--background`), apply the contract's no-light rule,
+/// then print its warnings (`glint: warning: FILE: ...`), or, with
+/// `--strict`, fail on the first.
+pub fn load(path: &Path, o: &RenderOpts) -> Result<Scene> {
+    check_envmap_opts(o)?;
     check_scene_path(path)?;
-    let mut scene = glint::cpu::loader::load(path)?;
+    let options = glint::cpu::loader::LoadOptions {
+        allow_any_path: o.allow_any_path,
+    };
+    let mut scene = glint::cpu::loader::load_with(path, options)?;
+    if let Some(bg) = o.background {
+        scene.background = bg.into();
+    }
+    if let Some(env) = &o.envmap {
+        let map = glint::cpu::envmap::EnvMap::load(env, o.envmap_scale, o.envmap_rotate)
+            .map_err(|e| anyhow!("{}: {e}", env.display()))?;
+        scene.background = glam::Vec3::ZERO;
+        scene.envmap = Some(std::sync::Arc::new(map));
+    }
+    // Exact simplifications (glint_cpu::features::simplify): they shrink
+    // what the specialised kernel carries without changing the image.
     glint::cpu::features::simplify(&mut scene);
+    scene.light_if_unlit();
+    report_warnings(path, &scene, o.strict)?;
     Ok(scene)
+}
+
+fn check_envmap_opts(o: &RenderOpts) -> Result<()> {
+    if o.envmap.is_some() && o.background.is_some() {
+        bail!("give --background or --envmap, not both (the environment map is the background)");
+    }
+    if !(o.envmap_scale.is_finite() && o.envmap_scale >= 0.0) {
+        bail!(
+            "--envmap-scale {} is out of range (a finite number >= 0)",
+            o.envmap_scale
+        );
+    }
+    if !o.envmap_rotate.is_finite() {
+        bail!(
+            "--envmap-rotate {} is not a finite number of degrees",
+            o.envmap_rotate
+        );
+    }
+    Ok(())
+}
+
+/// [`load`] without printing the warnings (they stay in `Scene::warnings`).
+pub fn load_quiet(
+    path: &Path,
+    allow_any_path: bool,
+    background: Option<[f32; 3]>,
+) -> Result<Scene> {
+    check_scene_path(path)?;
+    let options = glint::cpu::loader::LoadOptions { allow_any_path };
+    let mut scene = glint::cpu::loader::load_with(path, options)?;
+    if let Some(bg) = background {
+        scene.background = bg.into();
+    }
+    scene.light_if_unlit();
+    Ok(scene)
+}
+
+/// Print each warning as `glint: warning: FILE: ...`; with `strict`, the
+/// first one is the error instead.
+pub fn report_warnings(path: &Path, scene: &Scene, strict: bool) -> Result<()> {
+    if strict && let Some(w) = scene.warnings.first() {
+        bail!("{}: {} (--strict)", path.display(), one_line(w));
+    }
+    for w in &scene.warnings {
+        eprintln!("glint: warning: {}: {}", path.display(), one_line(w));
+    }
+    Ok(())
 }
 
 /// Settle the render options for `scene` (camera, image size, methods).
@@ -162,7 +229,7 @@ pub fn render_options(
 
 /// Load the scene and settle the render options.
 pub fn load_scene(args: &SceneArgs) -> Result<(Scene, RenderOptions)> {
-    let scene = load(&args.scene)?;
+    let scene = load(&args.scene, &args.opts)?;
     let opts = render_options(
         &scene,
         &args.scene,

@@ -4,7 +4,9 @@
 //! The binding table is `shaders/bindings.glsl` (set 0): 0 uniform Params,
 //! 1 triangles, 2 bvh_nodes, 3 shading, 4 materials, 5 emitters, 6 lights,
 //! 7 accum (two `vec4` per pixel: sum, sum of squares; added to by every
-//! dispatch), 8 ray_counts (one `uint` per pixel, added to). Push constants:
+//! dispatch), 8 ray_counts (one `uint` per pixel, added to), 9 texels,
+//! 10 textures, 11 material_textures, 12 triangle_uvs, 13 env_texels,
+//! 14 env_dist. Push constants:
 //! `uint sample_start; uint sample_count;`. One invocation per pixel, local
 //! size 8x8.
 //!
@@ -43,7 +45,7 @@ pub struct SamplePush {
     pub sample_count: u32,
 }
 
-/// The bytes of bindings 0..=6, ready to upload. Arrays may be empty (they
+/// The bytes of bindings 0..=6 and 9..=12, ready to upload. Arrays may be empty (they
 /// get a minimal buffer; the kernel learns real counts from Params).
 #[derive(Clone, Copy, Debug)]
 pub struct SceneBytes<'d> {
@@ -54,6 +56,14 @@ pub struct SceneBytes<'d> {
     pub materials: &'d [u8],
     pub emitters: &'d [u8],
     pub lights: &'d [u8],
+    /// Bindings 9-12: texels, texture table, material textures, triangle UVs.
+    pub texels: &'d [u8],
+    pub textures: &'d [u8],
+    pub material_textures: &'d [u8],
+    pub uvs: &'d [u8],
+    /// Bindings 13-14: environment map texels and distribution.
+    pub env_texels: &'d [u8],
+    pub env_dist: &'d [u8],
 }
 
 impl<'d> SceneBytes<'d> {
@@ -68,6 +78,12 @@ impl<'d> SceneBytes<'d> {
             materials: bytemuck::cast_slice(&data.materials),
             emitters: bytemuck::cast_slice(&data.emitters),
             lights: bytemuck::cast_slice(&data.lights),
+            texels: bytemuck::cast_slice(&data.texels),
+            textures: bytemuck::cast_slice(&data.textures),
+            material_textures: bytemuck::cast_slice(&data.material_textures),
+            uvs: bytemuck::cast_slice(&data.uvs),
+            env_texels: bytemuck::cast_slice(&data.env_texels),
+            env_dist: bytemuck::cast_slice(&data.env_dist),
         }
     }
 }
@@ -229,6 +245,12 @@ pub fn render_film_range(
     let materials = storage("materials", scene.materials)?;
     let emitters = storage("emitters", scene.emitters)?;
     let lights = storage("lights", scene.lights)?;
+    let texels = storage("texels", scene.texels)?;
+    let textures = storage("textures", scene.textures)?;
+    let material_textures = storage("material textures", scene.material_textures)?;
+    let uvs = storage("triangle uvs", scene.uvs)?;
+    let env_texels = storage("environment map", scene.env_texels)?;
+    let env_dist = storage("environment map distribution", scene.env_dist)?;
     let accum = Buffer::new(
         ctx,
         &format!("accumulation film ({width}x{height} pixels, 32 bytes each)"),
@@ -243,10 +265,24 @@ pub fn render_film_range(
     )?;
 
     let mut bindings = vec![BufferKind::Uniform];
-    bindings.extend([BufferKind::Storage; 8]);
+    bindings.extend([BufferKind::Storage; 14]);
     let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &kernel_cfg.options)?;
     kernel.bind(&[
-        &params, &triangles, &nodes, &shading, &materials, &emitters, &lights, &accum, &rays,
+        &params,
+        &triangles,
+        &nodes,
+        &shading,
+        &materials,
+        &emitters,
+        &lights,
+        &accum,
+        &rays,
+        &texels,
+        &textures,
+        &material_textures,
+        &uvs,
+        &env_texels,
+        &env_dist,
     ])?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 

@@ -101,12 +101,33 @@ impl Bvh {
     /// Closest hit in (0, ray.tmax), watertight (Woop, Benthin, Wald 2013).
     /// `tris` must be in the order [`Bvh::build`] returned.
     pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        traverse::intersect(&self.nodes, tris, ray)
+        traverse::intersect(&self.nodes, tris, ray, |_, _, _| true)
     }
 
     /// Any hit in (0, ray.tmax).
     pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
-        traverse::occluded(&self.nodes, tris, ray)
+        traverse::occluded(&self.nodes, tris, ray, |_, _, _| true)
+    }
+
+    /// [`Bvh::intersect`] skipping hits where `present(tri, u, v)` is false
+    /// (alpha masks).
+    pub fn intersect_masked(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        traverse::intersect(&self.nodes, tris, ray, present)
+    }
+
+    /// [`Bvh::occluded`] skipping hits where `present(tri, u, v)` is false.
+    pub fn occluded_masked(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> bool {
+        traverse::occluded(&self.nodes, tris, ray, present)
     }
 
     /// Depth of the deepest node (root = 0); 0 for an empty hierarchy.
@@ -161,6 +182,27 @@ impl Bvh4 {
     /// Any hit in (0, ray.tmax).
     pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
         wide_traverse::any_hit(&self.nodes, tris, ray, Kernel::best())
+    }
+
+    /// [`Bvh4::intersect`] skipping hits where `present(tri, u, v)` is
+    /// false (alpha masks).
+    pub fn intersect_masked(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        wide_traverse::intersect_masked(&self.nodes, tris, ray, present)
+    }
+
+    /// [`Bvh4::occluded`] skipping hits where `present(tri, u, v)` is false.
+    pub fn occluded_masked(
+        &self,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> bool {
+        wide_traverse::occluded_masked(&self.nodes, tris, ray, present)
     }
 
     /// [`Bvh4::intersect`] with a given box-test kernel (for tests and

@@ -157,7 +157,14 @@ fn node_box(n: &BvhNode) -> (Vec3, Vec3) {
 
 /// Closest hit: front-to-back (nearer child first, the other pushed), the
 /// search interval shrinking to the best hit so far (tinybvh's `Intersect`).
-pub(super) fn intersect(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> Option<Hit> {
+/// `present(tri, u, v)` is the alpha-mask hook at the leaf triangle test: a
+/// hit where it returns false is not there (`|_, _, _| true` compiles away).
+pub(super) fn intersect<F: Fn(u32, f32, f32) -> bool>(
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    ray: &Ray,
+    present: F,
+) -> Option<Hit> {
     if nodes.is_empty() {
         return None;
     }
@@ -181,7 +188,9 @@ pub(super) fn intersect(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> Opti
             let first = n.left_or_first as usize;
             let leaf = &tris[first..first + n.tri_count as usize];
             for (i, tri) in (first..).zip(leaf) {
-                if let Some((t, u, v)) = intersect_triangle(&r, tri, best.t) {
+                if let Some((t, u, v)) = intersect_triangle(&r, tri, best.t)
+                    && present(i as u32, u, v)
+                {
                     best = Hit {
                         t,
                         tri: i as u32,
@@ -222,7 +231,12 @@ pub(super) fn intersect(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> Opti
 /// Any hit: the first triangle hit in (0, tmax) ends the search. Children
 /// are still visited nearer first, as tinybvh's `IsOccluded` does: the near
 /// side is the likelier to hold a blocker.
-pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool {
+pub(super) fn occluded<F: Fn(u32, f32, f32) -> bool>(
+    nodes: &[BvhNode],
+    tris: &[Triangle],
+    ray: &Ray,
+    present: F,
+) -> bool {
     if nodes.is_empty() {
         return false;
     }
@@ -239,10 +253,10 @@ pub(super) fn occluded(nodes: &[BvhNode], tris: &[Triangle], ray: &Ray) -> bool 
         if n.is_leaf() {
             let first = n.left_or_first as usize;
             let leaf = &tris[first..first + n.tri_count as usize];
-            if leaf
-                .iter()
-                .any(|tri| intersect_triangle(&r, tri, ray.tmax).is_some())
-            {
+            if (first..).zip(leaf).any(|(i, tri)| {
+                intersect_triangle(&r, tri, ray.tmax)
+                    .is_some_and(|(_, u, v)| present(i as u32, u, v))
+            }) {
                 return true;
             }
         } else {

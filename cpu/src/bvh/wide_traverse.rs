@@ -106,15 +106,17 @@ fn sort4(dist: &[f32; 4]) -> [usize; 4] {
 /// dropped when popped if the best hit has since moved in front of them
 /// (the box test's own criterion: entry > tmax x SLAB_PAD misses).
 #[inline(always)]
-fn closest<F>(
+fn closest<F, P>(
     nodes: &[Bvh4Node],
     tris: &[Triangle],
     r: &PreparedRay,
     tmax: f32,
     boxes: F,
+    present: P,
 ) -> Option<Hit>
 where
     F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
+    P: Fn(u32, f32, f32) -> bool,
 {
     let mut best = Hit {
         t: tmax,
@@ -129,7 +131,9 @@ where
         if is_leaf_ref(cur) {
             let (first, count) = leaf_range(cur);
             for (i, tri) in (first..).zip(&tris[first..first + count]) {
-                if let Some((t, u, v)) = intersect_triangle(r, tri, best.t) {
+                if let Some((t, u, v)) = intersect_triangle(r, tri, best.t)
+                    && present(i as u32, u, v)
+                {
                     best = Hit {
                         t,
                         tri: i as u32,
@@ -188,9 +192,17 @@ where
 /// Any hit: the first triangle hit in (0, tmax) ends the search; children
 /// still nearest first (the likelier blockers).
 #[inline(always)]
-fn occluded<F>(nodes: &[Bvh4Node], tris: &[Triangle], r: &PreparedRay, tmax: f32, boxes: F) -> bool
+fn occluded<F, P>(
+    nodes: &[Bvh4Node],
+    tris: &[Triangle],
+    r: &PreparedRay,
+    tmax: f32,
+    boxes: F,
+    present: P,
+) -> bool
 where
     F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
+    P: Fn(u32, f32, f32) -> bool,
 {
     let mut stack = [0u32; WIDE_STACK_SIZE];
     let mut sp = 0;
@@ -198,10 +210,9 @@ where
     loop {
         if is_leaf_ref(cur) {
             let (first, count) = leaf_range(cur);
-            if tris[first..first + count]
-                .iter()
-                .any(|tri| intersect_triangle(r, tri, tmax).is_some())
-            {
+            if (first..).zip(&tris[first..first + count]).any(|(i, tri)| {
+                intersect_triangle(r, tri, tmax).is_some_and(|(_, u, v)| present(i as u32, u, v))
+            }) {
                 return true;
             }
         } else {
@@ -263,10 +274,58 @@ pub(super) fn intersect(
         // AVX asked for on a CPU without it: SSE2, which every x86_64 has.
         #[cfg(target_arch = "x86_64")]
         Kernel::Sse2 | Kernel::Avx => x86::intersect_sse2(nodes, tris, &r, ray.tmax),
-        _ => closest(nodes, tris, &r, ray.tmax, |n, t| {
-            intersect_aabb4_scalar(&r, n, t)
-        }),
+        _ => closest(
+            nodes,
+            tris,
+            &r,
+            ray.tmax,
+            |n, t| intersect_aabb4_scalar(&r, n, t),
+            |_, _, _| true,
+        ),
     }
+}
+
+/// Closest hit skipping triangles where `present(tri, u, v)` is false (the
+/// alpha-mask hook); scalar box tests: masked scenes are the rare case.
+pub(super) fn intersect_masked(
+    nodes: &[Bvh4Node],
+    tris: &[Triangle],
+    ray: &Ray,
+    present: impl Fn(u32, f32, f32) -> bool,
+) -> Option<Hit> {
+    if nodes.is_empty() {
+        return None;
+    }
+    let r = PreparedRay::new(ray.o, ray.d);
+    closest(
+        nodes,
+        tris,
+        &r,
+        ray.tmax,
+        |n, t| intersect_aabb4_scalar(&r, n, t),
+        present,
+    )
+}
+
+/// Any hit skipping triangles where `present(tri, u, v)` is false.
+pub(super) fn occluded_masked(
+    nodes: &[Bvh4Node],
+    tris: &[Triangle],
+    ray: &Ray,
+    present: impl Fn(u32, f32, f32) -> bool,
+) -> bool {
+    if nodes.is_empty() {
+        return false;
+    }
+    let r = PreparedRay::new(ray.o, ray.d);
+    occluded(
+        nodes,
+        tris,
+        &r,
+        ray.tmax,
+        |n, t| intersect_aabb4_scalar(&r, n, t),
+        present,
+    )
 }
 
 pub(super) fn any_hit(nodes: &[Bvh4Node], tris: &[Triangle], ray: &Ray, kernel: Kernel) -> bool {
@@ -282,9 +341,14 @@ pub(super) fn any_hit(nodes: &[Bvh4Node], tris: &[Triangle], ray: &Ray, kernel: 
         }
         #[cfg(target_arch = "x86_64")]
         Kernel::Sse2 | Kernel::Avx => x86::occluded_sse2(nodes, tris, &r, ray.tmax),
-        _ => occluded(nodes, tris, &r, ray.tmax, |n, t| {
-            intersect_aabb4_scalar(&r, n, t)
-        }),
+        _ => occluded(
+            nodes,
+            tris,
+            &r,
+            ray.tmax,
+            |n, t| intersect_aabb4_scalar(&r, n, t),
+            |_, _, _| true,
+        ),
     }
 }
 
@@ -405,13 +469,27 @@ mod x86 {
         tmax: f32,
     ) -> Option<Hit> {
         let r4 = ray4(r);
-        closest(nodes, tris, r, tmax, |n, t| intersect_aabb4(&r4, n, t))
+        closest(
+            nodes,
+            tris,
+            r,
+            tmax,
+            |n, t| intersect_aabb4(&r4, n, t),
+            |_, _, _| true,
+        )
     }
 
     #[inline(always)]
     fn occluded_impl(nodes: &[Bvh4Node], tris: &[Triangle], r: &PreparedRay, tmax: f32) -> bool {
         let r4 = ray4(r);
-        occluded(nodes, tris, r, tmax, |n, t| intersect_aabb4(&r4, n, t))
+        occluded(
+            nodes,
+            tris,
+            r,
+            tmax,
+            |n, t| intersect_aabb4(&r4, n, t),
+            |_, _, _| true,
+        )
     }
 
     pub(super) fn intersect_sse2(

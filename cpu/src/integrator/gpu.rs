@@ -10,6 +10,7 @@ use super::{PathTracer, RenderError};
 use crate::film::RenderOptions;
 use crate::lights::{GpuEmitter, GpuLight};
 use crate::scene::{GpuMaterial, Scene};
+use crate::texture::{GpuTexture, MaterialTextures, TriangleUv};
 
 /// Mirror of `uniform Params` in `shaders/bindings.glsl` (std140: the
 /// `vec4`s first, then scalars in groups of four, so std140 and C agree).
@@ -50,8 +51,21 @@ pub struct GpuParams {
     pub p_background: f32,
     /// Absolute floor of the ray offset (`RAY_EPS_SCENE` x scene extent).
     pub eps_abs: f32,
+    /// 1: some material has textures (bindings 9-12 hold them).
+    pub textured: u32,
+    /// 1: some material has an alpha mask (traversal tests it).
+    pub masked: u32,
+    /// Environment map size (0: none; bindings 13-14 hold it).
+    pub env_width: u32,
+    pub env_height: u32,
+    /// The environment map's rotation about +Y.
+    pub env_rot_sin: f32,
+    pub env_rot_cos: f32,
+    pub env_pad: [u32; 2],
 }
-const _: () = assert!(size_of::<GpuParams>() == 144);
+const _: () = assert!(size_of::<GpuParams>() == 176);
+const _: () = assert!(offset_of!(GpuParams, textured) == 144);
+const _: () = assert!(offset_of!(GpuParams, env_rot_sin) == 160);
 const _: () = assert!(offset_of!(GpuParams, background) == 64);
 const _: () = assert!(offset_of!(GpuParams, width) == 80);
 const _: () = assert!(offset_of!(GpuParams, seed_key) == 96);
@@ -69,6 +83,15 @@ pub struct GpuSceneData {
     pub emitters: Vec<GpuEmitter>,
     /// Binding 6, `params.light_count` real entries, padded to >= 1.
     pub lights: Vec<GpuLight>,
+    /// Bindings 9-12 (`SceneTextures`), each padded to >= 1.
+    pub texels: Vec<u32>,
+    pub textures: Vec<GpuTexture>,
+    pub material_textures: Vec<MaterialTextures>,
+    pub uvs: Vec<TriangleUv>,
+    /// Bindings 13-14 (`EnvMap` texels; marginal then conditional
+    /// distribution), each padded to >= 1.
+    pub env_texels: Vec<[f32; 4]>,
+    pub env_dist: Vec<f32>,
 }
 
 fn v4(v: glam::Vec3) -> [f32; 4] {
@@ -109,11 +132,31 @@ pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneDat
         p_punctual: pt.lights.probs.punctual,
         p_background: pt.lights.probs.background,
         eps_abs: pt.eps_abs,
+        textured: !scene.textures.is_empty() as u32,
+        masked: scene.textures.has_masks() as u32,
+        env_width: scene.envmap.as_ref().map_or(0, |e| e.width),
+        env_height: scene.envmap.as_ref().map_or(0, |e| e.height),
+        env_rot_sin: scene.envmap.as_ref().map_or(0.0, |e| e.rotation.sin()),
+        env_rot_cos: scene.envmap.as_ref().map_or(1.0, |e| e.rotation.cos()),
+        env_pad: [0; 2],
     };
     Ok(GpuSceneData {
         params,
         materials: padded(scene.materials.iter().map(GpuMaterial::from).collect()),
         emitters: padded(pt.lights.emitters.clone()),
         lights: padded(pt.lights.punctual.clone()),
+        texels: padded(scene.textures.texels.clone()),
+        textures: padded(scene.textures.table.clone()),
+        material_textures: padded(scene.textures.materials.clone()),
+        uvs: padded(scene.textures.uvs.clone()),
+        env_texels: padded(
+            scene
+                .envmap
+                .as_ref()
+                .map_or(Vec::new(), |e| e.texels.clone()),
+        ),
+        env_dist: padded(scene.envmap.as_ref().map_or(Vec::new(), |e| {
+            [e.marginal.clone(), e.conditional.clone()].concat()
+        })),
     })
 }

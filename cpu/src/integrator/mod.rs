@@ -54,6 +54,7 @@ use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene};
 use crate::sobol::PathSampler;
+use crate::texture::{MaterialTextures, normal_mapped, textured_bsdf};
 
 /// Mitsuba's default `rr_depth`.
 pub const RR_DEPTH: u32 = 5;
@@ -213,6 +214,26 @@ impl<'a> PathTracer<'a> {
         SurfaceFrame { ng, ns, frame }
     }
 
+    /// A textured material at a hit: the normal map tilts the shading
+    /// frame, the other textures set the BSDF's parameters.
+    fn apply_textures(
+        &self,
+        mt: &MaterialTextures,
+        tri: u32,
+        u: f32,
+        v: f32,
+        sf: &mut SurfaceFrame,
+        bsdf: &mut Bsdf,
+    ) {
+        let st = &self.scene.textures;
+        let ns = normal_mapped(st, mt, tri, u, v, sf.ng, &sf.frame);
+        if ns != sf.ns {
+            sf.frame = Frame::from_normal_tangent(ns, sf.frame.s);
+            sf.ns = ns;
+        }
+        *bsdf = textured_bsdf(st, mt, bsdf, tri, u, v);
+    }
+
     /// The shadow ray from `p` (geometric normal `ng`) toward a light
     /// sample: from the offset origin to eps(q) short of the light point q,
     /// measured from the offset origin (which may sit closer to the light
@@ -258,7 +279,7 @@ impl<'a> PathTracer<'a> {
 
         loop {
             *rays += 1;
-            let Some(hit) = scene.bvh.intersect(&scene.triangles, &ray) else {
+            let Some(hit) = scene.intersect(&ray) else {
                 if self.lights.probs.background > 0.0 {
                     let w = if !prev_mis {
                         1.0
@@ -266,7 +287,7 @@ impl<'a> PathTracer<'a> {
                         let lp = self.lights.background_pdf(prev_bg_normal, ray.d);
                         mis_bsdf(self.mis, prev_bsdf_pdf, lp)
                     };
-                    radiance += throughput * w * self.lights.background;
+                    radiance += throughput * w * self.lights.background_radiance(ray.d);
                 }
                 break;
             };
@@ -278,7 +299,7 @@ impl<'a> PathTracer<'a> {
             let wo = -ray.d;
 
             if tri.light != NO_LIGHT
-                && let Some(le) = emitted(scene, tri, wo)
+                && let Some(le) = emitted(scene, hit.tri, hit.u, hit.v, wo)
             {
                 let w = if !prev_mis {
                     1.0
@@ -298,8 +319,12 @@ impl<'a> PathTracer<'a> {
             let (u_light_cat, u_light_idx, u_light) = (u.light_cat, u.light_idx, u.light);
             let (u_bsdf_lobe, u_bsdf, u_rr) = (u.bsdf_lobe, u.bsdf, u.rr);
 
-            let sf = self.surface(hit.tri, hit.u, hit.v);
-            let bsdf: &Bsdf = &scene.materials[tri.material as usize].bsdf;
+            let mut sf = self.surface(hit.tri, hit.u, hit.v);
+            let mut bsdf: Bsdf = scene.materials[tri.material as usize].bsdf;
+            if let Some(mt) = scene.textures.material(tri.material) {
+                self.apply_textures(mt, hit.tri, hit.u, hit.v, &mut sf, &mut bsdf);
+            }
+            let bsdf = &bsdf;
             let wo_local = sf.frame.to_local(wo);
             let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
 
@@ -317,7 +342,7 @@ impl<'a> PathTracer<'a> {
                     if f.max_element() > 0.0 {
                         let shadow = self.shadow_ray(p, sf.ng, &ls);
                         *rays += 1;
-                        if shadow.tmax > 0.0 && !scene.bvh.occluded(&scene.triangles, &shadow) {
+                        if shadow.tmax > 0.0 && !scene.occluded(&shadow) {
                             let w = if ls.delta {
                                 1.0
                             } else {

@@ -323,9 +323,17 @@ pub fn read_indices(root: &Root, buffers: &[Vec<u8>], index: usize) -> Result<Ve
         if acc.sparse.is_some() {
             return Err("sparse index accessors are not supported".into());
         }
-        let view = acc.buffer_view.ok_or("indices have no buffer view")?;
         let csize = component_size(comp);
         let count = acc.count.0;
+        // No buffer view: the elements are zeros (glTF 2.0 spec 3.6.2.3).
+        let Some(view) = acc.buffer_view else {
+            if count > MAX_IMPLICIT_ELEMENTS {
+                return Err(format!(
+                    "{count} elements without a buffer view (at most {MAX_IMPLICIT_ELEMENTS})"
+                ));
+            }
+            return Ok(vec![0; count as usize]);
+        };
         let s = strided(
             root,
             buffers,

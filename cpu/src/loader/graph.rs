@@ -9,6 +9,7 @@ use gltf::mesh::Mode;
 use super::accessor::{read_indices, read_vec};
 use super::source::Source;
 use crate::scene::{Camera, PunctualLight, Triangle, TriangleShading};
+use crate::texture::TriangleUv;
 
 /// The most triangles one scene may hold (2^24, about 16.8 million, or
 /// 2.4 GB of triangle and shading data): a guard against documents that
@@ -22,6 +23,8 @@ pub struct Collected {
     pub shading: Vec<TriangleShading>,
     pub cameras: Vec<Camera>,
     pub lights: Vec<PunctualLight>,
+    /// Per-triangle texture coordinates (only when asked for).
+    pub uvs: Vec<TriangleUv>,
     /// Some primitive had no material: the caller appends the glTF default
     /// material at index `default_material`.
     pub uses_default_material: bool,
@@ -35,6 +38,8 @@ pub fn collect(
     src: &Source,
     scene_index: usize,
     default_material: u32,
+    want_uvs: bool,
+    warnings: &mut Vec<String>,
 ) -> Result<Collected, String> {
     let root = src.doc.as_json();
     let scene = root
@@ -45,6 +50,7 @@ pub fn collect(
     let mut visited = vec![false; root.nodes.len()];
     let mut out = Collected::default();
     let mut instances: Vec<(&gltf::Mesh, Mat4, String)> = Vec::new();
+    let mut skipped = Skipped::default();
     // Explicit stack: a 100,000-deep chain of nodes must not overflow the
     // call stack.
     let mut stack: Vec<(usize, Mat4)> = scene
@@ -73,6 +79,9 @@ pub fn collect(
             return Err(format!(
                 "{label}: world transform overflows to a non-finite value"
             ));
+        }
+        if node.skin.is_some() {
+            skipped.skins += 1;
         }
         if let Some(m) = node.mesh {
             let mesh = meshes
@@ -104,10 +113,50 @@ pub fn collect(
         ));
     }
     for (mesh, world, label) in instances {
-        add_mesh(src, mesh, world, default_material, &mut out)
-            .map_err(|e| format!("{label}: {e}"))?;
+        add_mesh(
+            src,
+            mesh,
+            world,
+            default_material,
+            want_uvs,
+            &mut out,
+            &mut skipped,
+        )
+        .map_err(|e| format!("{label}: {e}"))?;
     }
+    skipped.warn(warnings);
     Ok(out)
+}
+
+/// What the traversal skipped, counted so each kind is one warning.
+#[derive(Default)]
+struct Skipped {
+    points_lines: usize,
+    skins: usize,
+    morphs: usize,
+}
+
+impl Skipped {
+    fn warn(&self, warnings: &mut Vec<String>) {
+        if self.points_lines > 0 {
+            warnings.push(format!(
+                "{} point or line primitive(s) skipped (glint renders triangles)",
+                self.points_lines
+            ));
+        }
+        if self.skins > 0 {
+            warnings.push(format!(
+                "{} skinned node(s) rendered in the rest pose (skins are not supported)",
+                self.skins
+            ));
+        }
+        if self.morphs > 0 {
+            warnings.push(format!(
+                "{} primitive(s) with morph targets rendered in the rest pose (morph targets are not supported)",
+                self.morphs
+            ));
+        }
+    }
 }
 
 /// A node's local matrix from its raw JSON fields (not the `gltf` wrapper,
@@ -159,7 +208,9 @@ fn add_mesh(
     mesh: &gltf::Mesh,
     world: Mat4,
     default_material: u32,
+    want_uvs: bool,
     out: &mut Collected,
+    skipped: &mut Skipped,
 ) -> Result<(), String> {
     let root = src.doc.as_json();
     let linear = Mat3::from_mat4(world);
@@ -169,6 +220,11 @@ fn add_mesh(
         Some(n) => format!("mesh {} ('{n}')", mesh.index()),
         None => format!("mesh {}", mesh.index()),
     };
+    if mesh.primitives().len() == 0 {
+        return Err(format!(
+            "{mesh_label} has no primitives (glTF requires at least one)"
+        ));
+    }
     for prim in mesh.primitives() {
         let label = format!("{mesh_label} primitive {}", prim.index());
         let err = |e: String| format!("{label}: {e}");
@@ -178,7 +234,11 @@ fn add_mesh(
             Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
         ) {
             // Points and lines have no area: nothing to render.
+            skipped.points_lines += 1;
             continue;
+        }
+        if prim.morph_targets().len() > 0 {
+            skipped.morphs += 1;
         }
         let pos_acc = prim
             .get(&gltf::Semantic::Positions)
@@ -220,24 +280,41 @@ fn add_mesh(
             }
             None => None,
         };
-        let uvs = match (tangents.is_some(), attr(gltf::Semantic::TexCoords(0))) {
-            (false, Some(a)) => {
-                let v = read_vec::<2>(root, &src.buffers, a).map_err(err)?;
-                same_count("TEXCOORD_0", v.len())?;
-                Some(v)
+        let read_uv = |set: u32| -> Result<Option<Vec<[f32; 2]>>, String> {
+            match attr(gltf::Semantic::TexCoords(set)) {
+                Some(a) => {
+                    let v = read_vec::<2>(root, &src.buffers, a).map_err(err)?;
+                    same_count(&format!("TEXCOORD_{set}"), v.len())?;
+                    Ok(Some(v))
+                }
+                None => Ok(None),
             }
-            _ => None,
         };
+        let uvs = if tangents.is_none() || want_uvs {
+            read_uv(0)?
+        } else {
+            None
+        };
+        let uvs1 = if want_uvs { read_uv(1)? } else { None };
         let indices = match prim.indices() {
             Some(a) => Some(read_indices(root, &src.buffers, a.index()).map_err(err)?),
             None => None,
         };
         let n_refs = indices.as_ref().map_or(n_verts, Vec::len);
+        if mode == Mode::Triangles && n_refs % 3 != 0 {
+            let what = if indices.is_some() { "index" } else { "vertex" };
+            return Err(err(format!(
+                "{what} count {n_refs} is not a multiple of 3 (mode TRIANGLES)"
+            )));
+        }
         let n_tris = triangles_from_refs(mode, n_refs as u64) as usize;
         // Reserve only now that the data has been read: declared counts are
         // not trusted until their bytes have been found.
         out.triangles.reserve(n_tris);
         out.shading.reserve(n_tris);
+        if want_uvs {
+            out.uvs.reserve(n_tris);
+        }
         let vertex = |k: usize| -> Result<usize, String> {
             let v = match &indices {
                 Some(ix) => ix[k] as usize,
@@ -311,13 +388,49 @@ fn add_mesh(
                 sh.t = [t.extend(w).to_array(); 3];
             }
             out.shading.push(sh);
+            if want_uvs {
+                let mut tuv = TriangleUv::default();
+                for (j, &k) in v.iter().enumerate() {
+                    if let Some(uv) = &uvs {
+                        tuv.uv[j][0] = uv[k][0];
+                        tuv.uv[j][1] = uv[k][1];
+                    }
+                    if let Some(uv) = &uvs1 {
+                        tuv.uv[j][2] = uv[k][0];
+                        tuv.uv[j][3] = uv[k][1];
+                    }
+                }
+                tuv.extra[0] = match (&tangents, &uvs) {
+                    // glTF: bitangent = cross(normal, tangent.xyz) * w.
+                    (Some(ts), _) => {
+                        if ts[v[0]][3] < 0.0 {
+                            -1.0
+                        } else {
+                            1.0
+                        }
+                    }
+                    // Without TANGENT: the sign that makes the bitangent
+                    // point up the image (-dP/dv, glTF's v running down).
+                    (None, Some(uv)) => {
+                        let uvv = v.map(|k| Vec2::from(uv[k]));
+                        let (tu, tv) = (dpdu(p, uvv), dpdv(p, uvv));
+                        if geo.cross(tu).dot(-tv) < 0.0 {
+                            -1.0
+                        } else {
+                            1.0
+                        }
+                    }
+                    _ => 1.0,
+                };
+                out.uvs.push(tuv);
+            }
         }
     }
     Ok(())
 }
 
 /// Triangles drawn from `refs` vertex references (glTF 2.0 spec 3.7.2.1);
-/// a trailing partial triangle (a count not a multiple of 3) is ignored.
+/// TRIANGLES with a count not a multiple of 3 is refused before this.
 fn triangles_from_refs(mode: Mode, refs: u64) -> u64 {
     match mode {
         Mode::Triangles => refs / 3,
@@ -351,6 +464,23 @@ fn dpdu(p: [Vec3; 3], uv: [Vec2; 3]) -> Vec3 {
         return Vec3::ZERO;
     }
     let d = (duv12.y * dp02 - duv02.y * dp12) / det;
+    if d.is_finite() {
+        d.normalize_or_zero()
+    } else {
+        Vec3::ZERO
+    }
+}
+
+/// dP/dv of a triangle from its texture coordinates (the companion of
+/// [`dpdu`]); zero when degenerate.
+fn dpdv(p: [Vec3; 3], uv: [Vec2; 3]) -> Vec3 {
+    let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
+    let (dp02, dp12) = (p[0] - p[2], p[1] - p[2]);
+    let det = duv02.x * duv12.y - duv02.y * duv12.x;
+    if det.abs() < 1e-12 || !det.is_finite() {
+        return Vec3::ZERO;
+    }
+    let d = (duv02.x * dp12 - duv12.x * dp02) / det;
     if d.is_finite() {
         d.normalize_or_zero()
     } else {

@@ -10,13 +10,21 @@
 //! - The scene rendered is `scene`, else scene 0; a file with no scene at
 //!   all is an error (there is nothing to render).
 //! - Triangles come from modes 4 (triangles, the default), 5 (strips) and
-//!   6 (fans); points and lines are skipped. Skins and morph targets are
-//!   ignored (the rest pose is rendered).
+//!   6 (fans); points and lines are skipped with a warning. Skins and morph
+//!   targets are ignored (the rest pose is rendered), with a warning.
+//! - What glint skips or substitutes is a warning in `Scene::warnings`
+//!   (the CLI prints them, `--strict` makes them errors): points and lines,
+//!   skins, morph targets, extensions used but not supported.
+//! - Buffer and image URIs must stay inside the scene's folder (no absolute
+//!   paths, no `..` leaving it; `file:` URIs alike) unless
+//!   [`LoadOptions::allow_any_path`].
 //! - A primitive without a material gets the glTF default material (spec
 //!   3.9.6: baseColor 1, metallic 1, roughness 1), i.e. a GGX conductor with
 //!   F0 = 0.999 and alpha 1, appended after the file's materials.
-//! - Textures are ignored; their factors are kept. baseColor alpha and
-//!   alphaMode are ignored (everything is opaque).
+//! - Textures (`loader::texture`, conventions in [`crate::texture`]):
+//!   baseColor, metallicRoughness, normal and emissive, PNG or JPEG; an
+//!   image that cannot be used is a warning and its factor alone is used.
+//!   alphaMode MASK cuts geometry; BLEND is MASK at 0.5 with a warning.
 //! - Cameras are listed in depth-first node order; orthographic cameras are
 //!   an error. Without a camera, [`default_camera`] frames the scene.
 //! - KHR_lights_punctual `range` is ignored (lights fall off as 1/r^2).
@@ -26,6 +34,7 @@ mod accessor;
 mod graph;
 mod material;
 mod source;
+mod texture;
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -38,7 +47,9 @@ pub use material::{
     DEFAULT_ALPHA, DEFAULT_EXT_IOR, DEFAULT_INT_IOR, DEFAULT_REFLECTANCE, bsdf_from_extras,
     conductor_from_f0, gltf_default_material,
 };
-pub use source::{MAX_FILE_BYTES, SUPPORTED_REQUIRED_EXTENSIONS};
+pub use source::{
+    LoadOptions, MAX_FILE_BYTES, SUPPORTED_EXTENSIONS, SUPPORTED_REQUIRED_EXTENSIONS,
+};
 
 use crate::bvh::Bvh4;
 use crate::scene::{Camera, Scene};
@@ -53,7 +64,12 @@ pub enum LoadError {
 /// Load the default scene of a .gltf/.glb file, flatten it to world-space
 /// triangles and build the BVH.
 pub fn load(path: &Path) -> Result<Scene, LoadError> {
-    let mut scene = parse(path)?;
+    load_with(path, LoadOptions::default())
+}
+
+/// [`load`] with explicit [`LoadOptions`].
+pub fn load_with(path: &Path, options: LoadOptions) -> Result<Scene, LoadError> {
+    let mut scene = parse_with(path, options)?;
     scene.build_bvh();
     Ok(scene)
 }
@@ -61,7 +77,12 @@ pub fn load(path: &Path) -> Result<Scene, LoadError> {
 /// [`load`] without the BVH: the scene's triangles in traversal order,
 /// emitters numbered ([`Scene::assign_emitters`]) and `bvh` empty.
 pub fn parse(path: &Path) -> Result<Scene, LoadError> {
-    parse_inner(path).map_err(|message| LoadError::Invalid {
+    parse_with(path, LoadOptions::default())
+}
+
+/// [`parse`] with explicit [`LoadOptions`].
+pub fn parse_with(path: &Path, options: LoadOptions) -> Result<Scene, LoadError> {
+    parse_inner(path, options).map_err(|message| LoadError::Invalid {
         path: path.to_path_buf(),
         message,
     })
@@ -74,8 +95,9 @@ pub fn load_timed(path: &Path) -> Result<(Scene, f64), LoadError> {
     Ok((scene, start.elapsed().as_secs_f64()))
 }
 
-fn parse_inner(path: &Path) -> Result<Scene, String> {
-    let src = source::read(path)?;
+fn parse_inner(path: &Path, options: LoadOptions) -> Result<Scene, String> {
+    let mut warnings = Vec::new();
+    let src = source::read(path, options, &mut warnings)?;
     let doc = &src.doc;
     let scene_index = match doc.default_scene() {
         Some(s) => s.index(),
@@ -87,9 +109,20 @@ fn parse_inner(path: &Path) -> Result<Scene, String> {
         .map(|m| material::convert(&m))
         .collect::<Result<Vec<_>, _>>()?;
     let default_material = materials.len() as u32;
-    let collected = graph::collect(&src, scene_index, default_material)?;
+    // The default material is appended (and untextured) if used.
+    let mut with_default = materials.clone();
+    with_default.push(material::gltf_default_material());
+    let textures = texture::collect(&src, &with_default, &mut warnings)?;
+    let want_uvs = !textures.is_empty();
+    let collected = graph::collect(&src, scene_index, default_material, want_uvs, &mut warnings)?;
+    let mut textures = textures;
     if collected.uses_default_material {
         materials.push(material::gltf_default_material());
+    } else if !textures.materials.is_empty() {
+        textures.materials.truncate(materials.len());
+    }
+    if want_uvs {
+        textures.uvs = collected.uvs;
     }
     let scene_json = &doc.as_json().scenes[scene_index];
     let background = background(scene_json.extras.as_deref())
@@ -102,6 +135,9 @@ fn parse_inner(path: &Path) -> Result<Scene, String> {
         cameras: collected.cameras,
         background,
         bvh: Bvh4::default(),
+        warnings,
+        textures,
+        envmap: None,
     };
     scene.assign_emitters();
     Ok(scene)

@@ -23,16 +23,40 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
+    "KHR_mesh_quantization",
+    "KHR_texture_transform",
 ];
+
+/// Extensions glint reads when a file uses them (required or not); any
+/// other extension in `extensionsUsed` is ignored with a warning.
+pub const SUPPORTED_EXTENSIONS: &[&str] = SUPPORTED_REQUIRED_EXTENSIONS;
+
+/// How much the loader trusts the file's URIs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// Let buffer and image URIs name files outside the scene's folder
+    /// (absolute paths, `..` leaving it); refused by default.
+    pub allow_any_path: bool,
+}
 
 /// A validated document with its buffers' bytes, indexed like `buffers`.
 pub struct Source {
     pub doc: Document,
     pub buffers: Vec<Vec<u8>>,
+    /// The scene file's folder: relative URIs resolve against it.
+    pub base: std::path::PathBuf,
+    pub options: LoadOptions,
+    /// The JSON as written (for what the typed document drops, e.g.
+    /// `KHR_texture_transform` on every texture slot).
+    pub raw: serde_json::Value,
 }
 
 /// Read `path` (either container), validate it and load its buffers.
-pub fn read(path: &Path) -> Result<Source, String> {
+pub fn read(
+    path: &Path,
+    options: LoadOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Source, String> {
     let bytes = read_file(path)?;
     let (json, bin) = if bytes.starts_with(b"glTF") {
         split_glb(&bytes)?
@@ -58,11 +82,23 @@ pub fn read(path: &Path) -> Result<Source, String> {
         return Err(unsupported_version(&root.asset.version));
     }
     check_required_extensions(&root)?;
+    for e in &root.extensions_used {
+        if !SUPPORTED_EXTENSIONS.contains(&e.as_str()) {
+            warnings.push(format!("extension {e} is not supported; ignored"));
+        }
+    }
     validate(&root)?;
+    let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| e.to_string())?;
     let doc = Document::from_json_without_validation(root);
-    let base = path.parent().unwrap_or(Path::new("."));
-    let buffers = load_buffers(&doc, base, bin)?;
-    Ok(Source { doc, buffers })
+    let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
+    let buffers = load_buffers(&doc, &base, bin, options)?;
+    Ok(Source {
+        doc,
+        buffers,
+        base,
+        options,
+        raw,
+    })
 }
 
 fn unsupported_version(v: &str) -> String {
@@ -166,9 +202,11 @@ fn check_required_extensions(root: &gltf::json::Root) -> Result<(), String> {
 }
 
 /// The `gltf` crate's structural validation (every index in range, every
-/// enum value known), less one rule: POSITION accessors' `min`/`max`, which
-/// glTF requires but glint never reads, so a file missing (or garbling) them
-/// still loads.
+/// enum value known), less three rules: POSITION accessors' `min`/`max`,
+/// which glTF requires but glint never reads, so a file missing (or
+/// garbling) them still loads; accessors without a bufferView (zeros, as
+/// glTF allows); and required extensions the crate does not know (glint's
+/// own list decides).
 fn validate(root: &gltf::json::Root) -> Result<(), String> {
     use gltf::json::validation::{Checked, Error, Validate};
     // The crate's primitive hook indexes `accessors[POSITION]` unchecked:
@@ -190,7 +228,16 @@ fn validate(root: &gltf::json::Root) -> Result<(), String> {
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path().as_str().to_string();
         let bounds = path.ends_with(".min") || path.ends_with(".max");
-        if !(bounds && matches!(error, Error::Missing | Error::Invalid)) {
+        // An accessor without a bufferView is all zeros (glTF 2.0 spec
+        // 3.6.2.3), which the crate calls missing data.
+        let implicit = path.starts_with("accessors[") && path.ends_with(".bufferView");
+        // Required extensions are checked by `check_required_extensions`
+        // against what glint implements, not what the crate knows.
+        let required = path.starts_with("extensionsRequired[");
+        let skip = (bounds && matches!(error, Error::Missing | Error::Invalid))
+            || (implicit && matches!(error, Error::Missing))
+            || (required && matches!(error, Error::Unsupported));
+        if !skip {
             errors.push(format!("{path}: {error}"));
         }
     });
@@ -206,7 +253,12 @@ fn validate(root: &gltf::json::Root) -> Result<(), String> {
     Err(format!("invalid glTF: {}{more}", errors.join("; ")))
 }
 
-fn load_buffers(doc: &Document, base: &Path, bin: Option<&[u8]>) -> Result<Vec<Vec<u8>>, String> {
+fn load_buffers(
+    doc: &Document,
+    base: &Path,
+    bin: Option<&[u8]>,
+    options: LoadOptions,
+) -> Result<Vec<Vec<u8>>, String> {
     let mut out = Vec::new();
     for (i, buffer) in doc.as_json().buffers.iter().enumerate() {
         let data = match &buffer.uri {
@@ -218,7 +270,8 @@ fn load_buffers(doc: &Document, base: &Path, bin: Option<&[u8]>) -> Result<Vec<V
                     "buffer {i} has no uri (only buffer 0 may use the GLB BIN chunk)"
                 ));
             }
-            Some(uri) => read_uri(uri, base).map_err(|e| format!("buffer {i}: {e}"))?,
+            Some(uri) => read_uri(uri, base, options, MAX_FILE_BYTES)
+                .map_err(|e| format!("buffer {i}: {e}"))?,
         };
         let declared = buffer.byte_length.0;
         if (data.len() as u64) < declared {
@@ -232,22 +285,82 @@ fn load_buffers(doc: &Document, base: &Path, bin: Option<&[u8]>) -> Result<Vec<V
     Ok(out)
 }
 
-fn read_uri(uri: &str, base: &Path) -> Result<Vec<u8>, String> {
+/// The bytes a URI names: a base64 data URI, or a file relative to `base`
+/// (a `file:` URI follows the same rule). A file outside `base` (an
+/// absolute path, or `..` leaving the folder) is refused unless
+/// `allow_any_path`. At most `limit` bytes are read.
+pub fn read_uri(
+    uri: &str,
+    base: &Path,
+    options: LoadOptions,
+    limit: u64,
+) -> Result<Vec<u8>, String> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
             .split_once(";base64,")
             .ok_or("data URI is not base64-encoded")?;
+        if payload.len() as u64 / 4 * 3 > limit {
+            return Err(format!("data URI holds more than {limit} bytes"));
+        }
         return decode_base64(payload).map_err(|e| format!("data URI does not decode: {e}"));
     }
-    if uri.contains(':') {
+    let path_part = if let Some(rest) = uri.strip_prefix("file://") {
+        // file:///abs/path (empty host) or file://localhost/abs/path.
+        rest.strip_prefix("localhost").unwrap_or(rest)
+    } else if let Some(rest) = uri.strip_prefix("file:") {
+        rest
+    } else if uri.contains(':') && !is_windows_drive(uri) {
         let scheme = uri.split(':').next().unwrap_or_default();
         return Err(format!(
-            "URI scheme '{scheme}:' is not supported (relative paths and data URIs are)"
+            "URI scheme '{scheme}:' is not supported (relative paths, file: and data URIs are)"
+        ));
+    } else {
+        uri
+    };
+    let rel = percent_decode(path_part).ok_or_else(|| format!("URI '{uri}' has a bad %-escape"))?;
+    if !options.allow_any_path && escapes(&rel) {
+        return Err(format!(
+            "URI '{uri}' names a file outside the scene's folder (absolute or leaving it with '..'); --allow-any-path permits it"
         ));
     }
-    let rel = percent_decode(uri).ok_or_else(|| format!("URI '{uri}' has a bad %-escape"))?;
-    let file = base.join(rel);
+    let file = base.join(&rel);
+    let meta =
+        std::fs::metadata(&file).map_err(|e| format!("{}: cannot open: {e}", file.display()))?;
+    if meta.len() > limit {
+        return Err(format!(
+            "{}: file is {} bytes; glint reads up to {limit} bytes here",
+            file.display(),
+            meta.len()
+        ));
+    }
     read_file(&file).map_err(|e| format!("{}: {e}", file.display()))
+}
+
+fn is_windows_drive(uri: &str) -> bool {
+    let b = uri.as_bytes();
+    b.len() >= 2 && b[0].is_ascii_alphabetic() && b[1] == b':'
+}
+
+/// Whether a relative reference leaves its folder: absolute (a leading `/`
+/// or `\\`, a drive letter), or more `..` than names at some point.
+pub fn escapes(rel: &str) -> bool {
+    if rel.starts_with('/') || rel.starts_with('\\') || is_windows_drive(rel) {
+        return true;
+    }
+    let mut depth = 0i64;
+    for part in rel.split(['/', '\\']) {
+        match part {
+            "" | "." => {}
+            ".." => {
+                depth -= 1;
+                if depth < 0 {
+                    return true;
+                }
+            }
+            _ => depth += 1,
+        }
+    }
+    false
 }
 
 /// Decode `%XX` escapes (RFC 3986), as glTF URIs are URI-encoded.
@@ -321,6 +434,22 @@ mod tests {
         }
         assert!(decode_base64("Zm9v!").is_err());
         assert!(decode_base64("Z").is_err());
+    }
+
+    #[test]
+    fn escaping_paths_are_recognised() {
+        for bad in [
+            "/etc/passwd",
+            "../x.bin",
+            "a/../../x.bin",
+            "C:/x.bin",
+            "\\\\srv\\x",
+        ] {
+            assert!(escapes(bad), "{bad}");
+        }
+        for ok in ["x.bin", "a/b/../x.bin", "./x.bin", "a/./b.png"] {
+            assert!(!escapes(ok), "{ok}");
+        }
     }
 
     #[test]

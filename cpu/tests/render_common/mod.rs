@@ -4,7 +4,7 @@
 use glam::{Mat4, Vec3};
 use glint_cpu::bsdf::Bsdf;
 use glint_cpu::{
-    Bvh4, Camera, Film, Material, NO_LIGHT, PunctualLight, RenderOptions, Scene, Triangle,
+    Camera, Film, Material, NO_LIGHT, PunctualLight, RenderOptions, Scene, Triangle,
     TriangleShading,
 };
 
@@ -153,7 +153,7 @@ pub fn scene(
         lights,
         cameras: vec![camera],
         background,
-        bvh: Bvh4::default(),
+        ..Scene::default()
     };
     s.build_bvh();
     s

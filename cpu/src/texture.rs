@@ -1,0 +1,478 @@
+//! glTF textures as both backends read them: every image's texels as packed
+//! RGBA8 (`u32`, R in the low byte) in one array, a table of images
+//! ([`GpuTexture`]), per-material texture slots ([`MaterialTextures`]) and
+//! per-triangle texture coordinates ([`TriangleUv`]). `shaders/texture.glsl`
+//! mirrors every function here under the same name.
+//!
+//! Conventions (glTF 2.0, section 3.8 and the contract's "Materials"):
+//! - UV (0, 0) is the image's top-left corner; `v` grows downward, so texel
+//!   row `floor(v * height)` is read, row 0 being the image's first row.
+//! - Filtering is bilinear (texel centres at half-integers), or nearest when
+//!   the sampler's `magFilter` is NEAREST; no mipmaps.
+//! - Wrap modes REPEAT, CLAMP_TO_EDGE and MIRRORED_REPEAT per axis.
+//! - sRGB images (baseColor, emissive) are decoded to linear per texel,
+//!   before filtering; alpha is linear.
+//! - 8 bits per channel: 16-bit PNGs are reduced to 8 bits on load.
+
+use std::mem::size_of;
+
+use bytemuck::{Pod, Zeroable};
+use glam::{Vec2, Vec3, Vec4};
+
+use crate::bsdf::{Bsdf, Roughness, Shadowing};
+use crate::frame::Frame;
+use crate::loader::conductor_from_f0;
+
+/// "No texture" in a [`TexRef`].
+pub const NO_TEXTURE: u32 = u32::MAX;
+/// Largest image side glint decodes (checked from the header, before
+/// decoding).
+pub const MAX_TEXTURE_SIDE: u32 = 16384;
+/// The most texels all of a scene's images may hold together (4 GiB of
+/// RGBA8 would not fit a GPU buffer binding; 2^28 texels is 1 GiB).
+pub const MAX_TEXELS: u64 = 1 << 28;
+
+pub const WRAP_REPEAT: u32 = 0;
+pub const WRAP_CLAMP: u32 = 1;
+pub const WRAP_MIRROR: u32 = 2;
+/// `GpuTexture::flags` bit: nearest filtering (else bilinear).
+pub const TEX_NEAREST: u32 = 16;
+
+/// One image in the texel array (std430 `struct Texture`, 16 bytes).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct GpuTexture {
+    /// First texel in the texel array.
+    pub offset: u32,
+    pub width: u32,
+    pub height: u32,
+    /// Bits 0-1: wrap S, bits 2-3: wrap T (`WRAP_*`), bit 4: [`TEX_NEAREST`].
+    pub flags: u32,
+}
+const _: () = assert!(size_of::<GpuTexture>() == 16);
+
+/// A material's use of a texture (glTF `textureInfo` with
+/// `KHR_texture_transform`), 48 bytes.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct TexRef {
+    /// Index into the texture table, or [`NO_TEXTURE`].
+    pub texture: u32,
+    /// Which TEXCOORD set (0 or 1).
+    pub tex_coord: u32,
+    /// normalTexture `scale` (1 elsewhere).
+    pub scale: f32,
+    pub _pad: u32,
+    /// UV transform rows: uv' = (r0.x u + r0.y v + r0.z, r1.x u + r1.y v + r1.z).
+    pub transform: [[f32; 4]; 2],
+}
+const _: () = assert!(size_of::<TexRef>() == 48);
+
+impl Default for TexRef {
+    fn default() -> Self {
+        TexRef {
+            texture: NO_TEXTURE,
+            tex_coord: 0,
+            scale: 1.0,
+            _pad: 0,
+            transform: [[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]],
+        }
+    }
+}
+
+impl TexRef {
+    pub fn is_some(&self) -> bool {
+        self.texture != NO_TEXTURE
+    }
+
+    /// KHR_texture_transform: uv' = T * R * S * uv with the extension's
+    /// GLSL matrices (column-major `mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1)`,
+    /// so u' = cos sx u - sin sy v + ox, v' = sin sx u + cos sy v + oy).
+    pub fn set_transform(&mut self, offset: Vec2, rotation: f32, scale: Vec2) {
+        let (s, c) = rotation.sin_cos();
+        self.transform = [
+            [c * scale.x, -s * scale.y, offset.x, 0.0],
+            [s * scale.x, c * scale.y, offset.y, 0.0],
+        ];
+    }
+
+    pub fn apply(&self, uv: Vec2) -> Vec2 {
+        let [r0, r1] = self.transform;
+        Vec2::new(
+            r0[0] * uv.x + r0[1] * uv.y + r0[2],
+            r1[0] * uv.x + r1[1] * uv.y + r1[2],
+        )
+    }
+}
+
+/// How a material's textures modify its BSDF.
+pub const MAP_NONE: u32 = 0;
+/// glTF metallic-roughness mapping, recomputed per hit from the textured
+/// base colour, metallic and roughness.
+pub const MAP_GLTF: u32 = 1;
+/// `extras.bsdf`: baseColorTexture multiplies a diffuse `reflectance` or a
+/// conductor's `specular_reflectance`.
+pub const MAP_EXTRAS: u32 = 2;
+
+/// One material's textures and the factors they multiply (std430, 240 B).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct MaterialTextures {
+    /// `MAP_*`.
+    pub mode: u32,
+    /// alphaMode MASK: geometry with alpha below this is not there; a
+    /// negative value: opaque.
+    pub alpha_cutoff: f32,
+    /// baseColorFactor's alpha.
+    pub base_alpha: f32,
+    pub _pad: u32,
+    /// baseColorFactor rgb (MAP_GLTF).
+    pub base_factor: [f32; 4],
+    /// metallicFactor, roughnessFactor, transmissionFactor, ior (MAP_GLTF).
+    pub mr_factor: [f32; 4],
+    pub base_color: TexRef,
+    pub metallic_roughness: TexRef,
+    pub normal: TexRef,
+    pub emissive: TexRef,
+}
+const _: () = assert!(size_of::<MaterialTextures>() == 240);
+
+impl Default for MaterialTextures {
+    fn default() -> Self {
+        MaterialTextures {
+            mode: MAP_NONE,
+            alpha_cutoff: -1.0,
+            base_alpha: 1.0,
+            _pad: 0,
+            base_factor: [1.0; 4],
+            mr_factor: [0.0, 1.0, 0.0, 1.5],
+            base_color: TexRef::default(),
+            metallic_roughness: TexRef::default(),
+            normal: TexRef::default(),
+            emissive: TexRef::default(),
+        }
+    }
+}
+
+impl MaterialTextures {
+    /// Whether anything here needs a texture lookup or an alpha test.
+    pub fn is_used(&self) -> bool {
+        self.mode != MAP_NONE
+            || self.is_masked()
+            || self.normal.is_some()
+            || self.emissive.is_some()
+    }
+    pub fn is_masked(&self) -> bool {
+        self.alpha_cutoff >= 0.0
+    }
+}
+
+/// A triangle's texture coordinates (std430, 64 bytes): `uv[k]` holds
+/// vertex k's TEXCOORD_0 in `.xy` and TEXCOORD_1 in `.zw`; `extra.x` is
+/// the bitangent sign for normal mapping (B = sign * cross(N, T)).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct TriangleUv {
+    pub uv: [[f32; 4]; 3],
+    pub extra: [f32; 4],
+}
+const _: () = assert!(size_of::<TriangleUv>() == 64);
+
+impl TriangleUv {
+    /// Interpolated texture coordinate set `set` at barycentrics (u, v).
+    pub fn at(&self, set: u32, u: f32, v: f32) -> Vec2 {
+        let w = 1.0 - u - v;
+        let o = if set == 1 { 2 } else { 0 };
+        let c = |k: usize| Vec2::new(self.uv[k][o], self.uv[k][o + 1]);
+        w * c(0) + u * c(1) + v * c(2)
+    }
+}
+
+/// A decoded image's name and size, for `glint info`.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct TextureInfo {
+    pub name: String,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// All of a scene's texture data. Empty (and never read) for a scene
+/// without textures or alpha masks.
+#[derive(Clone, Debug, Default)]
+pub struct SceneTextures {
+    pub texels: Vec<u32>,
+    pub table: Vec<GpuTexture>,
+    pub info: Vec<TextureInfo>,
+    /// Per material (same indices as `Scene::materials`), or empty.
+    pub materials: Vec<MaterialTextures>,
+    /// Per triangle (same order as `Scene::triangles`), or empty.
+    pub uvs: Vec<TriangleUv>,
+}
+
+impl SceneTextures {
+    pub fn is_empty(&self) -> bool {
+        self.materials.iter().all(|m| !m.is_used())
+    }
+
+    /// Whether some material has an alpha mask.
+    pub fn has_masks(&self) -> bool {
+        self.materials.iter().any(|m| m.is_masked())
+    }
+
+    /// The material's textures, if it uses any.
+    pub fn material(&self, material: u32) -> Option<&MaterialTextures> {
+        self.materials
+            .get(material as usize)
+            .filter(|m| m.is_used())
+    }
+
+    /// Bytes the GPU holds for textures.
+    pub fn bytes(&self) -> usize {
+        self.texels.len() * 4
+            + self.table.len() * size_of::<GpuTexture>()
+            + self.materials.len() * size_of::<MaterialTextures>()
+            + self.uvs.len() * size_of::<TriangleUv>()
+    }
+
+    /// `r` looked up at triangle `tri`, barycentrics (u, v); raw RGBA, or
+    /// sRGB-decoded RGB with `srgb`.
+    pub fn lookup(&self, r: &TexRef, tri: u32, u: f32, v: f32, srgb: bool) -> Vec4 {
+        let uv = self.uvs[tri as usize].at(r.tex_coord, u, v);
+        texture_sample(
+            &self.texels,
+            &self.table[r.texture as usize],
+            r.apply(uv),
+            srgb,
+        )
+    }
+
+    /// Alpha-mask test: whether the surface of `tri` at (u, v) is there.
+    /// Opaque materials (and scenes without masks) always pass.
+    pub fn alpha_pass(&self, material: u32, tri: u32, u: f32, v: f32) -> bool {
+        let Some(m) = self.materials.get(material as usize) else {
+            return true;
+        };
+        if !m.is_masked() {
+            return true;
+        }
+        let mut a = m.base_alpha;
+        if m.base_color.is_some() {
+            a *= self.lookup(&m.base_color, tri, u, v, false).w;
+        }
+        a >= m.alpha_cutoff
+    }
+}
+
+/// sRGB transfer function to linear (IEC 61966-2-1).
+pub fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// A packed RGBA8 texel as four values in [0, 1].
+pub fn unpack_texel(t: u32) -> Vec4 {
+    Vec4::new(
+        (t & 255) as f32,
+        ((t >> 8) & 255) as f32,
+        ((t >> 16) & 255) as f32,
+        (t >> 24) as f32,
+    ) / 255.0
+}
+
+/// Integer texel coordinate `i` wrapped into [0, n) by `mode`.
+pub fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
+    match mode {
+        WRAP_CLAMP => i.clamp(0, n - 1),
+        WRAP_MIRROR => {
+            let k = i.rem_euclid(2 * n);
+            if k >= n { 2 * n - 1 - k } else { k }
+        }
+        _ => i.rem_euclid(n),
+    }
+}
+
+/// A texture coordinate reduced to a small range with the same result
+/// under `mode` (one period for repeat, two for mirror, [-1, 2] for clamp),
+/// so texel indices fit an `i32`; NaN reads as 0.
+pub fn reduce_coord(x: f32, mode: u32) -> f32 {
+    let x = if x.is_nan() { 0.0 } else { x };
+    match mode {
+        WRAP_CLAMP => x.clamp(-1.0, 2.0),
+        WRAP_MIRROR => x - 2.0 * (0.5 * x).floor(),
+        _ => x - x.floor(),
+    }
+}
+
+/// The texel at integer (x, y), wrapped; sRGB-decoded RGB with `srgb`.
+pub fn texture_fetch(texels: &[u32], t: &GpuTexture, x: i32, y: i32, srgb: bool) -> Vec4 {
+    let (w, h) = (t.width as i32, t.height as i32);
+    let x = wrap_texel(x, w, t.flags & 3);
+    let y = wrap_texel(y, h, (t.flags >> 2) & 3);
+    let c = unpack_texel(texels[t.offset as usize + (y * w + x) as usize]);
+    if srgb {
+        Vec4::new(
+            srgb_to_linear(c.x),
+            srgb_to_linear(c.y),
+            srgb_to_linear(c.z),
+            c.w,
+        )
+    } else {
+        c
+    }
+}
+
+/// Filtered lookup at `uv` (glTF: (0, 0) the image's top-left corner).
+pub fn texture_sample(texels: &[u32], t: &GpuTexture, uv: Vec2, srgb: bool) -> Vec4 {
+    let u = reduce_coord(uv.x, t.flags & 3);
+    let v = reduce_coord(uv.y, (t.flags >> 2) & 3);
+    let x = u * t.width as f32;
+    let y = v * t.height as f32;
+    if t.flags & TEX_NEAREST != 0 {
+        return texture_fetch(texels, t, x.floor() as i32, y.floor() as i32, srgb);
+    }
+    let (x, y) = (x - 0.5, y - 0.5);
+    let (x0, y0) = (x.floor(), y.floor());
+    let (fx, fy) = (x - x0, y - y0);
+    let (ix, iy) = (x0 as i32, y0 as i32);
+    let a = texture_fetch(texels, t, ix, iy, srgb);
+    let b = texture_fetch(texels, t, ix + 1, iy, srgb);
+    let c = texture_fetch(texels, t, ix, iy + 1, srgb);
+    let d = texture_fetch(texels, t, ix + 1, iy + 1, srgb);
+    (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy
+}
+
+/// A tangent-space normal-map texel (rgb in [0, 1]) applied to the frame
+/// (n, t, b): ((2 rgb - 1) with xy times `scale`) in (t, b, n), normalised.
+/// Returns `n` when the result is degenerate.
+pub fn perturb_normal(rgb: Vec3, scale: f32, n: Vec3, t: Vec3, b: Vec3) -> Vec3 {
+    let m = rgb * 2.0 - Vec3::ONE;
+    let p = t * (m.x * scale) + b * (m.y * scale) + n * m.z;
+    let len2 = p.length_squared();
+    if len2 > 0.0 && len2.is_finite() {
+        p / len2.sqrt()
+    } else {
+        n
+    }
+}
+
+/// The BSDF at a textured hit: the material's BSDF with its textured
+/// parameters. `MAP_GLTF` recomputes the glTF mapping (transmission, else
+/// metal, else diffuse, as `loader::material` maps the factors) from the
+/// textured base colour, metallic (B) and roughness (G); `MAP_EXTRAS`
+/// multiplies a diffuse reflectance or a conductor's specular reflectance
+/// by the base colour texture.
+pub fn textured_bsdf(
+    st: &SceneTextures,
+    mt: &MaterialTextures,
+    bsdf: &Bsdf,
+    tri: u32,
+    u: f32,
+    v: f32,
+) -> Bsdf {
+    let base_tex = if mt.base_color.is_some() {
+        st.lookup(&mt.base_color, tri, u, v, true).truncate()
+    } else {
+        Vec3::ONE
+    };
+    match mt.mode {
+        MAP_GLTF => {
+            let base = Vec3::from_slice(&mt.base_factor[..3]) * base_tex;
+            let mut metallic = mt.mr_factor[0];
+            let mut roughness = mt.mr_factor[1];
+            if mt.metallic_roughness.is_some() {
+                let c = st.lookup(&mt.metallic_roughness, tri, u, v, false);
+                roughness *= c.y;
+                metallic *= c.z;
+            }
+            let alpha = roughness * roughness;
+            let rough = Roughness {
+                alpha_u: alpha,
+                alpha_v: alpha,
+                shadowing: Shadowing::Correlated,
+            };
+            if mt.mr_factor[2] > 0.0 {
+                Bsdf::Dielectric {
+                    eta: mt.mr_factor[3],
+                    roughness: rough,
+                }
+            } else if metallic > 0.0 {
+                let conductor = conductor_from_f0(base, rough);
+                if metallic >= 1.0 {
+                    Bsdf::Conductor(conductor)
+                } else {
+                    Bsdf::Metallic {
+                        metallic,
+                        base,
+                        conductor,
+                    }
+                }
+            } else {
+                Bsdf::Diffuse { reflectance: base }
+            }
+        }
+        MAP_EXTRAS => match *bsdf {
+            Bsdf::Diffuse { reflectance } => Bsdf::Diffuse {
+                reflectance: reflectance * base_tex,
+            },
+            Bsdf::Conductor(mut c) => {
+                c.specular_reflectance *= base_tex;
+                Bsdf::Conductor(c)
+            }
+            other => other,
+        },
+        _ => *bsdf,
+    }
+}
+
+/// The shading normal after `mt`'s normal map, in the frame (ns, s, t)
+/// of the hit (s the tangent, t = cross(ns, s)); `ns` itself when there is
+/// no normal map or the result would face away from `ng`.
+pub fn normal_mapped(
+    st: &SceneTextures,
+    mt: &MaterialTextures,
+    tri: u32,
+    u: f32,
+    v: f32,
+    ng: Vec3,
+    frame: &Frame,
+) -> Vec3 {
+    if !mt.normal.is_some() {
+        return frame.n;
+    }
+    let c = st.lookup(&mt.normal, tri, u, v, false).truncate();
+    let sign = st.uvs[tri as usize].extra[0];
+    let n = perturb_normal(c, mt.normal.scale, frame.n, frame.s, frame.t * sign);
+    if n.dot(ng) > 0.0 { n } else { frame.n }
+}
+
+/// The emissive texture's factor at a hit (1 without one).
+pub fn emission_factor(st: &SceneTextures, material: u32, tri: u32, u: f32, v: f32) -> Vec3 {
+    match st.material(material) {
+        Some(mt) if mt.emissive.is_some() => st.lookup(&mt.emissive, tri, u, v, true).truncate(),
+        _ => Vec3::ONE,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wraps() {
+        assert_eq!(wrap_texel(-1, 4, WRAP_REPEAT), 3);
+        assert_eq!(wrap_texel(4, 4, WRAP_REPEAT), 0);
+        assert_eq!(wrap_texel(-1, 4, WRAP_CLAMP), 0);
+        assert_eq!(wrap_texel(9, 4, WRAP_CLAMP), 3);
+        assert_eq!(wrap_texel(4, 4, WRAP_MIRROR), 3);
+        assert_eq!(wrap_texel(-1, 4, WRAP_MIRROR), 0);
+        assert_eq!(wrap_texel(8, 4, WRAP_MIRROR), 0);
+    }
+
+    #[test]
+    fn srgb_128_is_0_2158() {
+        assert!((srgb_to_linear(128.0 / 255.0) - 0.2158605).abs() < 1e-5);
+    }
+}

@@ -1,0 +1,211 @@
+// glTF textures: the GLSL mirror of glint_cpu::texture (cpu/src/texture.rs),
+// function for function under the same names (conventions there: UV origin
+// at the image's top-left, bilinear or nearest, wrap modes, sRGB decode per
+// texel before filtering).
+//
+// The including kernel must, BEFORE including this file, declare the
+// buffers `uint texels[]`, `Texture textures[]`, `MaterialTextures
+// material_textures[]` and `TriangleUv triangle_uvs[]` (bindings.glsl does).
+#ifndef GLINT_TEXTURE_GLSL
+#define GLINT_TEXTURE_GLSL
+
+#include "texture_types.glsl"
+#include "bsdf/material.glsl"
+
+float srgb_to_linear(float c) {
+    return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
+}
+
+vec4 unpack_texel(uint t) {
+    return vec4(float(t & 255u), float((t >> 8) & 255u), float((t >> 16) & 255u), float(t >> 24)) / 255.0;
+}
+
+// Texel index i wrapped into [0, n). After reduce_coord, i >= -n - 1, so
+// i + 4n is non-negative and the modulo is well defined.
+int wrap_texel(int i, int n, uint mode) {
+    if (mode == WRAP_CLAMP) {
+        return clamp(i, 0, n - 1);
+    }
+    if (mode == WRAP_MIRROR) {
+        int k = int(uint(i + 4 * n) % uint(2 * n));
+        return k >= n ? 2 * n - 1 - k : k;
+    }
+    return int(uint(i + 4 * n) % uint(n));
+}
+
+float reduce_coord(float x, uint mode) {
+    if (isnan(x)) {
+        x = 0.0;
+    }
+    if (mode == WRAP_CLAMP) {
+        return clamp(x, -1.0, 2.0);
+    }
+    if (mode == WRAP_MIRROR) {
+        return x - 2.0 * floor(0.5 * x);
+    }
+    return x - floor(x);
+}
+
+vec4 texture_fetch(Texture t, int x, int y, bool srgb) {
+    int w = int(t.width);
+    int h = int(t.height);
+    x = wrap_texel(x, w, t.flags & 3u);
+    y = wrap_texel(y, h, (t.flags >> 2) & 3u);
+    vec4 c = unpack_texel(texels[t.offset + uint(y * w + x)]);
+    if (srgb) {
+        return vec4(srgb_to_linear(c.x), srgb_to_linear(c.y), srgb_to_linear(c.z), c.w);
+    }
+    return c;
+}
+
+vec4 texture_sample(Texture t, vec2 uv, bool srgb) {
+    float u = reduce_coord(uv.x, t.flags & 3u);
+    float v = reduce_coord(uv.y, (t.flags >> 2) & 3u);
+    float x = u * float(t.width);
+    float y = v * float(t.height);
+    if ((t.flags & TEX_NEAREST) != 0u) {
+        return texture_fetch(t, int(floor(x)), int(floor(y)), srgb);
+    }
+    x -= 0.5;
+    y -= 0.5;
+    float x0 = floor(x);
+    float y0 = floor(y);
+    float fx = x - x0;
+    float fy = y - y0;
+    int ix = int(x0);
+    int iy = int(y0);
+    vec4 a = texture_fetch(t, ix, iy, srgb);
+    vec4 b = texture_fetch(t, ix + 1, iy, srgb);
+    vec4 c = texture_fetch(t, ix, iy + 1, srgb);
+    vec4 d = texture_fetch(t, ix + 1, iy + 1, srgb);
+    return (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy;
+}
+
+vec2 texref_apply(TexRef r, vec2 uv) {
+    return vec2(r.transform[0].x * uv.x + r.transform[0].y * uv.y + r.transform[0].z,
+                r.transform[1].x * uv.x + r.transform[1].y * uv.y + r.transform[1].z);
+}
+
+vec2 triangle_uv_at(uint tri, uint set, float u, float v) {
+    float w = 1.0 - u - v;
+    TriangleUv t = triangle_uvs[tri];
+    if (set == 1u) {
+        return w * t.uv[0].zw + u * t.uv[1].zw + v * t.uv[2].zw;
+    }
+    return w * t.uv[0].xy + u * t.uv[1].xy + v * t.uv[2].xy;
+}
+
+// SceneTextures::lookup.
+vec4 texture_lookup(TexRef r, uint tri, float u, float v, bool srgb) {
+    vec2 uv = triangle_uv_at(tri, r.tex_coord, u, v);
+    return texture_sample(textures[r.texture], texref_apply(r, uv), srgb);
+}
+
+// SceneTextures::alpha_pass.
+bool alpha_pass(uint material, uint tri, float u, float v) {
+    MaterialTextures m = material_textures[material];
+    if (m.alpha_cutoff < 0.0) {
+        return true;
+    }
+    float a = m.base_alpha;
+    if (m.base_color.texture != NO_TEXTURE) {
+        a *= texture_lookup(m.base_color, tri, u, v, false).w;
+    }
+    return a >= m.alpha_cutoff;
+}
+
+bool material_textures_used(MaterialTextures m) {
+    return m.mode != MAP_NONE || m.alpha_cutoff >= 0.0 || m.normal.texture != NO_TEXTURE
+        || m.emissive.texture != NO_TEXTURE;
+}
+
+// glint_cpu::loader::conductor_from_f0 (MAX_F0 = 0.999).
+void conductor_from_f0(inout Material g, vec3 f0, float alpha) {
+    f0 = clamp(f0, vec3(0.0), vec3(0.999));
+    g.eta = vec4(1.0, 1.0, 1.0, 0.0);
+    g.k = vec4(2.0 * sqrt(f0 / (vec3(1.0) - f0)), 0.0);
+    g.specular = vec4(1.0, 1.0, 1.0, 0.0);
+    g.alpha_u = alpha;
+    g.alpha_v = alpha;
+    g.shadowing = SHADOWING_CORRELATED;
+}
+
+// texture::textured_bsdf, on the GPU material record.
+Material textured_bsdf(MaterialTextures mt, Material g, uint tri, float u, float v) {
+    vec3 base_tex = vec3(1.0);
+    if (mt.base_color.texture != NO_TEXTURE) {
+        base_tex = texture_lookup(mt.base_color, tri, u, v, true).xyz;
+    }
+    if (mt.mode == MAP_GLTF) {
+        vec3 base = mt.base_factor.xyz * base_tex;
+        float metallic = mt.mr_factor.x;
+        float roughness = mt.mr_factor.y;
+        if (mt.metallic_roughness.texture != NO_TEXTURE) {
+            vec4 c = texture_lookup(mt.metallic_roughness, tri, u, v, false);
+            roughness *= c.y;
+            metallic *= c.z;
+        }
+        float alpha = roughness * roughness;
+        Material r = g;
+        if (mt.mr_factor.z > 0.0) {
+            r.kind = KIND_DIELECTRIC;
+            r.eta = vec4(mt.mr_factor.w, 0.0, 0.0, 0.0);
+            r.alpha_u = alpha;
+            r.alpha_v = alpha;
+            r.shadowing = SHADOWING_CORRELATED;
+        } else if (metallic > 0.0) {
+            conductor_from_f0(r, base, alpha);
+            if (metallic >= 1.0) {
+                r.kind = KIND_CONDUCTOR;
+            } else {
+                r.kind = KIND_METALLIC;
+                r.reflectance = vec4(base, metallic);
+            }
+        } else {
+            r.kind = KIND_DIFFUSE;
+            r.reflectance = vec4(base, 0.0);
+        }
+        return r;
+    }
+    if (mt.mode == MAP_EXTRAS) {
+        if (g.kind == KIND_DIFFUSE) {
+            g.reflectance.xyz *= base_tex;
+        } else if (g.kind == KIND_CONDUCTOR) {
+            g.specular.xyz *= base_tex;
+        }
+    }
+    return g;
+}
+
+vec3 perturb_normal(vec3 rgb, float scale, vec3 n, vec3 t, vec3 b) {
+    vec3 m = rgb * 2.0 - vec3(1.0);
+    vec3 p = t * (m.x * scale) + b * (m.y * scale) + n * m.z;
+    float len2 = dot(p, p);
+    if (len2 > 0.0 && !isinf(len2)) {
+        return p / sqrt(len2);
+    }
+    return n;
+}
+
+// texture::normal_mapped: the frame's (s, t, n) are (tangent, cross(n, s), n).
+vec3 normal_mapped(MaterialTextures mt, uint tri, float u, float v, vec3 ng, vec3 fs, vec3 ft, vec3 fn) {
+    if (mt.normal.texture == NO_TEXTURE) {
+        return fn;
+    }
+    vec3 c = texture_lookup(mt.normal, tri, u, v, false).xyz;
+    float sign_b = triangle_uvs[tri].extra.x;
+    vec3 n = perturb_normal(c, mt.normal.scale, fn, fs, ft * sign_b);
+    return dot(n, ng) > 0.0 ? n : fn;
+}
+
+// texture::emission_factor.
+// The caller checks that the scene has textures at all.
+vec3 emission_factor(uint material, uint tri, float u, float v) {
+    MaterialTextures mt = material_textures[material];
+    if (mt.emissive.texture == NO_TEXTURE) {
+        return vec3(1.0);
+    }
+    return texture_lookup(mt.emissive, tri, u, v, true).xyz;
+}
+
+#endif

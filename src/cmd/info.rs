@@ -1,0 +1,257 @@
+//! `glint info SCENE`: what the scene holds and what glint will use.
+
+use std::fmt::Write as _;
+use std::mem::size_of;
+
+use anyhow::Result;
+use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness};
+use glint::cpu::lights::{GpuEmitter, GpuLight};
+use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF};
+use glint::cpu::{BvhNode, GpuMaterial, PunctualLight, Scene, Triangle, TriangleShading};
+
+use super::{check_scene_path, load_quiet, one_line};
+use crate::cli::InfoArgs;
+
+pub fn run(args: &InfoArgs) -> Result<()> {
+    check_scene_path(&args.scene)?;
+    let scene = load_quiet(&args.scene, args.allow_any_path, args.background)?;
+    if args.strict
+        && let Some(w) = scene.warnings.first()
+    {
+        anyhow::bail!("{}: {} (--strict)", args.scene.display(), one_line(w));
+    }
+    print!("{}", describe(&args.scene.display().to_string(), &scene));
+    Ok(())
+}
+
+fn rgb(v: glam::Vec3) -> String {
+    format!("{:.4},{:.4},{:.4}", v.x, v.y, v.z)
+}
+
+fn roughness(r: &Roughness) -> String {
+    if r.alpha_u == r.alpha_v {
+        format!("alpha {:.4}", r.alpha_u)
+    } else {
+        format!("alpha_u {:.4} alpha_v {:.4}", r.alpha_u, r.alpha_v)
+    }
+}
+
+fn conductor(c: &ConductorParams) -> String {
+    let name = if c.roughness.is_smooth() {
+        "conductor".to_string()
+    } else {
+        format!("roughconductor {}", roughness(&c.roughness))
+    };
+    format!("{name} eta {} k {}", rgb(c.eta), rgb(c.k))
+}
+
+/// The model a material maps to, Mitsuba 3's names.
+pub fn model(b: &Bsdf) -> String {
+    match b {
+        Bsdf::Diffuse { reflectance } => format!("diffuse reflectance {}", rgb(*reflectance)),
+        Bsdf::Conductor(c) => conductor(c),
+        Bsdf::Dielectric { eta, roughness: r } if r.is_smooth() => {
+            format!("dielectric eta {eta:.4}")
+        }
+        Bsdf::Dielectric { eta, roughness: r } => {
+            format!("roughdielectric eta {eta:.4} {}", roughness(r))
+        }
+        Bsdf::Metallic {
+            metallic,
+            base,
+            conductor: c,
+        } => format!(
+            "blend {metallic:.3} x ({}) + {:.3} x diffuse reflectance {}",
+            conductor(c),
+            1.0 - metallic,
+            rgb(*base)
+        ),
+    }
+}
+
+fn bytes(n: usize) -> String {
+    if n >= 1 << 20 {
+        format!("{n} B ({:.1} MiB)", n as f64 / (1 << 20) as f64)
+    } else if n >= 1 << 10 {
+        format!("{n} B ({:.1} KiB)", n as f64 / 1024.0)
+    } else {
+        format!("{n} B")
+    }
+}
+
+/// The report, one section per kind of thing.
+pub fn describe(path: &str, s: &Scene) -> String {
+    let mut o = String::new();
+    let _ = writeln!(o, "scene: {path}");
+    let _ = writeln!(o, "cameras: {}", s.cameras.len());
+    for (i, c) in s.cameras.iter().enumerate() {
+        let p = c.to_world.w_axis.truncate();
+        let _ = writeln!(
+            o,
+            "  {i}: {} at {} yfov {:.2} deg{}",
+            c.name.as_deref().unwrap_or("(unnamed)"),
+            rgb(p),
+            c.yfov.to_degrees(),
+            c.aspect_ratio
+                .map(|a| format!(" aspect {a:.4}"))
+                .unwrap_or_default()
+        );
+    }
+    if s.cameras.is_empty() {
+        let _ = writeln!(o, "  (none: the default viewpoint frames the scene)");
+    }
+    let _ = writeln!(o, "materials: {}", s.materials.len());
+    for (i, m) in s.materials.iter().enumerate() {
+        let mut extra = Vec::new();
+        if m.is_emissive() {
+            extra.push(format!("emission {}", rgb(m.emission)));
+        }
+        if m.double_sided {
+            extra.push("double-sided".into());
+        }
+        if let Some(mt) = s.textures.materials.get(i) {
+            let mut tex = Vec::new();
+            for (name, r) in [
+                ("baseColor", &mt.base_color),
+                ("metallicRoughness", &mt.metallic_roughness),
+                ("normal", &mt.normal),
+                ("emissive", &mt.emissive),
+            ] {
+                if r.is_some() {
+                    tex.push(format!("{name}=texture {}", r.texture));
+                }
+            }
+            if !tex.is_empty() {
+                extra.push(tex.join(" "));
+            }
+            match mt.mode {
+                MAP_GLTF => extra.push("per-texel glTF mapping".into()),
+                MAP_EXTRAS => extra.push("baseColorTexture multiplies extras.bsdf".into()),
+                _ => {}
+            }
+            if mt.is_masked() {
+                extra.push(format!("alpha mask < {}", mt.alpha_cutoff));
+            }
+        }
+        let extra = if extra.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", extra.join("; "))
+        };
+        let name = if m.name.is_empty() {
+            "(unnamed)"
+        } else {
+            &m.name
+        };
+        let _ = writeln!(o, "  {i}: {name}: {}{extra}", model(&m.bsdf));
+    }
+    let t = &s.textures;
+    let _ = writeln!(o, "textures: {}", t.table.len());
+    for (i, (g, info)) in t.table.iter().zip(&t.info).enumerate() {
+        let wrap = |m: u32| match m {
+            1 => "clamp",
+            2 => "mirror",
+            _ => "repeat",
+        };
+        let _ = writeln!(
+            o,
+            "  {i}: {} {}x{} wrap {}/{} {}",
+            info.name,
+            info.width,
+            info.height,
+            wrap(g.flags & 3),
+            wrap((g.flags >> 2) & 3),
+            if g.flags & glint::cpu::texture::TEX_NEAREST != 0 {
+                "nearest"
+            } else {
+                "bilinear"
+            }
+        );
+    }
+    let emitters = s.emitter_triangles().len();
+    let _ = writeln!(
+        o,
+        "lights: {emitters} emissive triangles, {} punctual, background {}",
+        s.lights.len(),
+        rgb(s.background)
+    );
+    for (i, l) in s.lights.iter().enumerate() {
+        let d = match l {
+            PunctualLight::Point {
+                position,
+                intensity,
+            } => format!("point at {} intensity {}", rgb(*position), rgb(*intensity)),
+            PunctualLight::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone_angle,
+                outer_cone_angle,
+            } => format!(
+                "spot at {} toward {} intensity {} cone {:.1}-{:.1} deg",
+                rgb(*position),
+                rgb(*direction),
+                rgb(*intensity),
+                inner_cone_angle.to_degrees(),
+                outer_cone_angle.to_degrees()
+            ),
+            PunctualLight::Directional {
+                direction,
+                irradiance,
+            } => format!(
+                "directional toward {} irradiance {}",
+                rgb(*direction),
+                rgb(*irradiance)
+            ),
+        };
+        let _ = writeln!(o, "  {i}: {d}");
+    }
+    let (lo, hi) = s.bounds();
+    let _ = writeln!(o, "triangles: {}", s.triangles.len());
+    let _ = writeln!(o, "bounds: min {} max {}", rgb(lo), rgb(hi));
+    let mut features = Vec::new();
+    if !t.is_empty() {
+        features.push("textures");
+    }
+    if t.has_masks() {
+        features.push("alpha masks");
+    }
+    if emitters > 0 {
+        features.push("area lights");
+    }
+    if !s.lights.is_empty() {
+        features.push("punctual lights");
+    }
+    if s.background.max_element() > 0.0 {
+        features.push("background");
+    }
+    let _ = writeln!(o, "kernel features: {}", features.join(", "));
+    let rows = [
+        ("triangles", s.triangles.len() * size_of::<Triangle>()),
+        ("bvh nodes", s.bvh.nodes.len() * size_of::<BvhNode>()),
+        ("shading", s.shading.len() * size_of::<TriangleShading>()),
+        ("materials", s.materials.len() * size_of::<GpuMaterial>()),
+        ("emitters", emitters * size_of::<GpuEmitter>()),
+        ("lights", s.lights.len() * size_of::<GpuLight>()),
+        ("texels", t.texels.len() * 4),
+        ("texture table", t.table.len() * 16),
+        ("material textures", t.materials.len() * 240),
+        ("triangle uvs", t.uvs.len() * 64),
+    ];
+    let total: usize = rows.iter().map(|r| r.1).sum();
+    let _ = writeln!(
+        o,
+        "memory (bytes uploaded per GPU buffer): {}",
+        bytes(total)
+    );
+    for (name, n) in rows {
+        if n > 0 {
+            let _ = writeln!(o, "  {name}: {}", bytes(n));
+        }
+    }
+    let _ = writeln!(o, "warnings: {}", s.warnings.len());
+    for w in &s.warnings {
+        let _ = writeln!(o, "  {}", one_line(w));
+    }
+    o
+}
