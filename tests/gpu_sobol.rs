@@ -34,7 +34,11 @@ fn glsl_sobol_returns_the_cpu_bits() {
     let mut queries = Vec::with_capacity(N);
     for _ in 0..N {
         let r = rng.u32();
-        let key = if r % 4 == 0 { rng.u32() } else { keys[(r >> 2) as usize % keys.len()] };
+        let key = if r % 4 == 0 {
+            rng.u32()
+        } else {
+            keys[(r >> 2) as usize % keys.len()]
+        };
         let pixel = match (r >> 8) % 3 {
             0 => rng.u32() % 4096,
             1 => rng.u32() % (16384 * 16384),
@@ -92,7 +96,11 @@ fn glsl_sobol_returns_the_cpu_bits() {
             b.rr,
         ]
         .map(f32::to_bits);
-        let got: Vec<u32> = results[3 * i..3 * i + 3].iter().flatten().copied().collect();
+        let got: Vec<u32> = results[3 * i..3 * i + 3]
+            .iter()
+            .flatten()
+            .copied()
+            .collect();
         if got[..11] != want {
             failures.push(format!(
                 "key {key:#x} pixel {pixel} sample {sample} dim {dim}: gpu {:x?} cpu {want:x?}",

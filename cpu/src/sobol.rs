@@ -44,12 +44,7 @@ pub const SOBOL_BLOCK_BITS: u32 = 16;
 /// `key` (`sampling::seed_key`).
 #[inline]
 pub fn pair_seed(key: u32, pixel: u32, sample: u32, pair: u32) -> u32 {
-    pcg4d([
-        pixel,
-        pair,
-        sample >> SOBOL_BLOCK_BITS,
-        key ^ SOBOL_SALT,
-    ])[0]
+    pcg4d([pixel, pair, sample >> SOBOL_BLOCK_BITS, key ^ SOBOL_SALT])[0]
 }
 
 /// Both coordinates of pair `pair` (dimensions 2 pair and 2 pair + 1).
@@ -112,7 +107,9 @@ pub enum PathSampler {
 impl PathSampler {
     pub fn new(kind: crate::film::SamplerKind, key: u32, pixel: u32, sample: u32) -> Self {
         match kind {
-            crate::film::SamplerKind::Independent => Self::Independent(Rng::new(key, pixel, sample)),
+            crate::film::SamplerKind::Independent => {
+                Self::Independent(Rng::new(key, pixel, sample))
+            }
             crate::film::SamplerKind::Sobol => Self::Sobol {
                 key,
                 pixel,
@@ -227,7 +224,11 @@ mod tests {
         if glsl[a..b] != want {
             println!("{want}");
         }
-        assert_eq!(glsl[a..b], want, "shaders/integrator/sobol.glsl's table is stale");
+        assert_eq!(
+            glsl[a..b],
+            want,
+            "shaders/integrator/sobol.glsl's table is stale"
+        );
     }
 
     /// A reimplementation from the table alone (what the GLSL does) gives
@@ -246,8 +247,8 @@ mod tests {
                             v ^= dn;
                         }
                     }
-                    let sc = seed.wrapping_mul(0x9c8f_2d3b)
-                        ^ [0x912f_69ba, 0x174f_18ab][d as usize];
+                    let sc =
+                        seed.wrapping_mul(0x9c8f_2d3b) ^ [0x912f_69ba, 0x174f_18ab][d as usize];
                     let x = u32_to_f32_norm(owen_scramble_rev(v, hash(sc)).reverse_bits());
                     assert_eq!(x.to_bits(), sobol_burley::sample(i, d, seed).to_bits());
                 }

@@ -4,10 +4,10 @@
 //! neighbouring pixels, between pairs, and between seeds.
 
 use glam::Vec2;
+use glint_cpu::SamplerKind;
 use glint_cpu::compare::normal_quantile;
 use glint_cpu::sampling::{Rng, seed_key};
 use glint_cpu::sobol::{PathSampler, bounce_pair, sobol_2d, sobol_sample};
-use glint_cpu::SamplerKind;
 
 /// Whether `pts` (2^m of them) put exactly one point in every elementary
 /// interval [i/2^a, (i+1)/2^a) x [j/2^(m-a), (j+1)/2^(m-a)), a = 0..=m:
@@ -68,12 +68,23 @@ fn any_aligned_range_of_2m_samples_is_a_0m2_net() {
     for pixel in [5u32, 40_000] {
         for pair in pairs() {
             for m in 1..=10u32 {
-                for k in [1u32, 3, 7, 64, (1 << 16) >> m, 5 << (16 - m), 1000 << (16 - m)] {
+                for k in [
+                    1u32,
+                    3,
+                    7,
+                    64,
+                    (1 << 16) >> m,
+                    5 << (16 - m),
+                    1000 << (16 - m),
+                ] {
                     let start = k << m;
                     let pts: Vec<Vec2> = (start..start + (1 << m))
                         .map(|s| sobol_2d(key, pixel, s, pair))
                         .collect();
-                    assert!(is_net(&pts, m), "pixel {pixel} pair {pair} m {m} start {start}");
+                    assert!(
+                        is_net(&pts, m),
+                        "pixel {pixel} pair {pair} m {m} start {start}"
+                    );
                 }
             }
         }
@@ -93,7 +104,9 @@ fn the_net_test_fails_independent_numbers_and_unaligned_sobol_ranges() {
     assert_eq!(fails, 20);
     // And an unaligned Sobol range is a valid set (see the next test) but
     // not a net in general.
-    let pts: Vec<Vec2> = (3..3 + 64).map(|s| sobol_2d(seed_key(0), 0, s, 1)).collect();
+    let pts: Vec<Vec2> = (3..3 + 64)
+        .map(|s| sobol_2d(seed_key(0), 0, s, 1))
+        .collect();
     assert!(!is_net(&pts, 6));
 }
 
@@ -108,7 +121,12 @@ fn any_range_is_a_union_of_nets_and_stays_uniform() {
         while s < start + n {
             let k = s.trailing_zeros().min(31 - (start + n - s).leading_zeros());
             let pts: Vec<Vec2> = (s..s + (1 << k)).map(|i| sobol_2d(key, 9, i, 3)).collect();
-            assert!(is_net(&pts, k), "block [{s}, {}) of [{start}, {})", s + (1 << k), start + n);
+            assert!(
+                is_net(&pts, k),
+                "block [{s}, {}) of [{start}, {})",
+                s + (1 << k),
+                start + n
+            );
             s += 1 << k;
         }
     }
@@ -176,7 +194,10 @@ fn neighbouring_pixels_pairs_and_seeds_are_uncorrelated() {
                 })
                 .unzip();
             let (r, ma, _) = correlation(&a, &b);
-            assert!(r.abs() < tol, "{name} dim {d} sample {s}: r = {r} (tolerance {tol})");
+            assert!(
+                r.abs() < tol,
+                "{name} dim {d} sample {s}: r = {r} (tolerance {tol})"
+            );
             assert!((ma - 0.5).abs() < mean_tol, "dim {d} sample {s}: mean {ma}");
         }
         // Two pairs of one sample in one pixel: the next pair's first
@@ -249,7 +270,16 @@ fn the_path_sampler_lays_bounces_out_as_documented() {
         rng.next_f32(),
     ];
     assert_eq!(
-        [b.light_cat, b.light_idx, b.light.x, b.light.y, b.bsdf_lobe, b.bsdf.x, b.bsdf.y, b.rr],
+        [
+            b.light_cat,
+            b.light_idx,
+            b.light.x,
+            b.light.y,
+            b.bsdf_lobe,
+            b.bsdf.x,
+            b.bsdf.y,
+            b.rr
+        ],
         want
     );
 }
