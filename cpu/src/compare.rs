@@ -44,8 +44,8 @@
 //! valid and conservative (less power only where QMC actually removed
 //! noise). Measured rather than assumed: `cpu/tests/render_stats.rs`
 //! (`the_film_variance_overestimates_a_sobol_mean`) renders scenes under
-//! many seeds and finds the film's estimate above the seed-to-seed
-//! variance of the pixel means.
+//! 40 seeds and finds the film's estimate 4-6x the seed-to-seed variance
+//! of the pixel means (and 1.03-1.11x for independent samples).
 
 // `!(a <= b)` on floats is meant: it is true for NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
