@@ -175,7 +175,11 @@ fn with_envmap(scene: &mut Scene) {
     }
     scene.background = Vec3::ZERO;
     scene.envmap = Some(std::sync::Arc::new(glint::cpu::envmap::EnvMap::new(
-        w, h, &rgb, 0.8, 0.5236,
+        w,
+        h,
+        &rgb,
+        0.8,
+        std::f32::consts::FRAC_PI_6,
     )));
 }
 

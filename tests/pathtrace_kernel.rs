@@ -42,6 +42,7 @@ fn gpu_kernel_traces_the_cpu_paths() {
         ("roughdielectric.gltf", -1),
         ("roughconductor.gltf", -1),
         ("conductor.gltf", 3),
+        ("textured.gltf", -1),
     ];
     for (asset, max_depth) in cases {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))

@@ -12,6 +12,9 @@
 //! map about +Y (right-handed, radians). Radiance is the nearest texel (so
 //! the sampling density is exact), times `--envmap-scale`.
 
+// `!(x > 0.0)` on floats is meant: it rejects NaN too.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use std::f32::consts::PI;
 use std::path::Path;
 

@@ -434,8 +434,7 @@ fn bad_images_are_warnings_and_the_factor_is_used() {
     d.json["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["index"] = json!(7);
     let path = d.write_gltf(&dir, "badindex");
     let e = parse(&path)
-        .err()
-        .expect("texture 7 does not exist")
+        .expect_err("texture 7 does not exist")
         .to_string();
     assert!(e.contains("baseColorTexture.index"), "{e}");
     assert!(!e.contains('\n'));

@@ -402,13 +402,8 @@ fn add_mesh(
                 }
                 tuv.extra[0] = match (&tangents, &uvs) {
                     // glTF: bitangent = cross(normal, tangent.xyz) * w.
-                    (Some(ts), _) => {
-                        if ts[v[0]][3] < 0.0 {
-                            -1.0
-                        } else {
-                            1.0
-                        }
-                    }
+                    (Some(ts), _) if ts[v[0]][3] < 0.0 => -1.0,
+                    (Some(_), _) => 1.0,
                     // Without TANGENT: the sign that makes the bitangent
                     // point up the image (-dP/dv, glTF's v running down).
                     (None, Some(uv)) => {
