@@ -71,7 +71,7 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
     float p_area;
     float p_punctual;
     float p_background;
-    float eps_abs;
+    float eps_abs;     // unused (0): ray offsets come from hit_error
 } params;
 
 layout(std430, set = 0, binding = 1) readonly buffer TriangleBuffer { Triangle triangles[]; };

@@ -35,10 +35,14 @@ pub enum Command {
     /// several sample counts or time budgets, measure each image against a
     /// reference, write DIR/converge.csv, .md, .svg and .png.
     Converge(ConvergeArgs),
+    /// Sweep each BSDF through its failure points (grazing angles, alpha
+    /// to 0, eta to 1, extreme k and anisotropy) on both backends; write
+    /// DIR/stability.md, .csv and a pass/fail map (.svg, .png).
+    Stability(StabilityArgs),
 }
 
 /// The verbs, for messages ("missing command: ...").
-pub const VERBS: &[&str] = &["render", "compare", "bench", "converge"];
+pub const VERBS: &[&str] = &["render", "compare", "bench", "converge", "stability"];
 
 /// `--nee on|off`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -294,4 +298,23 @@ pub struct VariantCli {
 
     #[command(flatten)]
     pub opts: RenderOpts,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct StabilityArgs {
+    /// Output folder (created if missing).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    pub dir: PathBuf,
+
+    /// The small sweep CI runs (fewer samples and queries per point).
+    #[arg(long)]
+    pub quick: bool,
+
+    /// Skip the GPU-vs-CPU half (no Vulkan device needed).
+    #[arg(long)]
+    pub cpu_only: bool,
+
+    /// Use the Vulkan device whose name contains NAME.
+    #[arg(long, value_name = "NAME")]
+    pub device: Option<String>,
 }

@@ -66,6 +66,7 @@ fn main() -> ExitCode {
         Command::Compare(args) => std::panic::catch_unwind(|| cmd::compare::run(&args)),
         Command::Bench(args) => std::panic::catch_unwind(|| cmd::bench::run(&args)),
         Command::Converge(args) => std::panic::catch_unwind(|| cmd::converge::run(&args)),
+        Command::Stability(args) => std::panic::catch_unwind(|| cmd::stability::run(&args)),
     };
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -6,6 +6,7 @@ pub mod compare;
 pub mod converge;
 pub mod outputs;
 pub mod render;
+pub mod stability;
 
 use std::io::IsTerminal;
 use std::path::Path;
@@ -123,7 +124,11 @@ pub fn check_scene_path(path: &Path) -> Result<()> {
 /// Load the scene.
 pub fn load(path: &Path) -> Result<Scene> {
     check_scene_path(path)?;
-    Ok(glint::cpu::loader::load(path)?)
+    let scene = glint::cpu::loader::load(path)?;
+    if let Some(w) = glint::cpu::integrator::precision_warning(&scene) {
+        eprintln!("glint: warning: {}: {w}", path.display());
+    }
+    Ok(scene)
 }
 
 /// Settle the render options for `scene` (camera, image size, methods).

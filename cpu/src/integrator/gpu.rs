@@ -48,7 +48,8 @@ pub struct GpuParams {
     pub p_area: f32,
     pub p_punctual: f32,
     pub p_background: f32,
-    /// Absolute floor of the ray offset (`RAY_EPS_SCENE` x scene extent).
+    /// Unused since ray offsets come from the hit point's error bound
+    /// (always 0; kept so that the layout stays put).
     pub eps_abs: f32,
 }
 const _: () = assert!(size_of::<GpuParams>() == 144);
@@ -108,7 +109,7 @@ pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneDat
         p_area: pt.lights.probs.area,
         p_punctual: pt.lights.probs.punctual,
         p_background: pt.lights.probs.background,
-        eps_abs: pt.eps_abs,
+        eps_abs: 0.0,
     };
     Ok(GpuSceneData {
         params,
