@@ -80,7 +80,7 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
     float p_area;
     float p_punctual;
     float p_background;
-    float eps_abs;
+    float eps_abs;     // unused (0): ray offsets come from hit_error
     uint textured;    // 1: some material has textures (bindings 9-12 are real)
     uint masked;      // 1: some material has an alpha mask (traversal tests it)
     uint env_width;   // environment map size; 0: none (bindings 13-14 dummies)

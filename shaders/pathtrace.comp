@@ -28,16 +28,66 @@ bool bvh_present(uint tri, float u, float v) {
 // glint_cpu::integrator constants.
 #define RR_DEPTH 5u
 #define RR_MAX_PROB 0.95
-#define RAY_EPS_REL 1e-4
+// pbrt-v4's gamma(7) (integrator::RAY_ERR_GAMMA) and ShadowEpsilon.
+#define RAY_ERR_GAMMA 4.1723268e-7
+#define SHADOW_EPS 1e-4
+// The triangle test's relative margin (integrator::RAY_ERR_TRI).
+#define RAY_ERR_TRI 3.8146973e-6
 
-float ray_eps(vec3 p) {
-    vec3 a = abs(p);
-    return RAY_EPS_REL * max(a.x, max(a.y, a.z)) + params.eps_abs;
+// Componentwise error bound of a point interpolated from the triangle,
+// plus the triangle test's margin (hit_error in cpu/src/integrator).
+vec3 hit_error(vec3 p0, vec3 p1, vec3 p2) {
+    vec3 e = max(p0, max(p1, p2)) - min(p0, min(p1, p2));
+    float extent = max(e.x, max(e.y, e.z));
+    return RAY_ERR_GAMMA * max(abs(p0), max(abs(p1), abs(p2))) + vec3(RAY_ERR_TRI * extent);
 }
 
-vec3 offset_origin(vec3 p, vec3 ng, vec3 w) {
-    float e = ray_eps(p);
-    return dot(w, ng) >= 0.0 ? p + ng * e : p - ng * e;
+// pbrt-v4's NextFloatUp / NextFloatDown, on the bits.
+float next_float_up(float v) {
+    if (isinf(v) && v > 0.0) {
+        return v;
+    }
+    uint b = floatBitsToUint(v);
+    if (b == 0x80000000u) {
+        b = 0u;
+    }
+    b = v >= 0.0 ? b + 1u : b - 1u;
+    return uintBitsToFloat(b);
+}
+
+float next_float_down(float v) {
+    if (isinf(v) && v < 0.0) {
+        return v;
+    }
+    uint b = floatBitsToUint(v);
+    if (b == 0u) {
+        b = 0x80000000u;
+    }
+    b = v > 0.0 ? b - 1u : b + 1u;
+    return uintBitsToFloat(b);
+}
+
+// pbrt-v4's OffsetRayOrigin.
+vec3 offset_origin(vec3 p, vec3 err, vec3 ng, vec3 w) {
+    float d = dot(abs(ng), err);
+    vec3 offset = ng * d;
+    if (dot(w, ng) < 0.0) {
+        offset = -offset;
+    }
+    vec3 po = p + offset;
+    for (int i = 0; i < 3; i++) {
+        if (offset[i] > 0.0) {
+            po[i] = next_float_up(po[i]);
+        } else if (offset[i] < 0.0) {
+            po[i] = next_float_down(po[i]);
+        }
+    }
+    return po;
+}
+
+float shadow_tmax(float len, vec3 q) {
+    vec3 a = abs(q);
+    return len * (1.0 - SHADOW_EPS) - 2.0 * RAY_ERR_GAMMA * max(a.x, max(a.y, a.z));
 }
 
 struct SurfaceFrame {
@@ -85,16 +135,16 @@ void apply_textures(uint material, uint tri, float u, float v, inout SurfaceFram
     m = textured_bsdf(mt, m, tri, u, v);
 }
 
-// The shadow ray toward a light sample, from the offset origin to eps(q)
+// The shadow ray toward a light sample, from the offset origin to just
 // short of the light point q (PathTracer::shadow_ray).
-void shadow_ray(vec3 p, vec3 ng, LightSample ls, out vec3 o, out vec3 d, out float tmax) {
-    o = offset_origin(p, ng, ls.wi);
+void shadow_ray(vec3 p, vec3 err, vec3 ng, LightSample ls, out vec3 o, out vec3 d, out float tmax) {
+    o = offset_origin(p, err, ng, ls.wi);
     if (!ls.at_infinity) {
         vec3 q = p + ls.wi * ls.dist;
         vec3 to = q - o;
         float len = length(to);
         d = to / len;
-        tmax = len - ray_eps(q);
+        tmax = shadow_tmax(len, q);
     } else {
         d = ls.wi;
         tmax = GLINT_FLT_MAX;
@@ -135,6 +185,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         }
         Triangle tri = triangles[hit.tri];
         vec3 p = (1.0 - hit.u - hit.v) * tri.p0.xyz + hit.u * tri.p1.xyz + hit.v * tri.p2.xyz;
+        vec3 p_err = hit_error(tri.p0.xyz, tri.p1.xyz, tri.p2.xyz);
         vec3 wo = -ray_d;
 
         vec3 le;
@@ -182,7 +233,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
                     vec3 so;
                     vec3 sd;
                     float stmax;
-                    shadow_ray(p, sf.ng, ls, so, sd, stmax);
+                    shadow_ray(p, p_err, sf.ng, ls, so, sd, stmax);
                     rays += 1u;
                     if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
                         float w = ls.delta ? 1.0 : mis_light(params.mis, ls.pdf, bsdf_pdf(m, wo_local, wi_local));
@@ -205,7 +256,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         prev_mis = sample_lights && !bs.delta;
         prev_bsdf_pdf = bs.pdf;
         prev_bg_normal = bg_normal;
-        ray_o = offset_origin(p, sf.ng, wi);
+        ray_o = offset_origin(p, p_err, sf.ng, wi);
         ray_d = wi;
         depth += 1u;
 

@@ -205,3 +205,138 @@ pub fn png(spec: &ChartSpec) -> Result<Vec<u8>, ChartError> {
         .map_err(err)?;
     Ok(out.into_inner())
 }
+
+/// A pass/degrade/fail map over a parameter grid (`glint stability`).
+#[derive(Clone, Debug)]
+pub struct Heatmap {
+    pub title: String,
+    /// Row labels (the family's parameter values), top to bottom.
+    pub rows: Vec<String>,
+    pub cols: usize,
+    /// (row, col, status 0 pass / 1 degrade / 2 fail, largest error).
+    pub cells: Vec<(usize, usize, u8, f64)>,
+}
+
+/// Panels per row of the heat-map figure.
+const MAP_COLUMNS: usize = 4;
+const MAP_PANEL_W: u32 = 330;
+const MAP_PANEL_H: u32 = 260;
+
+/// A cell's colour: green (pass), amber (degrade), red (fail); a passing
+/// cell is paler the smaller its error (log10 from 1e-6 to 1e-2).
+fn cell_color(status: u8, err: f64) -> RGBColor {
+    match status {
+        0 => {
+            let t = ((err.max(1e-9).log10() + 6.0) / 4.0).clamp(0.0, 1.0);
+            let l = |a: f64, b: f64| (a + (b - a) * t) as u8;
+            RGBColor(l(222.0, 120.0), l(245.0, 200.0), l(222.0, 120.0))
+        }
+        1 => RGBColor(245, 176, 65),
+        _ => RGBColor(214, 39, 40),
+    }
+}
+
+fn draw_maps<DB: DrawingBackend>(
+    root: DrawingArea<DB, Shift>,
+    title: &str,
+    col_labels: &[String],
+    maps: &[Heatmap],
+) -> Result<(), ChartError>
+where
+    DB::ErrorType: 'static,
+{
+    root.fill(&WHITE).map_err(err)?;
+    let (root_title, body) = root.split_vertically(60);
+    root_title
+        .draw(&Text::new(
+            title.to_string(),
+            (16, 10),
+            (FONT, 20).into_font().color(&BLACK),
+        ))
+        .map_err(err)?;
+    root_title
+        .draw(&Text::new(
+            format!(
+                "columns: cos theta_o = {}; green pass (darker: larger error), amber degrade, red fail",
+                col_labels.join(" ")
+            ),
+            (16, 36),
+            (FONT, 12).into_font().color(&BLACK),
+        ))
+        .map_err(err)?;
+    let rows = maps.len().div_ceil(MAP_COLUMNS).max(1);
+    let panels = body.split_evenly((rows, MAP_COLUMNS));
+    for (panel, map) in panels.iter().zip(maps) {
+        panel
+            .draw(&Text::new(
+                map.title.clone(),
+                (8, 4),
+                (FONT, 13).into_font().color(&BLACK),
+            ))
+            .map_err(err)?;
+        let (x0, y0) = (96i32, 24i32);
+        let (w, h) = panel.dim_in_pixel();
+        let cw = ((w as i32 - x0 - 8) / map.cols.max(1) as i32).max(1);
+        let ch = ((h as i32 - y0 - 8) / map.rows.len().max(1) as i32).clamp(1, 24);
+        for (r, label) in map.rows.iter().enumerate() {
+            panel
+                .draw(&Text::new(
+                    label.clone(),
+                    (4, y0 + r as i32 * ch + ch / 2 - 6),
+                    (FONT, 11).into_font().color(&BLACK),
+                ))
+                .map_err(err)?;
+        }
+        for &(r, c, status, e) in &map.cells {
+            let (cx, cy) = (x0 + c as i32 * cw, y0 + r as i32 * ch);
+            panel
+                .draw(&Rectangle::new(
+                    [(cx, cy), (cx + cw - 1, cy + ch - 1)],
+                    cell_color(status, e).filled(),
+                ))
+                .map_err(err)?;
+        }
+    }
+    root.present().map_err(err)?;
+    Ok(())
+}
+
+fn maps_size(maps: &[Heatmap]) -> (u32, u32) {
+    let rows = maps.len().div_ceil(MAP_COLUMNS).max(1) as u32;
+    (MAP_COLUMNS as u32 * MAP_PANEL_W, 60 + rows * MAP_PANEL_H)
+}
+
+/// The heat maps as an SVG document.
+pub fn heatmaps_svg(
+    title: &str,
+    col_labels: &[String],
+    maps: &[Heatmap],
+) -> Result<String, ChartError> {
+    register_font()?;
+    let mut s = String::new();
+    {
+        let root = SVGBackend::with_string(&mut s, maps_size(maps)).into_drawing_area();
+        draw_maps(root, title, col_labels, maps)?;
+    }
+    Ok(s)
+}
+
+/// The heat maps as PNG bytes.
+pub fn heatmaps_png(
+    title: &str,
+    col_labels: &[String],
+    maps: &[Heatmap],
+) -> Result<Vec<u8>, ChartError> {
+    register_font()?;
+    let (w, h) = maps_size(maps);
+    let mut buf = vec![0u8; (w * h * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
+        draw_maps(root, title, col_labels, maps)?;
+    }
+    let img = image::RgbImage::from_raw(w, h, buf).expect("sized buffer");
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png)
+        .map_err(err)?;
+    Ok(out.into_inner())
+}

@@ -39,10 +39,22 @@ pub enum Command {
     /// the models they map to, textures, lights, triangles, bounds, kernel
     /// features, GPU memory, warnings.
     Info(InfoArgs),
+
+    /// Sweep each BSDF through its failure points (grazing angles, alpha
+    /// to 0, eta to 1, extreme k and anisotropy) on both backends; write
+    /// DIR/stability.md, .csv and a pass/fail map (.svg, .png).
+    Stability(StabilityArgs),
 }
 
 /// The verbs, for messages ("missing command: ...").
-pub const VERBS: &[&str] = &["render", "compare", "bench", "converge", "info"];
+pub const VERBS: &[&str] = &[
+    "render",
+    "compare",
+    "bench",
+    "converge",
+    "info",
+    "stability",
+];
 
 #[derive(clap::Args, Debug)]
 pub struct InfoArgs {
@@ -407,4 +419,23 @@ pub struct VariantCli {
 
     #[command(flatten)]
     pub opts: RenderOpts,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct StabilityArgs {
+    /// Output folder (created if missing).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    pub dir: PathBuf,
+
+    /// The small sweep CI runs (fewer samples and queries per point).
+    #[arg(long)]
+    pub quick: bool,
+
+    /// Skip the GPU-vs-CPU half (no Vulkan device needed).
+    #[arg(long)]
+    pub cpu_only: bool,
+
+    /// Use the Vulkan device whose name contains NAME.
+    #[arg(long, value_name = "NAME")]
+    pub device: Option<String>,
 }

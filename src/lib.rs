@@ -6,3 +6,4 @@ pub mod backend;
 pub mod cache;
 pub mod chart;
 pub mod gpu;
+pub mod stability;

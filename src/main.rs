@@ -67,6 +67,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => std::panic::catch_unwind(|| cmd::bench::run(&args)),
         Command::Converge(args) => std::panic::catch_unwind(|| cmd::converge::run(&args)),
         Command::Info(args) => std::panic::catch_unwind(|| cmd::info::run(&args)),
+        Command::Stability(args) => std::panic::catch_unwind(|| cmd::stability::run(&args)),
     };
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -19,6 +19,9 @@
 // GGX alphas below this are rendered as the smooth (delta) counterpart
 // (SMOOTH_ALPHA_THRESHOLD in cpu/src/bsdf/mod.rs).
 #define SMOOTH_ALPHA_THRESHOLD 1e-3
+// A rough dielectric with |eta - 1| below this is rendered smooth
+// (ETA_SMOOTH_THRESHOLD in cpu/src/bsdf/mod.rs).
+#define ETA_SMOOTH_THRESHOLD 1e-2
 
 struct BsdfSample {
     vec3 wi;      // sampled incident direction (local frame)
@@ -155,7 +158,7 @@ bool conductor_sample(Material m, vec3 wo, vec2 u, out BsdfSample s) {
 // --------------------------------------------------------------- dielectric
 
 bool dielectric_is_smooth(float eta, Material m) {
-    return roughness_is_smooth(m.alpha_u, m.alpha_v) || eta == 1.0;
+    return roughness_is_smooth(m.alpha_u, m.alpha_v) || abs(eta - 1.0) < ETA_SMOOTH_THRESHOLD;
 }
 
 // Generalised half vector (Walter 2007 eq. 16), face-forwarded to +z;

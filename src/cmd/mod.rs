@@ -7,6 +7,7 @@ pub mod converge;
 pub mod info;
 pub mod outputs;
 pub mod render;
+pub mod stability;
 
 use std::io::IsTerminal;
 use std::path::Path;
@@ -145,6 +146,9 @@ pub fn load(path: &Path, o: &RenderOpts) -> Result<Scene> {
     // what the specialised kernel carries without changing the image.
     glint::cpu::features::simplify(&mut scene);
     scene.light_if_unlit();
+    if let Some(w) = glint::cpu::integrator::precision_warning(&scene) {
+        scene.warnings.push(w);
+    }
     report_warnings(path, &scene, o.strict)?;
     Ok(scene)
 }

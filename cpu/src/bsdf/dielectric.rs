@@ -11,13 +11,14 @@ use super::fresnel::{fresnel_dielectric, refract_dir};
 use super::microfacet::{
     ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
 };
-use super::{BsdfSample, Roughness, Shadowing};
+use super::{BsdfSample, ETA_SMOOTH_THRESHOLD, Roughness, Shadowing};
 
 /// Whether the interface is rendered as the smooth (delta) model: a small
-/// alpha, or eta = 1 where the rough transmission lobe collapses to the
-/// straight-through direction (pbrt-v4 does the same).
+/// alpha, or eta within [`ETA_SMOOTH_THRESHOLD`] of 1, where the rough
+/// transmission lobe collapses to the straight-through direction (pbrt-v4
+/// does the same for eta = 1 exactly).
 pub fn dielectric_is_smooth(eta: f32, r: &Roughness) -> bool {
-    r.is_smooth() || eta == 1.0
+    r.is_smooth() || (eta - 1.0).abs() < ETA_SMOOTH_THRESHOLD
 }
 
 /// The generalised half vector of Walter 2007 eq. 16, face-forwarded to

@@ -44,6 +44,18 @@ pub enum Shadowing {
 /// (pbrt-v4's choice; alpha = 0.01 is still rough).
 pub const SMOOTH_ALPHA_THRESHOLD: f32 = 1e-3;
 
+/// A rough dielectric whose relative IOR is within this of 1 is rendered as
+/// the smooth interface. The generalised half vector eta wi + wo of a
+/// transmitted pair is only |eta - 1| long, so f32 rounding of the
+/// directions moves the microfacet normal by ~6e-8 / |eta - 1|: against a
+/// lobe alpha wide, sample and pdf disagree by 6e-8 / (alpha |eta - 1|),
+/// over 1e-3 for alpha = 0.01 once |eta - 1| < 6e-3 (`glint stability`
+/// shows it at 1e-3). The transmission lobe is then at most |eta - 1| wide
+/// (alpha <= 1): as narrow as what the alpha threshold already treats as a
+/// delta. IOR exactly 1 gave NaN in Unity's and Blender's GGX BTDFs, and
+/// Cycles' sampled pdf disagreed with its evaluated pdf near equal IORs.
+pub const ETA_SMOOTH_THRESHOLD: f32 = 1e-2;
+
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Roughness {
     /// GGX alpha along the shading frame's s axis (the surface tangent).

@@ -20,12 +20,22 @@
 //!   then 4 light + 3 BSDF + 1 roulette per bounce) whether used or not, so
 //!   both backends walk the same stream; `sobol::PathSampler` gives them
 //!   from independent numbers or Owen-scrambled Sobol pairs (`--sampler`).
-//! - Ray offsets: new rays start at `p + ng * sign(wi . ng) * eps(p)`, with
-//!   eps(p) = 1e-4 max|p_i| + 1e-6 * scene extent (relative to the
-//!   position's own magnitude, where float error of the interpolated hit
-//!   point lives, with an absolute floor scaled by the scene for points at
-//!   the origin); shadow rays run from that offset origin to eps(q) short
-//!   of the light point q.
+//! - Ray offsets from the floating-point error of the hit point (pbrt-v4's
+//!   `OffsetRayOrigin`, Pharr et al. 4th ed. sec. 6.8.6): a hit point
+//!   interpolated from its triangle's vertices lies within
+//!   `err = gamma(7) max(|p0|, |p1|, |p2|)` (componentwise) of the plane,
+//!   the bound of pbrt-v4 sec. 6.8.5 taken over the whole triangle, plus
+//!   64 ulps of the triangle's extent for the rounding of the next
+//!   intersection test (pbrt-v4's triangle test rejects t < deltaT, a
+//!   bound of that size; ours has no such margin, so the offset carries
+//!   it: a huge single triangle gets offsets of ~4e-6 of its size). New
+//!   rays start at `p + ng * (|ng| . err)`
+//!   on the side `wi` points to, each component then rounded one float
+//!   away from p. Nothing depends on the scene's extent or on |p| beyond
+//!   what its own triangle's float precision needs, so a scene renders the
+//!   same far from the origin, at any scale, and beside a large ground
+//!   plane. Shadow rays end `SHADOW_EPS` of their length (pbrt-v4's
+//!   `ShadowEpsilon`) plus the light point's own error bound short of it.
 //! - Light leaks: a direction whose side of the geometric normal differs
 //!   from its side of the shading normal is discarded (light sample) or
 //!   ends the path (BSDF sample), since it would pass through the surface
@@ -60,10 +70,25 @@ use crate::texture::{MaterialTextures, normal_mapped, textured_bsdf};
 pub const RR_DEPTH: u32 = 5;
 /// Largest survival probability of Russian roulette (Mitsuba's 0.95).
 pub const RR_MAX_PROB: f32 = 0.95;
-/// Relative part of the ray-origin offset.
-pub const RAY_EPS_REL: f32 = 1e-4;
-/// Absolute floor of the offset, as a fraction of the scene's extent.
-pub const RAY_EPS_SCENE: f32 = 1e-6;
+/// pbrt-v4's gamma(7) = 7 u / (1 - 7 u), u = 2^-24 (the unit roundoff):
+/// the error bound factor of a point interpolated from three vertices.
+/// `shaders/pathtrace.comp` writes the same literal (pinned by a test).
+pub const RAY_ERR_GAMMA: f32 = 4.172_326_8e-7;
+/// Relative margin for the watertight triangle test's own rounding: a ray
+/// leaving a triangle at a grazing angle meets its plane again at a t
+/// whose rounding error is a few tens of ulps of the triangle's size
+/// (pbrt-v4 rejects such hits with a conservative t > deltaT; glint's
+/// triangle test has no such margin, so the offset carries it). 64 unit
+/// roundoffs; the literal is pinned against the GLSL by a test.
+pub const RAY_ERR_TRI: f32 = 3.814_697_3e-6;
+/// Shadow rays stop this fraction of their length short of the light
+/// point (pbrt-v4's `ShadowEpsilon`).
+pub const SHADOW_EPS: f32 = 1e-4;
+/// A scene whose ray-offset bound at its farthest point exceeds this
+/// fraction of its median triangle size gets a precision warning.
+/// (A tenth: neighbouring triangles then start to shadow each other and
+/// contacts open visibly.)
+pub const PRECISION_WARN_FRACTION: f32 = 0.1;
 /// Image tile edge for the CPU's parallel loop.
 pub const TILE: u32 = 16;
 
@@ -101,20 +126,106 @@ pub fn validate_options(scene: &Scene, opts: &RenderOptions) -> Result<(), Rende
     Ok(())
 }
 
-/// Offset scale for ray origins near `p`; see the module notes.
+/// Componentwise error bound of a point interpolated from the triangle
+/// `p0 p1 p2` (see the module notes): gamma(7) max(|p0|, |p1|, |p2|), plus
+/// `RAY_ERR_TRI` x the triangle's extent in every component for the next
+/// intersection test's rounding.
 #[inline]
-pub fn ray_eps(p: Vec3, eps_abs: f32) -> f32 {
-    RAY_EPS_REL * p.abs().max_element() + eps_abs
+pub fn hit_error(p0: Vec3, p1: Vec3, p2: Vec3) -> Vec3 {
+    let extent = (p0.max(p1).max(p2) - p0.min(p1).min(p2)).max_element();
+    RAY_ERR_GAMMA * p0.abs().max(p1.abs()).max(p2.abs()) + Vec3::splat(RAY_ERR_TRI * extent)
 }
 
-/// `p` moved off its surface to the side of `ng` that `w` points to.
+/// The next float toward +inf (pbrt-v4's `NextFloatUp`; -0 steps from +0).
 #[inline]
-pub fn offset_origin(p: Vec3, ng: Vec3, w: Vec3, eps_abs: f32) -> Vec3 {
-    let e = ray_eps(p, eps_abs);
-    if w.dot(ng) >= 0.0 {
-        p + ng * e
+pub fn next_float_up(v: f32) -> f32 {
+    if v.is_infinite() && v > 0.0 {
+        return v;
+    }
+    let mut b = v.to_bits();
+    if b == 0x8000_0000 {
+        b = 0;
+    }
+    b = if v >= 0.0 || b == 0 { b + 1 } else { b - 1 };
+    f32::from_bits(b)
+}
+
+/// The next float toward -inf (pbrt-v4's `NextFloatDown`).
+#[inline]
+pub fn next_float_down(v: f32) -> f32 {
+    if v.is_infinite() && v < 0.0 {
+        return v;
+    }
+    let mut b = v.to_bits();
+    if b == 0 {
+        b = 0x8000_0000;
+    }
+    b = if v > 0.0 { b - 1 } else { b + 1 };
+    f32::from_bits(b)
+}
+
+/// `p` (error bound `err`) moved off its surface to the side of `ng` that
+/// `w` points to: pbrt-v4's `OffsetRayOrigin`.
+#[inline]
+pub fn offset_origin(p: Vec3, err: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
+    let d = ng.abs().dot(err);
+    let mut offset = ng * d;
+    if w.dot(ng) < 0.0 {
+        offset = -offset;
+    }
+    let mut po = p + offset;
+    for i in 0..3 {
+        if offset[i] > 0.0 {
+            po[i] = next_float_up(po[i]);
+        } else if offset[i] < 0.0 {
+            po[i] = next_float_down(po[i]);
+        }
+    }
+    po
+}
+
+/// The shadow ray's length short of a light point `q` at distance `len`
+/// from the ray origin: `SHADOW_EPS` of the length plus q's own error
+/// bound (twice gamma(7) |q|: an emitter's point is interpolated as a hit
+/// point is).
+#[inline]
+pub fn shadow_tmax(len: f32, q: Vec3) -> f32 {
+    len * (1.0 - SHADOW_EPS) - 2.0 * RAY_ERR_GAMMA * q.abs().max_element()
+}
+
+/// Where f32 truly runs out for this scene: the ray-offset bound at its
+/// farthest point from the origin against its median triangle size.
+/// Returns the warning's text (without the `glint: warning: FILE:` prefix).
+pub fn precision_warning(scene: &Scene) -> Option<String> {
+    if scene.triangles.is_empty() {
+        return None;
+    }
+    let (lo, hi) = scene.bounds();
+    let far = lo.abs().max(hi.abs()).max_element();
+    let mut sizes: Vec<f32> = scene
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.vertices();
+            (b - a).length().max((c - a).length()).max((c - b).length())
+        })
+        .filter(|s| s.is_finite() && *s > 0.0)
+        .collect();
+    if sizes.is_empty() {
+        return None;
+    }
+    let mid = sizes.len() / 2;
+    let median = *sizes.select_nth_unstable_by(mid, f32::total_cmp).1;
+    let offset = RAY_ERR_GAMMA * far;
+    if !far.is_finite() || offset > PRECISION_WARN_FRACTION * median {
+        Some(format!(
+            "float precision runs out: the scene reaches {far:.3e} from the origin, where \
+             ray offsets are {offset:.2e}, {:.1}% of its median triangle ({median:.2e}); \
+             move it nearer the origin",
+            100.0 * offset / median
+        ))
     } else {
-        p - ng * e
+        None
     }
 }
 
@@ -144,7 +255,6 @@ pub struct PathTracer<'a> {
     /// Mitsuba's max_depth with -1 mapped to u32::MAX.
     pub max_depth: u32,
     pub key: u32,
-    pub eps_abs: f32,
     /// Next-event estimation on (the default). Off: pure BSDF sampling,
     /// emitters found only by hitting them (a test of MIS correctness).
     pub nee: bool,
@@ -169,8 +279,6 @@ impl<'a> PathTracer<'a> {
     pub fn new(scene: &'a Scene, opts: &RenderOptions) -> Result<Self, RenderError> {
         validate_options(scene, opts)?;
         let camera = PinholeCamera::new(&scene_camera(scene, opts.camera), opts.width, opts.height);
-        let (lo, hi) = scene.bounds();
-        let extent = (hi - lo).max_element();
         Ok(Self {
             scene,
             lights: Lights::new(scene),
@@ -181,7 +289,6 @@ impl<'a> PathTracer<'a> {
                 opts.max_depth as u32
             },
             key: seed_key(opts.seed),
-            eps_abs: RAY_EPS_SCENE * extent,
             nee: opts.nee,
             mis: opts.mis,
             sampler: opts.sampler,
@@ -234,12 +341,11 @@ impl<'a> PathTracer<'a> {
         *bsdf = textured_bsdf(st, mt, bsdf, tri, u, v);
     }
 
-    /// The shadow ray from `p` (geometric normal `ng`) toward a light
-    /// sample: from the offset origin to eps(q) short of the light point q,
-    /// measured from the offset origin (which may sit closer to the light
-    /// than p by up to eps(p)).
-    pub fn shadow_ray(&self, p: Vec3, ng: Vec3, ls: &LightSample) -> Ray {
-        let o = offset_origin(p, ng, ls.wi, self.eps_abs);
+    /// The shadow ray from `p` (error bound `err`, geometric normal `ng`)
+    /// toward a light sample: from the offset origin to just short of the
+    /// light point q ([`shadow_tmax`]).
+    pub fn shadow_ray(&self, p: Vec3, err: Vec3, ng: Vec3, ls: &LightSample) -> Ray {
+        let o = offset_origin(p, err, ng, ls.wi);
         if ls.dist.is_finite() {
             let q = p + ls.wi * ls.dist;
             let to = q - o;
@@ -247,7 +353,7 @@ impl<'a> PathTracer<'a> {
             Ray {
                 o,
                 d: to / len,
-                tmax: len - ray_eps(q, self.eps_abs),
+                tmax: shadow_tmax(len, q),
             }
         } else {
             Ray {
@@ -293,9 +399,10 @@ impl<'a> PathTracer<'a> {
             };
             let tri = &scene.triangles[hit.tri as usize];
             let [p0, p1, p2] = tri.vertices();
-            // Interpolating the vertices keeps the hit point's error relative
-            // to its own magnitude, which is what ray_eps assumes.
+            // Interpolated from the vertices: its error is bounded by
+            // hit_error (see the module notes on ray offsets).
             let p = (1.0 - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
+            let p_err = hit_error(p0, p1, p2);
             let wo = -ray.d;
 
             if tri.light != NO_LIGHT
@@ -340,7 +447,7 @@ impl<'a> PathTracer<'a> {
                 if same_side {
                     let f = bsdf.eval(wo_local, wi_local) * wi_local.z.abs();
                     if f.max_element() > 0.0 {
-                        let shadow = self.shadow_ray(p, sf.ng, &ls);
+                        let shadow = self.shadow_ray(p, p_err, sf.ng, &ls);
                         *rays += 1;
                         if shadow.tmax > 0.0 && !scene.occluded(&shadow) {
                             let w = if ls.delta {
@@ -368,7 +475,7 @@ impl<'a> PathTracer<'a> {
             prev_bsdf_pdf = bs.pdf;
             prev_bg_normal = bg_normal;
             ray = Ray {
-                o: offset_origin(p, sf.ng, wi, self.eps_abs),
+                o: offset_origin(p, p_err, sf.ng, wi),
                 d: wi,
                 tmax: f32::MAX,
             };
