@@ -5,3 +5,4 @@ pub use glint_cpu as cpu;
 pub mod backend;
 pub mod chart;
 pub mod gpu;
+pub mod heatmap;

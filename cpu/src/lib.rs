@@ -8,6 +8,7 @@ pub mod bsdf;
 pub mod bvh;
 pub mod camera;
 pub mod compare;
+pub mod exr_file;
 pub mod film;
 pub mod frame;
 pub mod integrator;
