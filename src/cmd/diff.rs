@@ -82,6 +82,20 @@ fn difference_values(a: &RadianceImage, b: &RadianceImage) -> (Vec<f32>, f32, St
     }
 }
 
+/// The largest |a - b| / max(|a|, |b|) over pixels and channels (0 where
+/// both are 0): how exactly two images match (merged shards against one
+/// render).
+fn max_relative_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c] as f64, y[c] as f64)))
+        .map(|(x, y)| {
+            let m = x.abs().max(y.abs());
+            if m == 0.0 { 0.0 } else { (x - y).abs() / m }
+        })
+        .fold(0.0, f64::max)
+}
+
 pub fn run(args: &DiffArgs) -> Result<bool> {
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
         bail!("--alpha {} is out of range (0, 1)", args.alpha);
@@ -132,6 +146,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
     let ib = ImageRef::new(b.width, b.height, &b.mean)?;
     let m = metrics::compute(&ia, &ib)?;
     let ratio = m.mean_ratio();
+    let max_rel = max_relative_difference(&a.mean, &b.mean);
 
     let report: Option<CompareReport> = match (&a.variance, &b.variance) {
         (Some(va), Some(vb)) => {
@@ -177,6 +192,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
             "mean_a": m.mean.to_array(),
             "mean_b": m.reference_mean.to_array(),
             "mean_ratio": ratio.to_array(),
+            "max_relative_difference": max_rel,
             "verdict": verdict,
             "alpha": args.alpha,
         });

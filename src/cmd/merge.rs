@@ -14,7 +14,7 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
-use glam::{DVec3, Vec3};
+use glam::DVec3;
 use glint::cpu::exr_file::{RadianceImage, RenderMeta, format_ranges};
 
 use super::outputs::Outputs;
@@ -229,6 +229,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Vec3;
     use glint::cpu::Film;
 
     #[test]
