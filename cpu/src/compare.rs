@@ -442,7 +442,8 @@ fn compare_core(
     let ba = blocks(a, mask);
     let bb = blocks(b, mask);
     // Samples behind a block, the smaller side's (exact side: unlimited).
-    let samples = |pixels: u32, spp: Option<u32>| spp.map_or(u64::MAX, |s| pixels as u64 * s as u64);
+    let samples =
+        |pixels: u32, spp: Option<u32>| spp.map_or(u64::MAX, |s| pixels as u64 * s as u64);
     let mut zs = Vec::new();
     let mut skipped = 0;
     let mut most = 0u64;

@@ -25,8 +25,8 @@ use std::path::Path;
 
 use exr::prelude::*;
 // The prelude brings its own `Result` alias.
-use std::result::Result;
 use glam::Vec3;
+use std::result::Result;
 
 use crate::film::Film;
 
@@ -109,8 +109,11 @@ impl RadianceImage {
             width: film.width,
             height: film.height,
             mean: film.means(),
-            variance: variance
-                .then(|| (0..film.sum.len()).map(|i| film.variance_of_mean(i)).collect()),
+            variance: variance.then(|| {
+                (0..film.sum.len())
+                    .map(|i| film.variance_of_mean(i))
+                    .collect()
+            }),
             meta,
         }
     }
@@ -132,7 +135,10 @@ impl RadianceImage {
             .collect();
         if let Some(v) = &self.variance {
             assert_eq!(v.len(), n);
-            for (c, name) in ["variance.R", "variance.G", "variance.B"].iter().enumerate() {
+            for (c, name) in ["variance.R", "variance.G", "variance.B"]
+                .iter()
+                .enumerate()
+            {
                 channels.push(AnyChannel::new(*name, plane(v, c)));
             }
         }
@@ -142,7 +148,10 @@ impl RadianceImage {
                 attributes.other.insert(Text::from(k), v);
             };
             let text = |s: &str| AttributeValue::Text(Text::from(s));
-            put(attr::SPP, AttributeValue::I32(m.spp.min(i32::MAX as u32) as i32));
+            put(
+                attr::SPP,
+                AttributeValue::I32(m.spp.min(i32::MAX as u32) as i32),
+            );
             put(attr::SEED, text(&m.seed.to_string()));
             put(attr::SAMPLER, text(&m.sampler));
             put(attr::SHARD, text(&m.shard));
@@ -165,8 +174,7 @@ impl RadianceImage {
     /// Write to `path` (no temporary: callers that need whole-or-nothing
     /// files go through their own temporaries).
     pub fn write_file(&self, path: &Path) -> Result<(), ExrError> {
-        let f = std::fs::File::create(path)
-            .map_err(|e| ExrError::Exr(exr::error::Error::Io(e)))?;
+        let f = std::fs::File::create(path).map_err(|e| ExrError::Exr(exr::error::Error::Io(e)))?;
         self.write(std::io::BufWriter::new(f))
     }
 
@@ -195,7 +203,9 @@ impl RadianceImage {
             names.iter().map(|n| find(n)).collect()
         };
         let join = |p: Vec<Vec<f32>>| -> Vec<Vec3> {
-            (0..n).map(|i| Vec3::new(p[0][i], p[1][i], p[2][i])).collect()
+            (0..n)
+                .map(|i| Vec3::new(p[0][i], p[1][i], p[2][i]))
+                .collect()
         };
         let rgb = planes(["R", "G", "B"]);
         let mut mean = Vec::new();

@@ -12,8 +12,8 @@ use clap::Parser;
 use glam::Vec3;
 use glint::backend::{Backend, BackendRender};
 use glint::chart::{ChartSpec, Curve};
-use glint::cpu::metrics::{self, ImageRef, Metrics};
 use glint::cpu::exr_file::{RadianceImage, RenderMeta};
+use glint::cpu::metrics::{self, ImageRef, Metrics};
 use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 
 use super::outputs::Outputs;
@@ -340,7 +340,8 @@ fn reference_image(
             .map_err(|e| e.to_string())
             .and_then(|_| {
                 // Through a temporary, so a crash leaves no half-written entry.
-                let meta = super::shard::render_meta(scene, &opts, super::shard::Shard::WHOLE, r.film.spp);
+                let meta =
+                    super::shard::render_meta(scene, &opts, super::shard::Shard::WHOLE, r.film.spp);
                 let tmp = glint::cpu::film::temp_path_for(c);
                 RadianceImage::from_film(&r.film, false, Some(meta))
                     .write_file(&tmp)
@@ -497,7 +498,12 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
                 metrics: m,
             });
             if args.keep_images {
-                let meta = super::shard::render_meta(&scene, &opts, super::shard::Shard::WHOLE, r.film.spp);
+                let meta = super::shard::render_meta(
+                    &scene,
+                    &opts,
+                    super::shard::Shard::WHOLE,
+                    r.film.spp,
+                );
                 films.push((r.film, meta));
             }
         }

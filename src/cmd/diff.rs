@@ -60,11 +60,17 @@ fn difference_values(a: &RadianceImage, b: &RadianceImage) -> (Vec<f32>, f32, St
         }
         _ => {
             let v: Vec<f32> = (0..a.mean.len())
-                .map(|i| extreme((a.mean[i] - b.mean[i]) / (b.mean[i].abs() + Vec3::splat(REL_EPS))))
+                .map(|i| {
+                    extreme((a.mean[i] - b.mean[i]) / (b.mean[i].abs() + Vec3::splat(REL_EPS)))
+                })
                 .collect();
             // Saturate at the 99th percentile of |error|, rounded up to a
             // 1-2-5 step (at least 1%).
-            let mut mags: Vec<f32> = v.iter().map(|x| x.abs()).filter(|x| x.is_finite()).collect();
+            let mut mags: Vec<f32> = v
+                .iter()
+                .map(|x| x.abs())
+                .filter(|x| x.is_finite())
+                .collect();
             mags.sort_by(f32::total_cmp);
             let p99 = mags
                 .get(((mags.len() as f64 * 0.99) as usize).min(mags.len().saturating_sub(1)))
@@ -178,7 +184,9 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
         use std::io::Write;
         outputs.write(slot, |w| Ok(w.write_all(&png)?))?;
     }
-    let verdict = report.as_ref().map(|r| if r.pass { "agree" } else { "differ" });
+    let verdict = report
+        .as_ref()
+        .map(|r| if r.pass { "agree" } else { "differ" });
     if let Some(slot) = json_slot {
         let mut j = serde_json::json!({
             "a": args.a.display().to_string(),
@@ -221,10 +229,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
     );
     match &report {
         Some(r) => {
-            println!(
-                "{}: {r}",
-                if r.pass { "agree" } else { "differ" }
-            );
+            println!("{}: {r}", if r.pass { "agree" } else { "differ" });
             Ok(r.pass)
         }
         None => {

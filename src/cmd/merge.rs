@@ -37,7 +37,10 @@ fn read(path: &Path) -> Result<Shard> {
         );
     };
     if meta.scene.is_none() {
-        bail!("{}: no glint.scene attribute to match shards by", path.display());
+        bail!(
+            "{}: no glint.scene attribute to match shards by",
+            path.display()
+        );
     }
     Ok(Shard {
         path: path.to_path_buf(),
@@ -74,8 +77,16 @@ fn check(shards: &[Shard]) -> Result<()> {
         if s.img.variance.is_some() != first.img.variance.is_some() {
             bail!(
                 "{p}: {} variance but {f} {} (render every shard with --variance, or none)",
-                if s.img.variance.is_some() { "holds" } else { "holds no" },
-                if first.img.variance.is_some() { "does" } else { "does not" }
+                if s.img.variance.is_some() {
+                    "holds"
+                } else {
+                    "holds no"
+                },
+                if first.img.variance.is_some() {
+                    "does"
+                } else {
+                    "does not"
+                }
             );
         }
         if a.version != b.version {
@@ -175,7 +186,10 @@ pub fn run(args: &MergeArgs) -> Result<()> {
     }
     for s in &args.shards {
         if same_file(s, out) {
-            bail!("{}: is one of the shards; refusing to overwrite it", out.display());
+            bail!(
+                "{}: is one of the shards; refusing to overwrite it",
+                out.display()
+            );
         }
     }
     let mut outputs = Outputs::new();
@@ -186,8 +200,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         .map(|p| read(p))
         .collect::<Result<Vec<_>>>()?;
     check(&shards)?;
-    let images: Vec<(&RadianceImage, u32)> =
-        shards.iter().map(|s| (&s.img, s.meta.spp)).collect();
+    let images: Vec<(&RadianceImage, u32)> = shards.iter().map(|s| (&s.img, s.meta.spp)).collect();
     let mut merged = pool(&images);
     let samples = coalesce(shards.iter().flat_map(|s| s.meta.samples.clone()).collect());
     let spp: u32 = shards.iter().map(|s| s.meta.spp).sum();

@@ -98,10 +98,8 @@ impl Outputs {
         let mut result = Ok(());
         for i in 0..self.finals.len() {
             if let Err(e) = std::fs::rename(&self.temps[i], &self.finals[i]) {
-                result = Err(anyhow!(e).context(format!(
-                    "{}: cannot write",
-                    self.finals[i].display()
-                )));
+                result =
+                    Err(anyhow!(e).context(format!("{}: cannot write", self.finals[i].display())));
                 break;
             }
             self.renamed = i + 1;

@@ -14,6 +14,14 @@ use crate::stats::Stats;
 pub fn run(args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     check_params(&args.scene)?;
+    for o in args.outputs.iter().chain(&args.stats) {
+        if same_file(o, &args.scene.scene) {
+            bail!(
+                "{}: is the input scene; refusing to overwrite it",
+                o.display()
+            );
+        }
+    }
     let mut formats = Vec::new();
     for o in &args.outputs {
         match OutputFormat::from_path(o) {
@@ -30,17 +38,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bail!("{}: given both as an image and as --stats", s.display());
     }
     check_scene_path(&args.scene.scene)?;
-    for o in args.outputs.iter().chain(&args.stats) {
-        if same_file(o, &args.scene.scene) {
-            bail!(
-                "{}: is the input scene; refusing to overwrite it",
-                o.display()
-            );
-        }
-    }
     let shard = args.shard.unwrap_or(Shard::WHOLE);
     if args.shard.is_some() && args.scene.opts.time_limit.is_some() {
-        bail!("--shard and --time-limit cannot be combined (a shard's samples are fixed in advance)");
+        bail!(
+            "--shard and --time-limit cannot be combined (a shard's samples are fixed in advance)"
+        );
     }
     if args.variance && !formats.contains(&OutputFormat::Exr) {
         eprintln!("glint: warning: --variance: no .exr output to hold it");
@@ -116,7 +118,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             .map(|p| p.display().to_string())
             .collect();
         let part = if args.shard.is_some() {
-            format!(", shard {shard}: samples {}..{}", opts.sample_start, opts.sample_start + r.film.spp)
+            format!(
+                ", shard {shard}: samples {}..{}",
+                opts.sample_start,
+                opts.sample_start + r.film.spp
+            )
         } else {
             String::new()
         };
