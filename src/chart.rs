@@ -28,17 +28,17 @@ pub struct ChartSpec {
 
 pub const WIDTH: u32 = 960;
 pub const HEIGHT: u32 = 640;
-const FONT: &str = "glint-sans";
+pub(crate) const FONT: &str = "glint-sans";
 
 #[derive(Debug, thiserror::Error)]
 #[error("chart: {0}")]
-pub struct ChartError(String);
+pub struct ChartError(pub(crate) String);
 
 fn err(e: impl std::fmt::Display) -> ChartError {
     ChartError(e.to_string())
 }
 
-fn register_font() -> Result<(), ChartError> {
+pub(crate) fn register_font() -> Result<(), ChartError> {
     static ONCE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     let ok = *ONCE.get_or_init(|| {
         plotters::style::register_font(

@@ -44,6 +44,11 @@ pub enum Command {
     /// to 0, eta to 1, extreme k and anisotropy) on both backends; write
     /// DIR/stability.md, .csv and a pass/fail map (.svg, .png).
     Stability(StabilityArgs),
+    /// Compare two EXRs: relMSE, RMSE, FLIP, mean ratio; with variance in
+    /// both, the statistical verdict (exit 0 agree, 1 differ, 2 bad input).
+    Diff(DiffArgs),
+    /// Combine shards (render --shard I/N) into one image exactly.
+    Merge(MergeArgs),
 }
 
 /// The verbs, for messages ("missing command: ...").
@@ -52,6 +57,8 @@ pub const VERBS: &[&str] = &[
     "compare",
     "bench",
     "converge",
+    "diff",
+    "merge",
     "info",
     "stability",
 ];
@@ -161,12 +168,12 @@ pub struct RenderOpts {
     pub max_depth: i32,
 
     /// Random seed: same seed, scene, options and backend give the same image.
-    #[arg(long, value_name = "S", default_value_t = 0)]
+    #[arg(long, value_name = "S", default_value_t = 0, allow_negative_numbers = true, value_parser = parse_seed)]
     pub seed: u64,
 
     /// The glTF camera, by name or by index among the default scene's
     /// cameras. Default: the first.
-    #[arg(long, value_name = "NAME|INDEX")]
+    #[arg(long, value_name = "NAME|INDEX", allow_negative_numbers = true, value_parser = parse_camera)]
     pub camera: Option<String>,
 
     /// GPU backend: use the Vulkan device whose name contains NAME.
@@ -244,6 +251,22 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
             .ok_or_else(|| format!("'{s}': each of R,G,B must be a finite number >= 0"))?;
     }
     Ok(c)
+}
+
+/// `--seed`: a whole number 0..=2^64-1, said so for "-1" rather than
+/// clap's "unexpected argument".
+fn parse_seed(s: &str) -> Result<u64, String> {
+    s.trim()
+        .parse::<u64>()
+        .map_err(|_| format!("a seed is a whole number from 0 to {}", u64::MAX))
+}
+
+/// `--camera`: a name, or an index from 0.
+fn parse_camera(s: &str) -> Result<String, String> {
+    match s.trim().parse::<i64>() {
+        Ok(i) if i < 0 => Err("camera indices start at 0 (or give the camera's name)".into()),
+        _ => Ok(s.to_string()),
+    }
 }
 
 impl RenderOpts {
@@ -330,6 +353,57 @@ pub struct RenderArgs {
     /// Write timings and counts as JSON to this file.
     #[arg(long, value_name = "FILE.json")]
     pub stats: Option<PathBuf>,
+
+    /// The .exr outputs also hold variance.R, variance.G, variance.B: the
+    /// variance of each pixel's mean (for glint diff and merge).
+    #[arg(long)]
+    pub variance: bool,
+
+    /// Render only shard I of N (0-based): sample indices
+    /// [floor(I spp/N), floor((I+1) spp/N)); glint merge combines them.
+    #[arg(long, value_name = "I/N")]
+    pub shard: Option<crate::cmd::shard::Shard>,
+
+    /// No progress bar and no success line.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct DiffArgs {
+    /// The image under test (.exr).
+    #[arg(value_name = "A.exr")]
+    pub a: PathBuf,
+
+    /// The reference (.exr).
+    #[arg(value_name = "B.exr")]
+    pub b: PathBuf,
+
+    /// Write a false-colour difference image with a colour bar: per-pixel
+    /// z where both carry variance, relative error otherwise.
+    #[arg(long = "diff", value_name = "OUT.png")]
+    pub diff: Option<PathBuf>,
+
+    /// Write the figures and the verdict as JSON.
+    #[arg(long, value_name = "FILE")]
+    pub json: Option<PathBuf>,
+
+    /// Overall significance of the statistical test (the chance that two
+    /// renders of the same image are reported as differing).
+    #[arg(long, value_name = "P", default_value_t = 1e-3)]
+    pub alpha: f64,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// The shards (.exr from render --shard I/N, with --variance to pool
+    /// variances).
+    #[arg(value_name = "SHARD.exr", required = true)]
+    pub shards: Vec<PathBuf>,
+
+    /// The merged image (.exr).
+    #[arg(short = 'o', long = "output", value_name = "OUT.exr", required = true)]
+    pub output: PathBuf,
 }
 
 #[derive(clap::Args, Debug)]

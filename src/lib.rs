@@ -6,4 +6,5 @@ pub mod backend;
 pub mod cache;
 pub mod chart;
 pub mod gpu;
+pub mod heatmap;
 pub mod stability;

@@ -13,6 +13,21 @@ use clap::Parser;
 use cli::{Cli, Command};
 use cmd::one_line;
 
+/// SIGINT and SIGTERM: remove unfinished outputs, say so in one line, exit
+/// 130 / 143 (signal-hook's iterator runs the handler on a thread of its
+/// own, where file removal and printing are safe).
+fn install_signal_handlers() {
+    use signal_hook::consts::{SIGINT, SIGTERM};
+    if let Ok(mut signals) = signal_hook::iterator::Signals::new([SIGINT, SIGTERM]) {
+        std::thread::spawn(move || {
+            if let Some(sig) = signals.forever().next() {
+                let name = if sig == SIGINT { "SIGINT" } else { "SIGTERM" };
+                cmd::outputs::on_signal(name, sig);
+            }
+        });
+    }
+}
+
 fn main() -> ExitCode {
     // Last resort: a bug must still end in one line, not a backtrace.
     std::panic::set_hook(Box::new(|info| {
@@ -29,6 +44,7 @@ fn main() -> ExitCode {
         eprintln!("glint: internal error: {}{at}", one_line(&msg));
     }));
 
+    install_signal_handlers();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -61,6 +77,18 @@ fn main() -> ExitCode {
     };
     // A panic unwinds through `Outputs::drop` (removing partial files), is
     // reported by the hook above, and ends here with status 101.
+    // diff: 0 agree, 1 differ, 2 bad input (the contract).
+    if let Command::Diff(args) = &cli.command {
+        return match std::panic::catch_unwind(|| cmd::diff::run(args)) {
+            Ok(Ok(true)) => ExitCode::SUCCESS,
+            Ok(Ok(false)) => ExitCode::from(1),
+            Ok(Err(e)) => {
+                eprintln!("glint: {}", one_line(&format!("{e:#}")));
+                ExitCode::from(2)
+            }
+            Err(_) => ExitCode::from(101),
+        };
+    }
     let result = match cli.command {
         Command::Render(args) => std::panic::catch_unwind(|| cmd::render::run(&args)),
         Command::Compare(args) => std::panic::catch_unwind(|| cmd::compare::run(&args)),
@@ -68,6 +96,8 @@ fn main() -> ExitCode {
         Command::Converge(args) => std::panic::catch_unwind(|| cmd::converge::run(&args)),
         Command::Info(args) => std::panic::catch_unwind(|| cmd::info::run(&args)),
         Command::Stability(args) => std::panic::catch_unwind(|| cmd::stability::run(&args)),
+        Command::Merge(args) => std::panic::catch_unwind(|| cmd::merge::run(&args)),
+        Command::Diff(_) => unreachable!("handled above"),
     };
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

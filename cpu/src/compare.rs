@@ -67,6 +67,15 @@ pub enum CompareError {
     Size(u32, u32, u32, u32),
     #[error("no samples to compare")]
     Empty,
+    #[error(
+        "{0} pixels hold non-finite radiance or variance (overflow near f32's range): no verdict"
+    )]
+    NonFinite(usize),
+    #[error(
+        "the test has no power: an 8x8 block needs at least {MIN_BLOCK_SAMPLES} samples \
+         (pixels x spp) and the best has {0}; render more samples or a larger image"
+    )]
+    NoPower(u64),
 }
 
 /// The outcome of a comparison, with what explains it.
@@ -85,6 +94,8 @@ pub struct CompareReport {
     /// Mean relative difference over the compared pixels (for messages).
     pub mean_a: Vec3,
     pub mean_b: Vec3,
+    /// Blocks left out for having under `MIN_BLOCK_SAMPLES` samples.
+    pub skipped: usize,
     pub pass: bool,
 }
 
@@ -103,42 +114,70 @@ impl std::fmt::Display for CompareReport {
             self.allowed_global,
             self.mean_a.to_array(),
             self.mean_b.to_array(),
-        )
+        )?;
+        if self.skipped > 0 {
+            write!(
+                f,
+                ", {} blocks skipped (under {MIN_BLOCK_SAMPLES} samples)",
+                self.skipped
+            )?;
+        }
+        Ok(())
     }
 }
 
-/// Block means and variances of the mean of one film.
+/// A noisy image as the test sees it: per-pixel means and variances of
+/// the mean (a film's, or an EXR's `variance.*` channels), and the samples
+/// per pixel behind them when known.
+#[derive(Clone, Copy, Debug)]
+pub struct Estimate<'a> {
+    pub width: u32,
+    pub height: u32,
+    pub mean: &'a [Vec3],
+    pub variance: &'a [Vec3],
+    pub spp: Option<u32>,
+}
+
+/// Fewest samples (pixels x spp) a block needs to be tested: below it the
+/// block's variance estimate is too rough for a z-test (a few samples can
+/// agree by chance and claim zero variance), so the block is skipped; a
+/// comparison with no testable block has no power and says so.
+pub const MIN_BLOCK_SAMPLES: u64 = 32;
+
+/// Block means and variances of the mean of one image.
 struct Blocks {
     bx: u32,
     by: u32,
     /// Per block: (mean, variance of the mean, pixel count); count 0 = skipped.
-    data: Vec<(Vec3, Vec3, u32)>,
+    data: Vec<(glam::DVec3, glam::DVec3, u32)>,
 }
 
-fn blocks(film: &Film, mask: &dyn Fn(u32, u32) -> bool) -> Blocks {
-    let bx = film.width.div_ceil(BLOCK);
-    let by = film.height.div_ceil(BLOCK);
+fn blocks(img: &Estimate, mask: &dyn Fn(u32, u32) -> bool) -> Blocks {
+    let bx = img.width.div_ceil(BLOCK);
+    let by = img.height.div_ceil(BLOCK);
     let mut acc = vec![(glam::DVec3::ZERO, glam::DVec3::ZERO, 0u32); (bx * by) as usize];
-    for y in 0..film.height {
-        for x in 0..film.width {
+    for y in 0..img.height {
+        for x in 0..img.width {
             if !mask(x, y) {
                 continue;
             }
-            let i = film.index(x, y);
+            let i = y as usize * img.width as usize + x as usize;
             let b = &mut acc[((y / BLOCK) * bx + x / BLOCK) as usize];
-            b.0 += film.mean(i).as_dvec3();
-            b.1 += film.variance_of_mean(i).as_dvec3();
+            b.0 += img.mean[i].as_dvec3();
+            b.1 += img.variance[i].as_dvec3();
             b.2 += 1;
         }
     }
+    // Kept in f64 until the z: radiance near f32's range must not
+    // overflow the block sums (non-finite pixels are refused before).
     let data = acc
         .into_iter()
         .map(|(s, v, n)| {
             if n == 0 {
-                (Vec3::ZERO, Vec3::ZERO, 0)
+                (glam::DVec3::ZERO, glam::DVec3::ZERO, 0)
             } else {
                 let n2 = n as f64 * n as f64;
-                ((s / n as f64).as_vec3(), (v / n2).as_vec3(), n)
+                (s / n as f64, v / n2, n)
             }
         })
         .collect();
@@ -301,6 +340,7 @@ fn decide(
         allowed_global,
         mean_a,
         mean_b,
+        skipped: 0,
         pass: z_max <= z_local && exceed_global <= allowed_global,
     }
 }
@@ -309,7 +349,7 @@ fn overall_mean(b: &Blocks) -> Vec3 {
     let mut s = glam::DVec3::ZERO;
     let mut n = 0u64;
     for &(m, _, c) in &b.data {
-        s += m.as_dvec3() * c as f64;
+        s += m * c as f64;
         n += c as u64;
     }
     if n == 0 {
@@ -317,6 +357,14 @@ fn overall_mean(b: &Blocks) -> Vec3 {
     } else {
         (s / n as f64).as_vec3()
     }
+}
+
+/// A film's means and variances of the mean, owned.
+fn film_planes(f: &Film) -> (Vec<Vec3>, Vec<Vec3>) {
+    (
+        f.means(),
+        (0..f.sum.len()).map(|i| f.variance_of_mean(i)).collect(),
+    )
 }
 
 /// Compare two renders of the same scene (see the module notes).
@@ -337,9 +385,84 @@ pub fn compare_films_masked(
     if a.spp == 0 || b.spp == 0 {
         return Err(CompareError::Empty);
     }
+    let (pa, pb) = (film_planes(a), film_planes(b));
+    let ea = Estimate {
+        width: a.width,
+        height: a.height,
+        mean: &pa.0,
+        variance: &pa.1,
+        spp: Some(a.spp),
+    };
+    let eb = Estimate {
+        width: b.width,
+        height: b.height,
+        mean: &pb.0,
+        variance: &pb.1,
+        spp: Some(b.spp),
+    };
+    compare_core(&ea, &eb, false, mask, alpha)
+}
+
+/// Compare two noisy images given as means and variances of the mean
+/// (what `glint diff` reads from two EXRs), at significance `alpha`.
+pub fn compare_estimates(
+    a: &Estimate,
+    b: &Estimate,
+    alpha: f64,
+) -> Result<CompareReport, CompareError> {
+    compare_core(a, b, false, &|_, _| true, alpha)
+}
+
+/// Pixels (under the mask) whose mean or variance is not finite.
+fn non_finite(e: &Estimate, mask: &dyn Fn(u32, u32) -> bool) -> usize {
+    let w = e.width as usize;
+    (0..e.mean.len())
+        .filter(|&i| {
+            mask((i % w) as u32, (i / w) as u32)
+                && !(e.mean[i].is_finite() && e.variance[i].is_finite())
+        })
+        .count()
+}
+
+/// The one rule behind every entry point: guards, blocks, z's, decision.
+fn compare_core(
+    a: &Estimate,
+    b: &Estimate,
+    b_exact: bool,
+    mask: &dyn Fn(u32, u32) -> bool,
+    alpha: f64,
+) -> Result<CompareReport, CompareError> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(CompareError::Size(a.width, a.height, b.width, b.height));
+    }
+    let n = a.width as usize * a.height as usize;
+    for e in [a, b] {
+        if e.mean.len() != n || e.variance.len() != n {
+            return Err(CompareError::Size(
+                a.width,
+                a.height,
+                e.mean.len() as u32,
+                1,
+            ));
+        }
+    }
+    if a.spp == Some(0) || b.spp == Some(0) {
+        return Err(CompareError::Empty);
+    }
+    // An overflowed sum or sum of squares (radiance near f32's limit) is
+    // infinite: its z would be 0 and pass. No verdict instead.
+    let bad = non_finite(a, mask) + non_finite(b, mask);
+    if bad > 0 {
+        return Err(CompareError::NonFinite(bad));
+    }
     let ba = blocks(a, mask);
     let bb = blocks(b, mask);
+    // Samples behind a block, the smaller side's (exact side: unlimited).
+    let samples =
+        |pixels: u32, spp: Option<u32>| spp.map_or(u64::MAX, |s| pixels as u64 * s as u64);
     let mut zs = Vec::new();
+    let mut skipped = 0;
+    let mut most = 0u64;
     for by in 0..ba.by {
         for bx in 0..ba.bx {
             let i = (by * ba.bx + bx) as usize;
@@ -348,22 +471,28 @@ pub fn compare_films_masked(
             if n == 0 {
                 continue;
             }
+            let s = samples(n, a.spp).min(if b_exact { u64::MAX } else { samples(n, b.spp) });
+            most = most.max(s);
+            if s < MIN_BLOCK_SAMPLES {
+                skipped += 1;
+                continue;
+            }
             for c in 0..3 {
-                let z = welch_z(
-                    ma[c] as f64,
-                    va[c] as f64,
-                    mb[c] as f64,
-                    vb[c] as f64,
-                    false,
-                );
+                let z = welch_z(ma[c], va[c], mb[c], vb[c], b_exact);
                 zs.push((z, (bx, by, c)));
             }
         }
     }
     if zs.is_empty() {
-        return Err(CompareError::Empty);
+        return Err(if skipped > 0 {
+            CompareError::NoPower(most)
+        } else {
+            CompareError::Empty
+        });
     }
-    Ok(decide(&zs, alpha, overall_mean(&ba), overall_mean(&bb)))
+    let mut r = decide(&zs, alpha, overall_mean(&ba), overall_mean(&bb));
+    r.skipped = skipped;
+    Ok(r)
 }
 
 /// Test a render against a known constant radiance `value` over the pixels
@@ -396,30 +525,23 @@ pub fn compare_to_reference(
             1,
         ));
     }
-    let ba = blocks(film, mask);
-    let mut exact = Film::new(film.width, film.height);
-    exact.spp = 1;
-    exact.sum.copy_from_slice(reference);
-    let bb = blocks(&exact, mask);
-    let mut zs = Vec::new();
-    for by in 0..ba.by {
-        for bx in 0..ba.bx {
-            let i = (by * ba.bx + bx) as usize;
-            let (ma, va, n) = ba.data[i];
-            let (mb, _, _) = bb.data[i];
-            if n == 0 {
-                continue;
-            }
-            for c in 0..3 {
-                let z = welch_z(ma[c] as f64, va[c] as f64, mb[c] as f64, 0.0, true);
-                zs.push((z, (bx, by, c)));
-            }
-        }
-    }
-    if zs.is_empty() {
-        return Err(CompareError::Empty);
-    }
-    Ok(decide(&zs, ALPHA, overall_mean(&ba), overall_mean(&bb)))
+    let pa = film_planes(film);
+    let zero = vec![Vec3::ZERO; reference.len()];
+    let ea = Estimate {
+        width: film.width,
+        height: film.height,
+        mean: &pa.0,
+        variance: &pa.1,
+        spp: Some(film.spp),
+    };
+    let eb = Estimate {
+        width: film.width,
+        height: film.height,
+        mean: reference,
+        variance: &zero,
+        spp: None,
+    };
+    compare_core(&ea, &eb, true, mask, ALPHA)
 }
 
 #[cfg(test)]
@@ -512,5 +634,25 @@ mod tests {
             compare_films(&a, &Film::new(8, 8)),
             Err(CompareError::Size(16, 16, 8, 8))
         );
+    }
+
+    #[test]
+    fn overflowing_radiance_gets_no_verdict() {
+        // 1e37 squared overflows f32's sum of squares: the variance is
+        // infinite, which would make every z 0 and pass.
+        let a = film_from(|_, _, s| Vec3::splat(1e37 * (1.0 + s as f32)), 16, 16, 4);
+        let b = film_from(|_, _, _| Vec3::splat(3e37), 16, 16, 4);
+        assert_eq!(compare_films(&a, &b), Err(CompareError::NonFinite(512)));
+    }
+
+    #[test]
+    fn a_test_without_power_says_so() {
+        let a = film_from(|_, _, s| Vec3::splat(s as f32), 1, 1, 4);
+        let b = film_from(|_, _, s| Vec3::splat(10.0 + s as f32), 1, 1, 4);
+        assert_eq!(compare_films(&a, &b), Err(CompareError::NoPower(4)));
+        // Edge blocks too small are skipped, the rest tested.
+        let a = film_from(|_, _, s| Vec3::splat(s as f32), 9, 7, 4);
+        let r = compare_films(&a, &a).unwrap();
+        assert_eq!((r.skipped, r.tests, r.pass), (1, 3, true));
     }
 }

@@ -9,6 +9,7 @@ pub mod bvh;
 pub mod camera;
 pub mod compare;
 pub mod envmap;
+pub mod exr_file;
 pub mod features;
 pub mod film;
 pub mod frame;

@@ -12,6 +12,7 @@ use clap::Parser;
 use glam::Vec3;
 use glint::backend::{Backend, BackendRender};
 use glint::chart::{ChartSpec, Curve};
+use glint::cpu::exr_file::{RadianceImage, RenderMeta};
 use glint::cpu::metrics::{self, ImageRef, Metrics};
 use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 
@@ -214,12 +215,12 @@ pub fn markdown(title: &str, command: &str, rows: &[Row], variants: &[Variant]) 
 
 /// 64-bit FNV-1a: a stable content key (std's hasher may change between
 /// Rust releases, which would silently orphan every cached reference).
-struct Fnv(u64);
+pub(super) struct Fnv(pub(super) u64);
 impl Fnv {
-    fn new() -> Self {
+    pub(super) fn new() -> Self {
         Fnv(0xcbf2_9ce4_8422_2325)
     }
-    fn add(&mut self, bytes: &[u8]) {
+    pub(super) fn add(&mut self, bytes: &[u8]) {
         for &b in bytes {
             self.0 ^= b as u64;
             self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
@@ -325,7 +326,19 @@ fn reference_image(
             .map(std::fs::create_dir_all)
             .transpose()
             .map_err(|e| e.to_string())
-            .and_then(|_| r.film.write_image(c).map_err(|e| e.to_string()));
+            .and_then(|_| {
+                // Through a temporary, so a crash leaves no half-written entry.
+                let meta =
+                    super::shard::render_meta(scene, &opts, super::shard::Shard::WHOLE, r.film.spp);
+                let tmp = glint::cpu::film::temp_path_for(c);
+                RadianceImage::from_film(&r.film, false, Some(meta))
+                    .write_file(&tmp)
+                    .map_err(|e| e.to_string())
+                    .and_then(|_| std::fs::rename(&tmp, c).map_err(|e| e.to_string()))
+                    .inspect_err(|_| {
+                        let _ = std::fs::remove_file(&tmp);
+                    })
+            });
         if let Err(e) = stored {
             eprintln!("glint: warning: cannot cache the reference: {e}");
         }
@@ -439,7 +452,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
 
     let mut rows = Vec::new();
     let mut devices = Vec::new();
-    let mut films: Vec<Film> = Vec::new();
+    let mut films: Vec<(Film, RenderMeta)> = Vec::new();
     for v in variants {
         for &b in budgets {
             let (spp, time_limit) = match b {
@@ -473,7 +486,13 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
                 metrics: m,
             });
             if args.keep_images {
-                films.push(r.film);
+                let meta = super::shard::render_meta(
+                    &scene,
+                    &opts,
+                    super::shard::Shard::WHOLE,
+                    r.film.spp,
+                );
+                films.push((r.film, meta));
             }
         }
     }
@@ -505,8 +524,8 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     outputs.write(md_slot, |w| Ok(w.write_all(md.as_bytes())?))?;
     outputs.write(svg_slot, |w| Ok(w.write_all(svg.as_bytes())?))?;
     outputs.write(png_slot, |w| Ok(w.write_all(&png)?))?;
-    for (slot, film) in image_slots.iter().zip(&films) {
-        outputs.write(*slot, |w| encode(film, w, OutputFormat::Exr))?;
+    for (slot, (film, meta)) in image_slots.iter().zip(&films) {
+        outputs.write(*slot, |w| encode(film, w, OutputFormat::Exr, meta, false))?;
     }
     outputs.commit()?;
     print!("{md}");

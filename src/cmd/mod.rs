@@ -4,9 +4,12 @@
 pub mod bench;
 pub mod compare;
 pub mod converge;
+pub mod diff;
 pub mod info;
+pub mod merge;
 pub mod outputs;
 pub mod render;
+pub mod shard;
 pub mod stability;
 
 use std::io::IsTerminal;
@@ -14,6 +17,7 @@ use std::path::Path;
 
 use anyhow::{Result, anyhow, bail};
 use glint::backend::{self, Backend, BackendRender, GpuOptions};
+use glint::cpu::exr_file::{RadianceImage, RenderMeta};
 use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -67,8 +71,11 @@ fn image_size(opts: &RenderOpts, aspect: f32) -> Result<(u32, u32)> {
     })
 }
 
+/// `--quiet`: no progress bar (set once, before rendering).
+pub static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
 pub fn progress_bar() -> Option<ProgressBar> {
-    if !std::io::stderr().is_terminal() {
+    if QUIET.load(std::sync::atomic::Ordering::Relaxed) || !std::io::stderr().is_terminal() {
         return None;
     }
     let pb = ProgressBar::new(1);
@@ -114,12 +121,58 @@ pub fn check_params(args: &SceneArgs) -> Result<()> {
     check_opts(spp_of(args.spp, &args.opts), &args.opts)
 }
 
-/// The scene file must be a readable regular file.
+/// The scene file must be a regular file (or a link to one); anything else
+/// is named for what it is. Only metadata is read: a FIFO is not opened
+/// (which would wait for a writer).
 pub fn check_scene_path(path: &Path) -> Result<()> {
-    if !path.is_file() {
-        bail!("{}: no such file", path.display());
+    check_input_file(path, "a glTF file")
+}
+
+/// An input must be a regular file (or a link to one); anything else is
+/// named for what it is, "not {kind}".
+pub fn check_input_file(path: &Path, kind: &str) -> Result<()> {
+    let p = path.display();
+    let meta = match std::fs::metadata(path) {
+        Ok(m) => m,
+        // ELOOP: too many levels of symbolic links.
+        Err(e) if e.raw_os_error() == Some(40) => {
+            bail!("{p}: a symbolic link loop, not {kind}")
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            if std::fs::symlink_metadata(path).is_ok() {
+                bail!("{p}: a symbolic link to a missing file");
+            }
+            bail!("{p}: no such file");
+        }
+        Err(e) => bail!("{p}: cannot read: {e}"),
+    };
+    let t = meta.file_type();
+    use std::os::unix::fs::FileTypeExt;
+    let what = if t.is_file() {
+        return Ok(());
+    } else if t.is_dir() {
+        "a directory"
+    } else if t.is_fifo() {
+        "a named pipe (FIFO)"
+    } else if t.is_char_device() {
+        "a character device"
+    } else if t.is_block_device() {
+        "a block device"
+    } else if t.is_socket() {
+        "a socket"
+    } else {
+        "not a regular file"
+    };
+    bail!("{p}: {what}, not {kind}")
+}
+
+/// Whether `a` and `b` name the same existing file (links followed).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    use std::os::unix::fs::MetadataExt;
+    match (std::fs::metadata(a), std::fs::metadata(b)) {
+        (Ok(x), Ok(y)) => (x.dev(), x.ino()) == (y.dev(), y.ino()),
+        _ => false,
     }
-    Ok(())
 }
 
 /// Load the scene with the options that change what it holds
@@ -271,10 +324,19 @@ pub fn render_on(
     Ok(r)
 }
 
+/// Encode `film`: PNG through `Film::encode`; EXR with glint's header
+/// attributes from `meta`, and the variance of the mean when `variance`.
 pub fn encode(
     film: &Film,
     w: &mut std::io::BufWriter<std::fs::File>,
     format: OutputFormat,
+    meta: &RenderMeta,
+    variance: bool,
 ) -> Result<()> {
-    film.encode(w, format).map_err(|e| anyhow!("{e}"))
+    match format {
+        OutputFormat::Exr => RadianceImage::from_film(film, variance, Some(meta.clone()))
+            .write(w)
+            .map_err(|e| anyhow!("{e}")),
+        OutputFormat::Png => film.encode(w, format).map_err(|e| anyhow!("{e}")),
+    }
 }

@@ -6,13 +6,22 @@ use anyhow::{Result, bail};
 use glint::cpu::OutputFormat;
 
 use super::outputs::Outputs;
-use super::{check_params, check_scene_path, encode, load_scene, render_on};
+use super::shard::{self, Shard};
+use super::{check_params, check_scene_path, encode, load_scene, render_on, same_file};
 use crate::cli::RenderArgs;
 use crate::stats::Stats;
 
 pub fn run(args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     check_params(&args.scene)?;
+    for o in args.outputs.iter().chain(&args.stats) {
+        if same_file(o, &args.scene.scene) {
+            bail!(
+                "{}: is the input scene; refusing to overwrite it",
+                o.display()
+            );
+        }
+    }
     let mut formats = Vec::new();
     for o in &args.outputs {
         match OutputFormat::from_path(o) {
@@ -29,6 +38,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bail!("{}: given both as an image and as --stats", s.display());
     }
     check_scene_path(&args.scene.scene)?;
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
+    if args.shard.is_some() && args.scene.opts.time_limit.is_some() {
+        bail!(
+            "--shard and --time-limit cannot be combined (a shard's samples are fixed in advance)"
+        );
+    }
+    if args.variance && !formats.contains(&OutputFormat::Exr) {
+        eprintln!("glint: warning: --variance: no .exr output to hold it");
+    }
+    super::QUIET.store(args.quiet, std::sync::atomic::Ordering::Relaxed);
 
     let mut outputs = Outputs::new();
     let image_slots: Vec<usize> = args
@@ -42,7 +61,10 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(|s| outputs.reserve(s))
         .transpose()?;
 
-    let (scene, opts) = load_scene(&args.scene)?;
+    let (scene, mut opts) = load_scene(&args.scene)?;
+    if args.shard.is_some() {
+        shard::apply(&mut opts, shard)?;
+    }
     let load_seconds = start.elapsed().as_secs_f64();
     let r = render_on(
         args.backend,
@@ -52,8 +74,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &opts,
     )?;
 
+    let meta = shard::render_meta(&scene, &opts, shard, r.film.spp);
     for (&slot, &format) in image_slots.iter().zip(&formats) {
-        outputs.write(slot, |w| encode(&r.film, w, format))?;
+        outputs.write(slot, |w| encode(&r.film, w, format, &meta, args.variance))?;
     }
     if let Some(slot) = stats_slot {
         let st = Stats {
@@ -88,5 +111,29 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             Ok(())
         })?;
     }
-    outputs.commit()
+    outputs.commit()?;
+    if !args.quiet {
+        let names: Vec<String> = args
+            .outputs
+            .iter()
+            .chain(&args.stats)
+            .map(|p| p.display().to_string())
+            .collect();
+        let part = if args.shard.is_some() {
+            format!(
+                ", shard {shard}: samples {}..{}",
+                opts.sample_start,
+                opts.sample_start + r.film.spp
+            )
+        } else {
+            String::new()
+        };
+        eprintln!(
+            "glint: wrote {} ({} spp{part}, {:.2} s)",
+            names.join(", "),
+            r.film.spp,
+            start.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
 }

@@ -1,0 +1,243 @@
+//! `glint diff A.exr B.exr [--diff OUT.png] [--json FILE]`: A measured
+//! against B (the reference) with `glint_cpu::metrics`; when both files
+//! carry `variance.*`, the block z-test of `glint_cpu::compare` decides
+//! whether they agree. `run` returns Ok(true) for agree (or no verdict
+//! possible without variance), Ok(false) for differ; errors are bad input.
+
+use std::path::Path;
+
+use anyhow::{Result, anyhow, bail};
+use glam::Vec3;
+use glint::cpu::compare::{self, CompareReport, Estimate};
+use glint::cpu::exr_file::RadianceImage;
+use glint::cpu::metrics::{self, ImageRef};
+
+use super::outputs::Outputs;
+use crate::cli::DiffArgs;
+
+/// z at which the difference image saturates.
+const Z_RANGE: f32 = 5.0;
+/// The relative error's denominator offset (relMSE's, in linear units).
+const REL_EPS: f32 = 0.1;
+
+fn read(path: &Path) -> Result<RadianceImage> {
+    super::check_input_file(path, "an EXR image")?;
+    RadianceImage::read(path).map_err(|e| anyhow!("{}: {e}", path.display()))
+}
+
+/// Per pixel, the channel with the largest |value| (sign kept).
+fn extreme(v: Vec3) -> f32 {
+    let mut best = v.x;
+    for c in [v.y, v.z] {
+        if c.abs() > best.abs() || c.is_nan() {
+            best = c;
+        }
+    }
+    best
+}
+
+/// Per-pixel z = (A - B) / sqrt(var A + var B), or with no variance the
+/// relative error (A - B) / (|B| + 0.1).
+fn difference_values(a: &RadianceImage, b: &RadianceImage) -> (Vec<f32>, f32, String) {
+    match (&a.variance, &b.variance) {
+        (Some(va), Some(vb)) => {
+            let v = (0..a.mean.len())
+                .map(|i| {
+                    let d = a.mean[i] - b.mean[i];
+                    let s = (va[i] + vb[i]).to_array().map(f32::sqrt);
+                    extreme(Vec3::from_array(std::array::from_fn(|c| {
+                        if s[c] > 0.0 {
+                            d[c] / s[c]
+                        } else if d[c] == 0.0 {
+                            0.0
+                        } else {
+                            d[c].signum() * f32::INFINITY
+                        }
+                    })))
+                })
+                .collect();
+            (v, Z_RANGE, "z = (A-B)/sd".to_string())
+        }
+        _ => {
+            let v: Vec<f32> = (0..a.mean.len())
+                .map(|i| {
+                    extreme((a.mean[i] - b.mean[i]) / (b.mean[i].abs() + Vec3::splat(REL_EPS)))
+                })
+                .collect();
+            // Saturate at the 99th percentile of |error|, rounded up to a
+            // 1-2-5 step (at least 1%).
+            let mut mags: Vec<f32> = v
+                .iter()
+                .map(|x| x.abs())
+                .filter(|x| x.is_finite())
+                .collect();
+            mags.sort_by(f32::total_cmp);
+            let p99 = mags
+                .get(((mags.len() as f64 * 0.99) as usize).min(mags.len().saturating_sub(1)))
+                .copied()
+                .unwrap_or(0.0)
+                .max(0.01);
+            let decade = 10f32.powf(p99.log10().floor());
+            let range = [1.0, 2.0, 5.0, 10.0]
+                .iter()
+                .map(|m| m * decade)
+                .find(|r| *r >= p99)
+                .unwrap_or(10.0 * decade);
+            (v, range, "(A-B)/(|B|+0.1)".to_string())
+        }
+    }
+}
+
+/// The largest |a - b| / max(|a|, |b|) over pixels and channels (0 where
+/// both are 0): how exactly two images match (merged shards against one
+/// render).
+fn max_relative_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c] as f64, y[c] as f64)))
+        .map(|(x, y)| {
+            let m = x.abs().max(y.abs());
+            if m == 0.0 { 0.0 } else { (x - y).abs() / m }
+        })
+        .fold(0.0, f64::max)
+}
+
+pub fn run(args: &DiffArgs) -> Result<bool> {
+    if !(args.alpha > 0.0 && args.alpha < 1.0) {
+        bail!("--alpha {} is out of range (0, 1)", args.alpha);
+    }
+    if let Some(d) = &args.diff
+        && glint::cpu::OutputFormat::from_path(d) != Some(glint::cpu::OutputFormat::Png)
+    {
+        bail!("{}: the difference image is a .png", d.display());
+    }
+    for o in args.diff.iter().chain(&args.json) {
+        for input in [&args.a, &args.b] {
+            if super::same_file(o, input) {
+                bail!("{}: is an input; refusing to overwrite it", o.display());
+            }
+        }
+    }
+    let mut outputs = Outputs::new();
+    let diff_slot = args.diff.as_ref().map(|p| outputs.reserve(p)).transpose()?;
+    let json_slot = args.json.as_ref().map(|p| outputs.reserve(p)).transpose()?;
+    let a = read(&args.a)?;
+    let b = read(&args.b)?;
+    let (an, bn) = (args.a.display(), args.b.display());
+    if (a.width, a.height) != (b.width, b.height) {
+        bail!(
+            "{an}: {}x{} but {bn} is {}x{}",
+            a.width,
+            a.height,
+            b.width,
+            b.height
+        );
+    }
+    if let (Some(ma), Some(mb)) = (&a.meta, &b.meta) {
+        if ma.scene.is_some() && mb.scene.is_some() && ma.scene != mb.scene {
+            eprintln!("glint: warning: {an}: rendered from a different scene or options than {bn}");
+        }
+        let overlap = ma
+            .samples
+            .iter()
+            .any(|x| mb.samples.iter().any(|y| x.0 < y.1 && y.0 < x.1));
+        if ma.seed == mb.seed && ma.sampler == mb.sampler && overlap {
+            eprintln!(
+                "glint: warning: {an}: same seed and samples as {bn}: not independent renders, \
+                 so the test is conservative (use another --seed for the reference)"
+            );
+        }
+    }
+    let ia = ImageRef::new(a.width, a.height, &a.mean)?;
+    let ib = ImageRef::new(b.width, b.height, &b.mean)?;
+    let m = metrics::compute(&ia, &ib)?;
+    let ratio = m.mean_ratio();
+    let max_rel = max_relative_difference(&a.mean, &b.mean);
+
+    let report: Option<CompareReport> = match (&a.variance, &b.variance) {
+        (Some(va), Some(vb)) => {
+            let ea = Estimate {
+                width: a.width,
+                height: a.height,
+                mean: &a.mean,
+                variance: va,
+                spp: a.spp(),
+            };
+            let eb = Estimate {
+                width: b.width,
+                height: b.height,
+                mean: &b.mean,
+                variance: vb,
+                spp: b.spp(),
+            };
+            Some(
+                compare::compare_estimates(&ea, &eb, args.alpha)
+                    .map_err(|e| anyhow!("{an} vs {bn}: {e}"))?,
+            )
+        }
+        _ => None,
+    };
+
+    if let Some(slot) = diff_slot {
+        let (values, range, label) = difference_values(&a, &b);
+        let png = glint::heatmap::png(a.width, a.height, &values, range, &label)?;
+        use std::io::Write;
+        outputs.write(slot, |w| Ok(w.write_all(&png)?))?;
+    }
+    let verdict = report
+        .as_ref()
+        .map(|r| if r.pass { "agree" } else { "differ" });
+    if let Some(slot) = json_slot {
+        let mut j = serde_json::json!({
+            "a": args.a.display().to_string(),
+            "b": args.b.display().to_string(),
+            "width": a.width,
+            "height": a.height,
+            "relmse": m.relmse,
+            "relmse_trim": m.relmse_trim,
+            "rmse": m.rmse,
+            "flip": m.flip,
+            "mean_a": m.mean.to_array(),
+            "mean_b": m.reference_mean.to_array(),
+            "mean_ratio": ratio.to_array(),
+            "max_relative_difference": max_rel,
+            "verdict": verdict,
+            "alpha": args.alpha,
+        });
+        if let Some(r) = &report {
+            j["test"] = serde_json::json!({
+                "tests": r.tests,
+                "z_max": r.z_max,
+                "z_local": r.z_local,
+                "exceed_global": r.exceed_global,
+                "allowed_global": r.allowed_global,
+                "skipped_blocks": r.skipped,
+            });
+        }
+        outputs.write(slot, |w| {
+            serde_json::to_writer_pretty(&mut *w, &j)?;
+            use std::io::Write;
+            writeln!(w)?;
+            Ok(())
+        })?;
+    }
+    outputs.commit()?;
+
+    println!(
+        "{an} vs {bn}: relMSE {:.4e}, RMSE {:.4e}, FLIP {:.4}, mean ratio [{:.4}, {:.4}, {:.4}]",
+        m.relmse, m.rmse, m.flip, ratio.x, ratio.y, ratio.z
+    );
+    match &report {
+        Some(r) => {
+            println!("{}: {r}", if r.pass { "agree" } else { "differ" });
+            Ok(r.pass)
+        }
+        None => {
+            let missing = if a.variance.is_none() { &an } else { &bn };
+            println!(
+                "no statistical verdict: {missing} holds no variance (render with --variance)"
+            );
+            Ok(true)
+        }
+    }
+}

@@ -1,0 +1,132 @@
+//! `--shard I/N` and what every `.exr` records (glint's header
+//! attributes): the sample range a render covers, and the content key that
+//! tells `merge` two shards are of one image.
+
+use std::str::FromStr;
+
+use anyhow::{Result, bail};
+use glint::cpu::exr_file::RenderMeta;
+use glint::cpu::{RenderOptions, Scene};
+
+use super::converge::Fnv;
+
+/// Shard `index` of `count` (0-based).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Shard {
+    pub index: u32,
+    pub count: u32,
+}
+
+impl Shard {
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    /// Sample indices `[start, end)` of this shard of `spp` samples:
+    /// `[floor(I spp / N), floor((I + 1) spp / N))`. The N ranges tile
+    /// `[0, spp)` exactly, each within one sample of spp / N.
+    pub fn range(self, spp: u32) -> (u32, u32) {
+        let at = |i: u32| (i as u64 * spp as u64 / self.count as u64) as u32;
+        (at(self.index), at(self.index + 1))
+    }
+}
+
+impl std::fmt::Display for Shard {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl FromStr for Shard {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("'{s}' is not I/N (shard I of N, 0 <= I < N, e.g. 0/4)");
+        let (i, n) = s.split_once('/').ok_or_else(bad)?;
+        let (index, count) = (
+            i.trim().parse::<u32>().map_err(|_| bad())?,
+            n.trim().parse::<u32>().map_err(|_| bad())?,
+        );
+        if count == 0 || index >= count {
+            return Err(bad());
+        }
+        Ok(Shard { index, count })
+    }
+}
+
+/// Set `opts` to render only `shard` of its samples; a shard that would
+/// hold no samples is an error.
+pub fn apply(opts: &mut RenderOptions, shard: Shard) -> Result<()> {
+    let (start, end) = shard.range(opts.spp);
+    if start == end {
+        bail!(
+            "--shard {shard} of --spp {} holds no samples (at most {} shards)",
+            opts.spp,
+            opts.spp
+        );
+    }
+    opts.sample_start = start;
+    opts.spp = end - start;
+    Ok(())
+}
+
+/// A content key of what defines the image apart from its samples: the
+/// loaded scene (external buffers included), size, camera, depth and
+/// methods. Seeds, samplers and sample ranges are recorded and checked on
+/// their own, so `merge` can say which one differs.
+pub fn image_key(scene: &Scene, opts: &RenderOptions) -> String {
+    let mut h = Fnv::new();
+    h.add(bytemuck::cast_slice(&scene.triangles));
+    h.add(bytemuck::cast_slice(&scene.shading));
+    h.add(
+        format!(
+            "{:?}|{:?}|{:?}|{:?}",
+            scene.materials, scene.lights, scene.cameras, scene.background
+        )
+        .as_bytes(),
+    );
+    h.add(
+        format!(
+            "{}x{} depth {} camera {} {:?} {:?}",
+            opts.width, opts.height, opts.max_depth, opts.camera, opts.nee, opts.mis
+        )
+        .as_bytes(),
+    );
+    format!("{:016x}", h.0)
+}
+
+/// What an `.exr` of a finished render records; `spp` is the samples
+/// taken (a time limit may stop short of `opts.spp`).
+pub fn render_meta(scene: &Scene, opts: &RenderOptions, shard: Shard, spp: u32) -> RenderMeta {
+    RenderMeta {
+        spp,
+        seed: opts.seed,
+        sampler: opts.sampler.name().to_string(),
+        shard: shard.to_string(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        samples: vec![(opts.sample_start, opts.sample_start + spp)],
+        scene: Some(image_key(scene, opts)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_tile_the_samples() {
+        for spp in [1u32, 3, 4, 7, 64, 100] {
+            for n in 1..=spp.min(9) {
+                let mut next = 0;
+                for i in 0..n {
+                    let (a, b) = Shard { index: i, count: n }.range(spp);
+                    assert_eq!(a, next);
+                    assert!(b > a, "{i}/{n} of {spp}");
+                    next = b;
+                }
+                assert_eq!(next, spp);
+            }
+        }
+        assert_eq!("2/4".parse::<Shard>(), Ok(Shard { index: 2, count: 4 }));
+        for bad in ["4/4", "1/0", "-1/4", "1", "a/b"] {
+            assert!(bad.parse::<Shard>().is_err(), "{bad}");
+        }
+    }
+}

@@ -1,0 +1,644 @@
+//! CI image regression end to end: `render --variance` and the EXR header
+//! attributes, `--shard` + `merge`, `diff` (its verdict's calibration and
+//! power), and the rough edges a new user hit (signals, odd scene paths,
+//! `-o` naming the scene, negative seeds and cameras, the success line).
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use glam::Vec3;
+use glint::cpu::exr_file::{RadianceImage, RenderMeta};
+use glint::cpu::{RenderOptions, SamplerKind};
+
+fn glint() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_glint"))
+}
+
+fn cornell() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell.gltf")
+}
+
+/// A fresh, empty scratch directory for one test.
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("glint-reg-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn files_in(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    v.sort();
+    v
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn assert_ok(out: &Output) {
+    assert!(out.status.success(), "{}", stderr(out));
+}
+
+/// Non-zero status, exactly one line on stderr, containing `needle`.
+fn assert_one_line_error(out: &Output, needle: &str) {
+    let err = stderr(out);
+    assert!(!out.status.success(), "expected failure, stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "one line on stderr, got: {err:?}");
+    assert!(
+        lines[0].contains(needle),
+        "{:?} should mention {needle:?}",
+        lines[0]
+    );
+}
+
+/// `glint render cornell` on the CPU at `size`x`size` with extra args.
+fn render(out: &Path, size: u32, spp: u32, extra: &[&str]) -> Output {
+    glint()
+        .arg("render")
+        .arg(cornell())
+        .arg("-o")
+        .arg(out)
+        .args(["--backend", "cpu", "--width", &size.to_string()])
+        .args(["--spp", &spp.to_string()])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+fn diff(a: &Path, b: &Path, extra: &[&str]) -> Output {
+    glint()
+        .arg("diff")
+        .arg(a)
+        .arg(b)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn exr_records_attributes_variance_and_a_success_line() {
+    let dir = scratch("attrs");
+    let (exr, png) = (dir.join("a.exr"), dir.join("a.png"));
+    let out = glint()
+        .arg("render")
+        .arg(cornell())
+        .arg("-o")
+        .arg(&exr)
+        .arg("-o")
+        .arg(&png)
+        .args([
+            "--backend",
+            "cpu",
+            "--width",
+            "16",
+            "--spp",
+            "8",
+            "--seed",
+            "7",
+            "--variance",
+        ])
+        .output()
+        .unwrap();
+    assert_ok(&out);
+    let err = stderr(&out);
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(
+        err.contains("a.exr") && err.contains("a.png") && err.contains("8 spp"),
+        "{err}"
+    );
+    let img = RadianceImage::read(&exr).unwrap();
+    let meta = img.meta.clone().unwrap();
+    assert_eq!(
+        (
+            meta.spp,
+            meta.seed,
+            meta.sampler.as_str(),
+            meta.shard.as_str()
+        ),
+        (8, 7, "independent", "0/1")
+    );
+    assert_eq!(meta.version, env!("CARGO_PKG_VERSION"));
+    assert_eq!(meta.samples, [(0, 8)]);
+    let var = img.variance.as_ref().unwrap();
+    assert!(var.iter().any(|v| v.x > 0.0) && var.iter().all(|v| v.min_element() >= 0.0));
+    // The same render through the library: same means, same variances.
+    let scene = glint::cpu::loader::load(&cornell()).unwrap();
+    let opts = RenderOptions {
+        spp: 8,
+        seed: 7,
+        ..RenderOptions::new(16, 16)
+    };
+    let (film, _) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
+    assert_eq!(img.mean, film.means());
+    assert_eq!(var[37], film.variance_of_mean(37));
+    assert_eq!(image::open(&png).unwrap().width(), 16);
+
+    // --quiet: nothing on stderr; without --variance no variance channels.
+    let out = render(&exr, 16, 2, &["--quiet"]);
+    assert_ok(&out);
+    assert_eq!(stderr(&out), "");
+    assert_eq!(RadianceImage::read(&exr).unwrap().variance, None);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Largest relative difference per pixel and channel (0 where both are 0).
+fn max_rel(a: &[Vec3], b: &[Vec3]) -> f64 {
+    a.iter()
+        .zip(b)
+        .flat_map(|(x, y)| (0..3).map(move |c| (x[c] as f64, y[c] as f64)))
+        .map(|(x, y)| {
+            let m = x.abs().max(y.abs());
+            if m == 0.0 { 0.0 } else { (x - y).abs() / m }
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn four_shards_merged_equal_one_render() {
+    let dir = scratch("shards");
+    let whole = dir.join("whole.exr");
+    assert_ok(&render(
+        &whole,
+        24,
+        18,
+        &["--seed", "3", "--variance", "--quiet"],
+    ));
+    let mut shards = Vec::new();
+    for i in 0..4 {
+        let p = dir.join(format!("s{i}.exr"));
+        let out = render(
+            &p,
+            24,
+            18,
+            &["--seed", "3", "--variance", "--shard", &format!("{i}/4")],
+        );
+        assert_ok(&out);
+        assert!(
+            stderr(&out).contains(&format!("shard {i}/4")),
+            "{}",
+            stderr(&out)
+        );
+        shards.push(p);
+    }
+    // 18 samples in 4 shards: 4, 5, 4, 5.
+    let metas: Vec<RenderMeta> = shards
+        .iter()
+        .map(|p| RadianceImage::read(p).unwrap().meta.unwrap())
+        .collect();
+    assert_eq!(
+        metas.iter().map(|m| m.samples[0]).collect::<Vec<_>>(),
+        [(0, 4), (4, 9), (9, 13), (13, 18)]
+    );
+    assert_eq!(metas[2].shard, "2/4");
+    let merged = dir.join("merged.exr");
+    // Order does not matter.
+    let out = glint()
+        .arg("merge")
+        .args([&shards[2], &shards[0], &shards[3], &shards[1]])
+        .arg("-o")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    assert_ok(&out);
+    let (m, w) = (
+        RadianceImage::read(&merged).unwrap(),
+        RadianceImage::read(&whole).unwrap(),
+    );
+    let meta = m.meta.clone().unwrap();
+    assert_eq!((meta.spp, meta.shard.as_str()), (18, "0/1"));
+    assert_eq!(meta.samples, [(0, 18)]);
+    assert_eq!(meta.scene, w.meta.as_ref().unwrap().scene);
+    let mean_err = max_rel(&m.mean, &w.mean);
+    // The variances: the pooled one against the single render's, both
+    // from f32 sums (cancellation in sum_sq - sum^2 / n bounds agreement).
+    let var_err = max_rel(m.variance.as_ref().unwrap(), w.variance.as_ref().unwrap());
+    eprintln!(
+        "merged vs single: max relative difference: mean {mean_err:.2e}, variance {var_err:.2e}"
+    );
+    assert!(mean_err <= 1e-6, "mean {mean_err}");
+    assert!(var_err <= 1e-3, "variance {var_err}");
+    // The merged image diffs as identical to the single render.
+    let out = diff(&merged, &whole, &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn merge_refuses_what_does_not_fit() {
+    let dir = scratch("refuse");
+    let r = |name: &str, extra: &[&str]| {
+        let p = dir.join(name);
+        let mut args = vec!["--variance", "--quiet"];
+        args.extend_from_slice(extra);
+        assert_ok(&render(&p, 8, 8, &args));
+        p
+    };
+    let s0 = r("s0.exr", &["--shard", "0/4"]);
+    let s1 = r("s1.exr", &["--shard", "1/4"]);
+    let half = r("half.exr", &["--shard", "0/2"]);
+    let seed = r("seed.exr", &["--shard", "2/4", "--seed", "9"]);
+    let depth = r("depth.exr", &["--shard", "2/4", "--max-depth", "2"]);
+    let novar = dir.join("novar.exr");
+    assert_ok(&render(&novar, 8, 8, &["--shard", "2/4", "--quiet"]));
+    let big = dir.join("big.exr");
+    assert_ok(&render(
+        &big,
+        16,
+        8,
+        &["--shard", "2/4", "--quiet", "--variance"],
+    ));
+    let png = dir.join("x.png");
+    assert_ok(&render(&png, 8, 8, &["--quiet"]));
+    let out = dir.join("out.exr");
+    let merge = |shards: &[&PathBuf]| {
+        glint()
+            .arg("merge")
+            .args(shards)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap()
+    };
+    assert_one_line_error(&merge(&[&s0, &s1, &s0]), "a duplicate shard");
+    assert_one_line_error(&merge(&[&s1, &half]), "overlap");
+    assert_one_line_error(&merge(&[&s0, &seed]), "seed 9");
+    assert_one_line_error(&merge(&[&s0, &depth]), "a different scene");
+    assert_one_line_error(&merge(&[&s0, &novar]), "variance");
+    assert_one_line_error(&merge(&[&s0, &big]), "16x16 but");
+    assert_one_line_error(&merge(&[&s0, &png]), "x.png");
+    assert!(!out.exists());
+    assert_ok(&merge(&[&s0, &s1]));
+    let m = RadianceImage::read(&out).unwrap().meta.unwrap();
+    assert_eq!(
+        (m.spp, m.shard.as_str(), m.samples.clone()),
+        (4, "0/1", vec![(0, 4)])
+    );
+    // Shards that hold nothing, or are not I/N.
+    assert_one_line_error(&render(&out, 8, 4, &["--shard", "0/8"]), "holds no samples");
+    assert_one_line_error(&render(&out, 8, 4, &["--shard", "4/4"]), "is not I/N");
+    assert_one_line_error(
+        &render(&out, 8, 4, &["--shard", "0/2", "--time-limit", "1"]),
+        "cannot be combined",
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Render cornell in-process (fast) and write it as glint does.
+fn render_exr(
+    scene: &glint::cpu::Scene,
+    path: &Path,
+    size: u32,
+    spp: u32,
+    seed: u64,
+    sampler: SamplerKind,
+) {
+    let opts = RenderOptions {
+        spp,
+        seed,
+        sampler,
+        ..RenderOptions::new(size, size)
+    };
+    let (film, _) = glint::cpu::render(scene, &opts, &|_, _| {}).unwrap();
+    let meta = RenderMeta {
+        spp,
+        seed,
+        sampler: sampler.name().into(),
+        shard: "0/1".into(),
+        version: env!("CARGO_PKG_VERSION").into(),
+        samples: vec![(0, spp)],
+        scene: None,
+    };
+    RadianceImage::from_film(&film, true, Some(meta))
+        .write_file(path)
+        .unwrap();
+}
+
+/// The samplers glint has. ADD `SamplerKind::Sobol` here when it lands:
+/// the calibration must hold for each (QMC samples are not independent;
+/// the variance estimate treats them as if they were, which overestimates
+/// the variance of the mean and keeps the test conservative).
+const SAMPLERS: &[SamplerKind] = &[SamplerKind::Independent];
+
+#[test]
+fn diff_false_positive_rate_is_calibrated() {
+    // 200 pairs of independent renders of one scene: `glint diff` must
+    // report "differ" no more often than its alpha allows (binomial upper
+    // bound at 1e-3), at the default alpha and at 0.05 (where a rate is
+    // measurable).
+    let dir = scratch("calib");
+    let scene = glint::cpu::loader::load(&cornell()).unwrap();
+    const PAIRS: u64 = 200;
+    for &sampler in SAMPLERS {
+        let mut fails = [0usize; 2];
+        let alphas = [1e-3, 0.05];
+        for pair in 0..PAIRS {
+            let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+            render_exr(&scene, &a, 24, 16, 2 * pair, sampler);
+            render_exr(&scene, &b, 24, 16, 2 * pair + 1, sampler);
+            for (k, alpha) in alphas.iter().enumerate() {
+                let out = diff(&a, &b, &["--alpha", &alpha.to_string()]);
+                match out.status.code() {
+                    Some(0) => {}
+                    Some(1) => fails[k] += 1,
+                    c => panic!("diff exit {c:?}: {}", stderr(&out)),
+                }
+            }
+        }
+        for (k, alpha) in alphas.iter().enumerate() {
+            let bound = glint::cpu::compare::binomial_upper_quantile(PAIRS as usize, *alpha, 1e-3);
+            eprintln!(
+                "diff calibration ({}): alpha {alpha}: {} of {PAIRS} pairs differ ({:.3}; bound {bound})",
+                sampler.name(),
+                fails[k],
+                fails[k] as f64 / PAIRS as f64
+            );
+            assert!(
+                fails[k] <= bound,
+                "{} at alpha {alpha}: {} > {bound}",
+                sampler.name(),
+                fails[k]
+            );
+        }
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// A change of one material on one object is caught at 256 spp. The issue
+/// asks for 2%: on the bundled scenes that is beyond the block test at 256
+/// spp (measured: 2% on the diffuse sphere at 64 and 128 pixels wide gives
+/// max |z| 3.0 and 4.0 against thresholds 4.6 and 4.9; 5% gives 5.7,
+/// too near the threshold for a test that must not flake), so this pins
+/// 10% (max |z| about 10) and the README states the measured power.
+#[test]
+fn diff_catches_a_material_change() {
+    let dir = scratch("power");
+    let sphere = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/diffuse.gltf");
+    let mut g: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&sphere).unwrap()).unwrap();
+    let m = &mut g["materials"][0];
+    assert_eq!(m["name"], "diffuse");
+    for c in 0..3 {
+        let v = m["extras"]["bsdf"]["reflectance"][c].as_f64().unwrap();
+        m["extras"]["bsdf"]["reflectance"][c] = (v * 1.10).into();
+    }
+    let changed = dir.join("changed.gltf");
+    std::fs::write(&changed, serde_json::to_vec(&g).unwrap()).unwrap();
+    let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
+    for (scene, out, seed) in [(&sphere, &a, "1"), (&changed, &b, "2")] {
+        let o = glint()
+            .arg("render")
+            .arg(scene)
+            .arg("-o")
+            .arg(out)
+            .args([
+                "--backend",
+                "cpu",
+                "--width",
+                "64",
+                "--spp",
+                "256",
+                "--variance",
+                "--quiet",
+                "--seed",
+                seed,
+            ])
+            .output()
+            .unwrap();
+        assert_ok(&o);
+    }
+    let (png, json) = (dir.join("d.png"), dir.join("d.json"));
+    let out = diff(
+        &b,
+        &a,
+        &[
+            "--diff",
+            png.to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+        ],
+    );
+    eprintln!("{}", String::from_utf8_lossy(&out.stdout));
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    assert_eq!(j["verdict"], "differ");
+    let d = image::open(&png).unwrap();
+    assert!(d.width() > 64 && d.height() >= 48);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn diff_exit_status_and_guards() {
+    let dir = scratch("diff");
+    let (a, b, c) = (dir.join("a.exr"), dir.join("b.exr"), dir.join("c.exr"));
+    assert_ok(&render(
+        &a,
+        16,
+        16,
+        &["--variance", "--quiet", "--seed", "1"],
+    ));
+    assert_ok(&render(
+        &b,
+        16,
+        16,
+        &["--variance", "--quiet", "--seed", "2"],
+    ));
+    assert_ok(&render(&c, 16, 16, &["--quiet", "--seed", "3"]));
+    let out = diff(&a, &b, &[]);
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("relMSE") && text.contains("FLIP") && text.contains("agree"),
+        "{text}"
+    );
+    // Without variance: metrics, no verdict, exit 0.
+    let out = diff(&a, &c, &[]);
+    assert_eq!(out.status.code(), Some(0));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("no statistical verdict"));
+    // Bad input: 2 with one line.
+    let out = diff(&a, &dir.join("missing.exr"), &[]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_one_line_error(&out, "no such file");
+    let small = dir.join("small.exr");
+    assert_ok(&render(&small, 8, 16, &["--variance", "--quiet"]));
+    assert_one_line_error(&diff(&a, &small, &[]), "16x16 but");
+    // A 1x1 image at 4 spp: the test has no power (exit 2, not "agree").
+    let write = |p: &Path, mean: Vec3, var: Vec3, w: u32, spp: u32, seed: u64| {
+        let n = (w * w) as usize;
+        RadianceImage {
+            width: w,
+            height: w,
+            mean: vec![mean; n],
+            variance: Some(vec![var; n]),
+            meta: Some(RenderMeta {
+                spp,
+                seed,
+                sampler: "independent".into(),
+                shard: "0/1".into(),
+                version: "0".into(),
+                samples: vec![(0, spp)],
+                scene: None,
+            }),
+        }
+        .write_file(p)
+        .unwrap();
+    };
+    let (x, y) = (dir.join("x.exr"), dir.join("y.exr"));
+    write(&x, Vec3::ONE, Vec3::splat(0.1), 1, 4, 1);
+    write(&y, Vec3::splat(1.5), Vec3::splat(0.1), 1, 4, 2);
+    let out = diff(&x, &y, &[]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_one_line_error(&out, "no power");
+    // Radiance near 1e37: its variance overflowed to infinity; a z of 0
+    // must not pass.
+    write(&x, Vec3::splat(1e37), Vec3::splat(f32::INFINITY), 16, 64, 1);
+    write(&y, Vec3::splat(3e37), Vec3::splat(f32::INFINITY), 16, 64, 2);
+    let out = diff(&x, &y, &[]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_one_line_error(&out, "non-finite");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn odd_scene_paths_say_what_they_are() {
+    let dir = scratch("paths");
+    let out = dir.join("o.png");
+    let try_scene = |scene: &Path| {
+        glint()
+            .arg("render")
+            .arg(scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--backend", "cpu", "--width", "8", "--spp", "1"])
+            .output()
+            .unwrap()
+    };
+    assert_one_line_error(&try_scene(&dir), "a directory");
+    assert_one_line_error(&try_scene(Path::new("/dev/zero")), "a character device");
+    let fifo = dir.join("fifo.gltf");
+    assert!(
+        Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .unwrap()
+            .success()
+    );
+    // Must not wait for a writer.
+    assert_one_line_error(&try_scene(&fifo), "a named pipe (FIFO)");
+    let (l1, l2) = (dir.join("l1.gltf"), dir.join("l2.gltf"));
+    std::os::unix::fs::symlink(&l2, &l1).unwrap();
+    std::os::unix::fs::symlink(&l1, &l2).unwrap();
+    assert_one_line_error(&try_scene(&l1), "a symbolic link loop");
+    assert_one_line_error(&try_scene(&dir.join("none.gltf")), "no such file");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn output_naming_the_scene_is_refused() {
+    let dir = scratch("self");
+    let scene = dir.join("scene.gltf");
+    std::fs::copy(cornell(), &scene).unwrap();
+    let before = std::fs::read(&scene).unwrap();
+    for name in ["scene.gltf", "./scene.gltf"] {
+        let out = glint()
+            .current_dir(&dir)
+            .args([
+                "render",
+                "scene.gltf",
+                "-o",
+                name,
+                "--backend",
+                "cpu",
+                "--spp",
+                "1",
+            ])
+            .output()
+            .unwrap();
+        assert_one_line_error(&out, "is the input scene");
+    }
+    // And through --stats.
+    let out = glint()
+        .current_dir(&dir)
+        .args([
+            "render",
+            "scene.gltf",
+            "-o",
+            "a.png",
+            "--stats",
+            "scene.gltf",
+            "--backend",
+            "cpu",
+        ])
+        .output()
+        .unwrap();
+    assert_one_line_error(&out, "is the input scene");
+    assert_eq!(std::fs::read(&scene).unwrap(), before);
+    assert_eq!(files_in(&dir), ["scene.gltf"]);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn negative_seed_and_camera_are_explained() {
+    let dir = scratch("neg");
+    let out = dir.join("o.png");
+    let o = render(&out, 8, 1, &["--seed", "-1"]);
+    assert_one_line_error(&o, "a seed is a whole number from 0");
+    let o = render(&out, 8, 1, &["--camera", "-1"]);
+    assert_one_line_error(&o, "camera indices start at 0");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn signals_mid_render_remove_unfinished_outputs() {
+    for (signal, code) in [("INT", 130), ("TERM", 143)] {
+        let dir = scratch(&format!("sig{signal}"));
+        let child = glint()
+            .arg("render")
+            .arg(cornell())
+            .arg("-o")
+            .arg(dir.join("a.exr"))
+            .arg("-o")
+            .arg(dir.join("a.png"))
+            .args([
+                "--backend",
+                "cpu",
+                "--width",
+                "128",
+                "--spp",
+                "100000",
+                "--quiet",
+            ])
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait for the temporaries (the render has begun).
+        let t0 = std::time::Instant::now();
+        while files_in(&dir).len() < 2 {
+            assert!(
+                t0.elapsed().as_secs() < 60,
+                "no temporaries: {:?}",
+                files_in(&dir)
+            );
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        let tmp = files_in(&dir);
+        assert!(tmp.iter().all(|n| n.contains(".tmp-")), "{tmp:?}");
+        let ok = Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(ok.success());
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(code), "{}", stderr(&out));
+        assert_one_line_error(&out, &format!("interrupted by SIG{signal}"));
+        assert_eq!(files_in(&dir), Vec::<String>::new());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
