@@ -11,8 +11,8 @@ use std::time::Instant;
 
 use glam::Vec3;
 use glint_cpu::bvh::{
-    Kernel, MAX_DEPTH, MAX_LEAF_SIZE, MAX_WIDE_DEPTH, PreparedRay, SLOT_EMPTY, STACK_SIZE,
-    WIDE_STACK_SIZE, WIDTH, intersect_triangle, is_leaf_ref, leaf_range,
+    Kernel, MAX_DEPTH, MAX_LEAF_SIZE, MAX_WIDE_DEPTH, PreparedRay, SLOT_EMPTY, STACK_SIZE, WIDTH,
+    intersect_triangle, is_leaf_ref, leaf_range,
 };
 use glint_cpu::{Bvh, Bvh4, Bvh4Node, Hit, Ray, Triangle};
 use rayon::prelude::*;
@@ -241,7 +241,6 @@ fn check_wide_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle]) -> usize {
     );
     let bin_depth = bin.depth();
     assert!(depth <= MAX_WIDE_DEPTH && depth <= bin_depth.saturating_sub(1) / 2);
-    assert!((WIDTH - 1) * (MAX_WIDE_DEPTH + 1) <= WIDE_STACK_SIZE);
     assert_eq!(wide.depth(), depth);
     depth
 }

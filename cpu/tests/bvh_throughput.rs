@@ -17,22 +17,37 @@ use std::path::Path;
 use std::time::Instant;
 
 use glint_cpu::bvh::Kernel;
-use glint_cpu::{Bvh, Bvh4, Hit, Triangle};
+use glint_cpu::{Bvh, Bvh4, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
 use geometry::{Rng, bunny, diffuse_rays, primary_rays, tri};
 
-/// Best of three runs: the shortest time is the least disturbed by other
-/// processes on a shared machine.
-fn best_of_3<T>(mut f: impl FnMut() -> T) -> (T, f64) {
-    let mut best = f64::INFINITY;
-    let mut out = None;
-    for _ in 0..3 {
-        let start = Instant::now();
-        out = Some(f());
-        best = best.min(start.elapsed().as_secs_f64());
+/// A traversal under test: rays in, a checksum out.
+type Variant<'a> = &'a dyn Fn(&[Ray]) -> usize;
+
+/// Seconds each variant takes on all of `rays`, measured interleaved: the
+/// rays are cut into chunks and every variant runs on a chunk before the next
+/// chunk starts, so a change of load on the shared machine falls on all
+/// variants alike; per chunk the best of three rounds counts. A variant maps
+/// a chunk of rays to a checksum (kept, so nothing is optimised away).
+fn interleaved(rays: &[Ray], chunk: usize, variants: &[Variant]) -> Vec<f64> {
+    let mut total = vec![0.0; variants.len()];
+    let mut sink = 0;
+    for c in rays.chunks(chunk) {
+        let mut best = vec![f64::INFINITY; variants.len()];
+        for _ in 0..3 {
+            for (v, f) in variants.iter().enumerate() {
+                let start = Instant::now();
+                sink += f(c);
+                best[v] = best[v].min(start.elapsed().as_secs_f64());
+            }
+        }
+        for (t, b) in total.iter_mut().zip(best) {
+            *t += b;
+        }
     }
-    (out.unwrap(), best)
+    std::hint::black_box(sink);
+    total
 }
 
 fn load(path: &Path) -> Vec<Triangle> {
@@ -73,106 +88,101 @@ fn measure(name: &str, input: &[Triangle]) {
         diffuse.len(),
     );
     let mrays = |n: usize, s: f64| n as f64 / s / 1e6;
+    let kernels = Kernel::available();
     for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
-        // Closest hit.
-        let (want, bin_s) = best_of_3(|| {
-            rays.iter()
-                .map(|r| bvh.intersect(&tris, r))
-                .collect::<Vec<_>>()
-        });
-        let (par, bin_par_s) = best_of_3(|| {
-            rays.par_iter()
-                .map(|r| bvh.intersect(&tris, r))
-                .collect::<Vec<_>>()
-        });
-        assert_eq!(par, want);
-        let hits = want.iter().flatten().count();
-        let mut line = format!(
-            "  {set:7} closest ({hits} hit): binary {:.2} Mrays/s (1 thread), {:.2} (rayon)",
-            mrays(rays.len(), bin_s),
-            mrays(rays.len(), bin_par_s)
-        );
-        for k in Kernel::available() {
-            let (got, s) = best_of_3(|| {
-                rays.iter()
-                    .map(|r| wide.intersect_with(k, &tris, r))
-                    .collect::<Vec<_>>()
-            });
-            // The same closest distance (exact ties may pick another triangle).
-            assert!(
-                got.iter()
-                    .zip(&want)
-                    .all(|(g, w)| g.map(|h| h.t) == w.map(|h| h.t)),
-                "{name} {set} wide {k:?} differs from binary"
-            );
-            line += &format!(
-                "; wide {k:?} {:.2} (x{:.2})",
-                mrays(rays.len(), s),
-                bin_s / s
-            );
-        }
-        let (par, s) = best_of_3(|| {
-            rays.par_iter()
-                .map(|r| wide.intersect(&tris, r))
-                .collect::<Vec<_>>()
-        });
+        // Correctness first, untimed: every traversal gives the binary's
+        // closest distance (exact ties may pick another triangle) and
+        // occlusion, on one thread and on rayon.
+        let want: Vec<Option<Hit>> = rays.iter().map(|r| bvh.intersect(&tris, r)).collect();
+        let want_occ: Vec<bool> = rays.iter().map(|r| bvh.occluded(&tris, r)).collect();
+        let par: Vec<Option<Hit>> = rays.par_iter().map(|r| wide.intersect(&tris, r)).collect();
+        let par_occ: Vec<bool> = rays.par_iter().map(|r| wide.occluded(&tris, r)).collect();
+        assert_eq!(par_occ, want_occ, "{name} {set}: rayon any-hit");
         assert!(
             par.iter()
                 .zip(&want)
                 .all(|(g, w)| g.map(|h| h.t) == w.map(|h| h.t))
         );
-        line += &format!(
-            "; wide best {:.2} (rayon, x{:.2})",
-            mrays(rays.len(), s),
-            bin_par_s / s
-        );
-        eprintln!("{line}");
-
-        // Any hit.
-        let (want, bin_s) = best_of_3(|| {
-            rays.iter()
-                .map(|r| bvh.occluded(&tris, r))
-                .collect::<Vec<_>>()
-        });
-        let (par, bin_par_s) = best_of_3(|| {
-            rays.par_iter()
-                .map(|r| bvh.occluded(&tris, r))
-                .collect::<Vec<_>>()
-        });
-        assert_eq!(par, want);
-        let mut line = format!(
-            "  {set:7} any-hit: binary {:.2} Mrays/s (1 thread), {:.2} (rayon)",
-            mrays(rays.len(), bin_s),
-            mrays(rays.len(), bin_par_s)
-        );
-        for k in Kernel::available() {
-            let (got, s) = best_of_3(|| {
-                rays.iter()
-                    .map(|r| wide.occluded_with(k, &tris, r))
-                    .collect::<Vec<_>>()
-            });
-            assert_eq!(
-                got, want,
-                "{name} {set} wide {k:?} any-hit differs from binary"
-            );
-            line += &format!(
-                "; wide {k:?} {:.2} (x{:.2})",
-                mrays(rays.len(), s),
-                bin_s / s
-            );
+        for &k in &kernels {
+            for (i, r) in rays.iter().enumerate() {
+                let g = wide.intersect_with(k, &tris, r);
+                assert_eq!(
+                    g.map(|h| h.t),
+                    want[i].map(|h| h.t),
+                    "{name} {set} {k:?} {r:?}"
+                );
+                assert_eq!(
+                    wide.occluded_with(k, &tris, r),
+                    want_occ[i],
+                    "{name} {set} {k:?}"
+                );
+            }
         }
-        let (par, s) = best_of_3(|| {
-            rays.par_iter()
-                .map(|r| wide.occluded(&tris, r))
-                .collect::<Vec<_>>()
-        });
-        assert_eq!(par, want);
-        line += &format!(
-            "; wide best {:.2} (rayon, x{:.2})",
-            mrays(rays.len(), s),
-            bin_par_s / s
-        );
-        eprintln!("{line}");
+        let hits = want.iter().flatten().count();
+
+        for any in [false, true] {
+            let query = if any { "any-hit" } else { "closest" };
+            let bin = |c: &[Ray]| -> usize {
+                if any {
+                    c.iter().filter(|r| bvh.occluded(&tris, r)).count()
+                } else {
+                    c.iter().filter_map(|r| bvh.intersect(&tris, r)).count()
+                }
+            };
+            let wide_k = |k: Kernel| {
+                let wide = &wide;
+                let tris = &tris;
+                move |c: &[Ray]| -> usize {
+                    if any {
+                        c.iter().filter(|r| wide.occluded_with(k, tris, r)).count()
+                    } else {
+                        c.iter()
+                            .filter_map(|r| wide.intersect_with(k, tris, r))
+                            .count()
+                    }
+                }
+            };
+            let wides: Vec<_> = kernels.iter().map(|&k| wide_k(k)).collect();
+            let mut variants: Vec<Variant> = vec![&bin];
+            variants.extend(wides.iter().map(|f| f as Variant));
+            let single = interleaved(rays, 4096, &variants);
+            let bin_par = |c: &[Ray]| -> usize {
+                if any {
+                    c.par_iter().filter(|r| bvh.occluded(&tris, r)).count()
+                } else {
+                    c.par_iter().filter_map(|r| bvh.intersect(&tris, r)).count()
+                }
+            };
+            let wide_par = |c: &[Ray]| -> usize {
+                if any {
+                    c.par_iter().filter(|r| wide.occluded(&tris, r)).count()
+                } else {
+                    c.par_iter()
+                        .filter_map(|r| wide.intersect(&tris, r))
+                        .count()
+                }
+            };
+            let par = interleaved(rays, 16384, &[&bin_par, &wide_par]);
+            let mut line = format!(
+                "  {set:7} {query} ({hits} hit): binary {:.2} Mrays/s",
+                mrays(rays.len(), single[0])
+            );
+            for (k, s) in kernels.iter().zip(&single[1..]) {
+                line += &format!(
+                    ", wide {k:?} {:.2} (x{:.2})",
+                    mrays(rays.len(), *s),
+                    single[0] / s
+                );
+            }
+            line += &format!(
+                "; rayon: binary {:.2}, wide {:?} {:.2} (x{:.2})",
+                mrays(rays.len(), par[0]),
+                Kernel::best(),
+                mrays(rays.len(), par[1]),
+                par[0] / par[1]
+            );
+            eprintln!("{line}");
+        }
     }
 }
 

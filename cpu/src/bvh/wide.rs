@@ -179,7 +179,7 @@ pub(super) fn collapse(bin: &[BvhNode]) -> Vec<Bvh4Node> {
                 }
                 let key = (d == 1, half_area(&bin[i]));
                 // Strictly better only: ties keep the leftmost (determinism).
-                if pick.is_none_or(|(_, p1, pa)| key.0 > p1 || (key.0 == p1 && key.1 > pa)) {
+                if pick.is_none_or(|(_, p1, pa)| (key.0 && !p1) || (key.0 == p1 && key.1 > pa)) {
                     pick = Some((k, key.0, key.1));
                 }
             }
