@@ -100,10 +100,10 @@ pub fn sobol_pair(i: u32, seed: u32) -> Vec2 {
     let (mut v0, mut v1) = (0u32, 0u32);
     // The top 16 bits: the crate's 2^16-sample tables. Branch-free (a
     // mask per bit): a data-dependent loop mispredicts on shuffled indices.
-    for k in 0..16 {
+    for (k, (d0, d1)) in DIRECTIONS[0].iter().zip(&DIRECTIONS[1]).enumerate() {
         let m = ((idx >> (31 - k)) & 1).wrapping_neg();
-        v0 ^= DIRECTIONS[0][k] & m;
-        v1 ^= DIRECTIONS[1][k] & m;
+        v0 ^= d0 & m;
+        v1 ^= d1 & m;
     }
     let s = seed.wrapping_mul(0x9c8f_2d3b);
     let x = owen_scramble_rev(v0, hash(s ^ 0x912f_69ba));
