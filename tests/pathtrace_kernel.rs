@@ -1,7 +1,8 @@
 //! shaders/pathtrace.comp against the CPU path tracer it mirrors.
 //!
-//! Both draw the same random numbers for a sample (the counter-based
-//! generator of glint_cpu::sampling and shaders/integrator/rng.glsl), so
+//! Both draw the same random numbers for a sample (with either sampler:
+//! glint_cpu::sampling / shaders/integrator/rng.glsl, glint_cpu::sobol /
+//! shaders/integrator/sobol.glsl), so
 //! they trace the same paths up to float rounding: almost every pixel must
 //! agree to 1e-3 relative, the ray counts nearly exactly, and the images
 //! must pass the statistical comparison (which a systematic error in one
@@ -13,7 +14,7 @@ use std::path::Path;
 
 use glint::cpu::compare::compare_films;
 use glint::cpu::integrator::gpu_scene_data;
-use glint::cpu::{Film, RenderOptions, Scene};
+use glint::cpu::{Film, RenderOptions, SamplerKind, Scene};
 use glint::gpu::render::{SceneBytes, render_film};
 
 fn gpu_render(ctx: &common::ValidatedContext, scene: &Scene, opts: &RenderOptions) -> (Film, u64) {
@@ -44,7 +45,8 @@ fn gpu_kernel_traces_the_cpu_paths() {
         ("conductor.gltf", 3),
         ("textured.gltf", -1),
     ];
-    for (asset, max_depth) in cases {
+    let samplers = [SamplerKind::Sobol, SamplerKind::Independent];
+    for ((asset, max_depth), sampler) in cases.into_iter().flat_map(|c| samplers.map(|s| (c, s))) {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets")
             .join(asset);
@@ -53,11 +55,12 @@ fn gpu_kernel_traces_the_cpu_paths() {
             spp: 16,
             max_depth,
             seed: 7,
+            sampler,
             ..RenderOptions::new(40, 32)
         };
         let (gpu, gpu_rays) = gpu_render(&ctx, &scene, &opts);
         let (cpu, cpu_stats) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
-        let what = format!("{asset} max_depth {max_depth}");
+        let what = format!("{asset} max_depth {max_depth} {}", sampler.name());
 
         let r = compare_films(&gpu, &cpu).unwrap();
         assert!(r.pass, "{what}: {r}");

@@ -47,24 +47,85 @@ pub fn pair_seed(key: u32, pixel: u32, sample: u32, pair: u32) -> u32 {
     pcg4d([pixel, pair, sample >> SOBOL_BLOCK_BITS, key ^ SOBOL_SALT])[0]
 }
 
+/// Sobol dimensions 0 and 1's direction numbers, bit-reversed, as
+/// `sobol_burley` stores them: `[dimension][bit]`. A copy, so that one pass
+/// over the index bits serves both dimensions; [`direction_table`] reads
+/// the crate's, and a unit test holds the two (and the GLSL's) equal.
+pub const DIRECTIONS: [[u32; 16]; 2] = [
+    [
+        0x0000_0001,
+        0x0000_0002,
+        0x0000_0004,
+        0x0000_0008,
+        0x0000_0010,
+        0x0000_0020,
+        0x0000_0040,
+        0x0000_0080,
+        0x0000_0100,
+        0x0000_0200,
+        0x0000_0400,
+        0x0000_0800,
+        0x0000_1000,
+        0x0000_2000,
+        0x0000_4000,
+        0x0000_8000,
+    ],
+    [
+        0x0000_0001,
+        0x0000_0003,
+        0x0000_0005,
+        0x0000_000f,
+        0x0000_0011,
+        0x0000_0033,
+        0x0000_0055,
+        0x0000_00ff,
+        0x0000_0101,
+        0x0000_0303,
+        0x0000_0505,
+        0x0000_0f0f,
+        0x0000_1111,
+        0x0000_3333,
+        0x0000_5555,
+        0x0000_ffff,
+    ],
+];
+
+/// `(sobol_burley::sample(i, 0, seed), sobol_burley::sample(i, 1, seed))`,
+/// bit for bit (a unit test checks it), at half the cost: the two share
+/// the index shuffle and one pass over the index bits.
+#[inline]
+pub fn sobol_pair(i: u32, seed: u32) -> Vec2 {
+    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
+    let idx = owen_scramble_rev(i.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
+    let (mut v0, mut v1) = (0u32, 0u32);
+    // The top 16 bits: the crate's 2^16-sample tables. Branch-free (a
+    // mask per bit): a data-dependent loop mispredicts on shuffled indices.
+    for (k, (d0, d1)) in DIRECTIONS[0].iter().zip(&DIRECTIONS[1]).enumerate() {
+        let m = ((idx >> (31 - k)) & 1).wrapping_neg();
+        v0 ^= d0 & m;
+        v1 ^= d1 & m;
+    }
+    let s = seed.wrapping_mul(0x9c8f_2d3b);
+    let x = owen_scramble_rev(v0, hash(s ^ 0x912f_69ba));
+    let y = owen_scramble_rev(v1, hash(s ^ 0x174f_18ab));
+    Vec2::new(
+        u32_to_f32_norm(x.reverse_bits()),
+        u32_to_f32_norm(y.reverse_bits()),
+    )
+}
+
 /// Both coordinates of pair `pair` (dimensions 2 pair and 2 pair + 1).
 #[inline]
 pub fn sobol_2d(key: u32, pixel: u32, sample: u32, pair: u32) -> Vec2 {
     let seed = pair_seed(key, pixel, sample, pair);
-    let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
-    Vec2::new(
-        sobol_burley::sample(i, 0, seed),
-        sobol_burley::sample(i, 1, seed),
-    )
+    sobol_pair(sample & ((1 << SOBOL_BLOCK_BITS) - 1), seed)
 }
 
 /// Dimension `dim` of sample `sample` in `pixel`: a value in [0, 1), a
 /// multiple of 2^-23 (`sobol_burley`'s f32 conversion).
 #[inline]
 pub fn sobol_sample(key: u32, pixel: u32, sample: u32, dim: u32) -> f32 {
-    let seed = pair_seed(key, pixel, sample, dim / 2);
-    let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
-    sobol_burley::sample(i, dim % 2, seed)
+    sobol_2d(key, pixel, sample, dim / 2)[(dim % 2) as usize]
 }
 
 /// The numbers one bounce draws, whether it uses them or not.
@@ -229,6 +290,22 @@ mod tests {
             want,
             "shaders/integrator/sobol.glsl's table is stale"
         );
+    }
+
+    /// The copy is the crate's table, and `sobol_pair` the crate's
+    /// `sample` for dimensions 0 and 1, bit for bit.
+    #[test]
+    fn sobol_pair_is_the_crates_sample() {
+        assert_eq!(DIRECTIONS, direction_table());
+        let mut seed = 1u32;
+        for _ in 0..64 {
+            seed = crate::sampling::pcg4d([seed, 1, 2, 3])[0];
+            for i in (0..4096u32).chain([65535, 40_000, 12_345]) {
+                let p = sobol_pair(i, seed);
+                assert_eq!(p.x.to_bits(), sobol_burley::sample(i, 0, seed).to_bits());
+                assert_eq!(p.y.to_bits(), sobol_burley::sample(i, 1, seed).to_bits());
+            }
+        }
     }
 
     /// A reimplementation from the table alone (what the GLSL does) gives
