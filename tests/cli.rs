@@ -600,19 +600,36 @@ fn envmap_file_renders_like_the_same_constant_background() {
         .unwrap();
     let render = |extra: &[&str], out: &str| {
         glint()
-            .args(["render", scene.to_str().unwrap(), "--backend", "cpu", "--spp", "32"])
+            .args([
+                "render",
+                scene.to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--spp",
+                "32",
+            ])
             .args(["--width", "12", "--height", "8", "-o"])
             .arg(dir.join(out))
             .args(extra)
             .output()
             .unwrap()
     };
-    let out = render(&["--envmap", env.to_str().unwrap(), "--envmap-rotate", "40"], "env.exr");
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = render(
+        &["--envmap", env.to_str().unwrap(), "--envmap-rotate", "40"],
+        "env.exr",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
     let out = render(&["--background", "0.5,0.5,0.5"], "bg.exr");
     assert!(out.status.success());
-    let (a, b) = (mean_of_exr(&dir.join("env.exr")), mean_of_exr(&dir.join("bg.exr")));
+    let (a, b) = (
+        mean_of_exr(&dir.join("env.exr")),
+        mean_of_exr(&dir.join("bg.exr")),
+    );
     assert!((a / b - 1.0).abs() < 0.03, "envmap {a} vs background {b}");
     let out = render(
         &["--envmap", env.to_str().unwrap(), "--background", "1,1,1"],
