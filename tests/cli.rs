@@ -589,3 +589,53 @@ fn info_describes_the_textured_asset() {
     let out = glint().args(["info", "missing.gltf"]).output().unwrap();
     assert_one_line_error(&out, "missing.gltf");
 }
+
+#[test]
+fn envmap_file_renders_like_the_same_constant_background() {
+    let dir = scratch("envmap");
+    let scene = write_unlit_scene(&dir);
+    let env = dir.join("sky.exr");
+    image::Rgb32FImage::from_pixel(16, 8, image::Rgb([0.5f32, 0.5, 0.5]))
+        .save(&env)
+        .unwrap();
+    let render = |extra: &[&str], out: &str| {
+        glint()
+            .args([
+                "render",
+                scene.to_str().unwrap(),
+                "--backend",
+                "cpu",
+                "--spp",
+                "32",
+            ])
+            .args(["--width", "12", "--height", "8", "-o"])
+            .arg(dir.join(out))
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let out = render(
+        &["--envmap", env.to_str().unwrap(), "--envmap-rotate", "40"],
+        "env.exr",
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("warning"));
+    let out = render(&["--background", "0.5,0.5,0.5"], "bg.exr");
+    assert!(out.status.success());
+    let (a, b) = (
+        mean_of_exr(&dir.join("env.exr")),
+        mean_of_exr(&dir.join("bg.exr")),
+    );
+    assert!((a / b - 1.0).abs() < 0.03, "envmap {a} vs background {b}");
+    let out = render(
+        &["--envmap", env.to_str().unwrap(), "--background", "1,1,1"],
+        "both.exr",
+    );
+    assert_one_line_error(&out, "not both");
+    let out = render(&["--envmap", "missing.exr"], "missing.exr");
+    assert_one_line_error(&out, "missing.exr");
+}
