@@ -54,6 +54,7 @@ fn mis_agrees_on_glossy_and_transmissive_surfaces() {
         alpha_u: 0.3,
         alpha_v: 0.15,
         shadowing: Shadowing::Correlated,
+        multiscatter: false,
     };
     let materials = [
         Bsdf::Conductor(ConductorParams {
