@@ -22,6 +22,8 @@ pub mod diffuse;
 pub mod fresnel;
 pub mod metallic;
 pub mod microfacet;
+// Generated numbers, printed with every digit the generator computed.
+#[allow(clippy::excessive_precision)]
 pub mod ms_tables;
 pub mod multiscatter;
 mod tables;
