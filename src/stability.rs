@@ -189,6 +189,7 @@ fn rough(au: f32, av: f32, sh: Shadowing) -> Roughness {
         alpha_u: au,
         alpha_v: av,
         shadowing: sh,
+        multiscatter: false,
     }
 }
 

@@ -62,6 +62,7 @@ fn rough(au: f32, av: f32, separable: bool) -> Roughness {
         } else {
             Shadowing::Correlated
         },
+        multiscatter: false,
     }
 }
 

@@ -265,6 +265,7 @@ mod tests {
             alpha_u: a,
             alpha_v: b,
             shadowing,
+            multiscatter: false,
         }
     }
 

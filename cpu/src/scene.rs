@@ -87,7 +87,8 @@ impl Material {
 pub struct GpuMaterial {
     /// One of the `GpuMaterial::KIND_*` tags.
     pub kind: u32,
-    /// 0: height-correlated Smith G2, 1: separable G1 G1.
+    /// Bit 0: separable G1 G1 (else height-correlated Smith G2); bit 1:
+    /// `multiscatter` energy compensation.
     pub shadowing: u32,
     /// GGX alphas; the smooth (delta) form when max < SMOOTH_ALPHA_THRESHOLD.
     pub alpha_u: f32,
@@ -114,6 +115,11 @@ impl GpuMaterial {
     pub const KIND_METALLIC: u32 = 3;
 }
 
+/// `GpuMaterial::shadowing`: bit 0 separable, bit 1 multiscatter.
+fn shadowing_bits(r: &crate::bsdf::Roughness) -> u32 {
+    (r.shadowing == Shadowing::Separable) as u32 | (r.multiscatter as u32) << 1
+}
+
 fn vec4(v: Vec3, w: f32) -> [f32; 4] {
     [v.x, v.y, v.z, w]
 }
@@ -130,7 +136,7 @@ impl From<&Material> for GpuMaterial {
             g.specular = vec4(c.specular_reflectance, 0.0);
             g.alpha_u = c.roughness.alpha_u;
             g.alpha_v = c.roughness.alpha_v;
-            g.shadowing = (c.roughness.shadowing == Shadowing::Separable) as u32;
+            g.shadowing = shadowing_bits(&c.roughness);
         };
         match &m.bsdf {
             Bsdf::Diffuse { reflectance } => {
@@ -146,7 +152,7 @@ impl From<&Material> for GpuMaterial {
                 g.eta = [*eta, 0.0, 0.0, 0.0];
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
-                g.shadowing = (roughness.shadowing == Shadowing::Separable) as u32;
+                g.shadowing = shadowing_bits(roughness);
             }
             Bsdf::Metallic {
                 metallic,

@@ -392,6 +392,7 @@ pub fn textured_bsdf(
                 alpha_u: alpha,
                 alpha_v: alpha,
                 shadowing: Shadowing::Correlated,
+                multiscatter: false,
             };
             if mt.mr_factor[2] > 0.0 {
                 Bsdf::Dielectric {

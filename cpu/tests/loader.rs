@@ -252,6 +252,7 @@ fn rough(u: f32, v: f32, shadowing: Shadowing) -> Roughness {
         alpha_u: u,
         alpha_v: v,
         shadowing,
+        multiscatter: false,
     }
 }
 

@@ -165,7 +165,7 @@ fn offset_origins_never_self_intersect() {
             let far = 10f32.powi(far_exp);
             for _ in 0..2000 {
                 let c = rng.v() * far;
-                let (mut p0, mut p1, mut p2) =
+                let (p0, mut p1, mut p2) =
                     (c + rng.v() * size, c + rng.v() * size, c + rng.v() * size);
                 // A third of the triangles lie in an axis-aligned plane.
                 if rng.f() < 0.33 {

@@ -54,6 +54,7 @@ fn mis_agrees_on_glossy_and_transmissive_surfaces() {
         alpha_u: 0.3,
         alpha_v: 0.15,
         shadowing: Shadowing::Correlated,
+        multiscatter: false,
     };
     let materials = [
         Bsdf::Conductor(ConductorParams {
@@ -157,6 +158,7 @@ fn the_film_variance_overestimates_a_sobol_mean() {
                 alpha_u: 0.2,
                 alpha_v: 0.2,
                 shadowing: Shadowing::Correlated,
+                multiscatter: false,
             },
         }),
         emission: Vec3::ZERO,

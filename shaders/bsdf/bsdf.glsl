@@ -41,11 +41,13 @@ vec2 rough_alphas(Material m) {
     return vec2(max(m.alpha_u, MIN_ALPHA), max(m.alpha_v, MIN_ALPHA));
 }
 
+// Material.shadowing: bit 0 separable; bit 1 multiscatter, which the GLSL
+// does not implement yet (the CPU crate does: cpu/src/bsdf/multiscatter.rs).
 bool material_separable(Material m) {
     if (!HAS(F_SMITH_CORRELATED)) {
         return true;
     }
-    return HAS(F_SMITH_SEPARABLE) && m.shadowing == SHADOWING_SEPARABLE;
+    return HAS(F_SMITH_SEPARABLE) && (m.shadowing & SHADOWING_SEPARABLE) != 0u;
 }
 
 // Mirror both directions to the upper hemisphere when wo is below it.

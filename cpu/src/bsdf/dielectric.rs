@@ -11,6 +11,7 @@ use super::fresnel::{fresnel_dielectric, refract_dir};
 use super::microfacet::{
     ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
 };
+use super::multiscatter::dielectric_ms_albedo;
 use super::{BsdfSample, ETA_SMOOTH_THRESHOLD, Roughness, Shadowing};
 
 /// Whether the interface is rendered as the smooth (delta) model: a small
@@ -54,6 +55,18 @@ pub fn dielectric_half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32
     Some((wm, etap, is_reflection))
 }
 
+/// `multiscatter`: 1 / E(mu_o) of the single-scattering lobe seen from wo's
+/// side (Turquin 2019; see multiscatter.rs); 1 otherwise.
+pub fn dielectric_ms_scale(eta: f32, r: &Roughness, wo: Vec3) -> f32 {
+    if !r.multiscatter {
+        return 1.0;
+    }
+    let (ax, ay) = rough_alphas(r);
+    let side_eta = if wo.z >= 0.0 { eta } else { 1.0 / eta };
+    let e = dielectric_ms_albedo(wo.z.abs(), (ax * ay).sqrt(), side_eta);
+    if e > 0.0 { 1.0 / e } else { 1.0 }
+}
+
 pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     if dielectric_is_smooth(eta, r) {
         return Vec3::ZERO;
@@ -66,9 +79,10 @@ pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     let d = ggx_d(wm, ax, ay);
     let v = ggx_visibility(wo, wi, ax, ay, separable);
     let f = fresnel_dielectric(wo.dot(wm), eta);
+    let scale = dielectric_ms_scale(eta, r, wo);
     if is_reflection {
         // Walter 2007 eq. 20 with V = G / (4 |co| |ci|).
-        return Vec3::splat(d * f * v);
+        return Vec3::splat(d * f * v * scale);
     }
     // Walter 2007 eq. 21 (G / (|ci| |co|) = 4 V), in pbrt-v4's form with
     // the denominator (wi.wm + wo.wm / etap)^2, then the radiance scaling.
@@ -79,7 +93,7 @@ pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
         return Vec3::ZERO;
     }
     let ft = d * (1.0 - f) * 4.0 * v * (dot_i * dot_o).abs() / denom;
-    Vec3::splat(ft / (etap * etap))
+    Vec3::splat(ft / (etap * etap) * scale)
 }
 
 pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
@@ -188,7 +202,7 @@ pub fn dielectric_sample(
     dielectric_half_vector(eta, wo, wi)?;
     Some(BsdfSample {
         wi,
-        weight: Vec3::splat(weight),
+        weight: Vec3::splat(weight * dielectric_ms_scale(eta, r, wo)),
         pdf,
         delta: false,
         eta: eta_rel,

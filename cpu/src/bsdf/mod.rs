@@ -22,6 +22,10 @@ pub mod diffuse;
 pub mod fresnel;
 pub mod metallic;
 pub mod microfacet;
+// Generated numbers, printed with every digit the generator computed.
+#[allow(clippy::excessive_precision)]
+pub mod ms_tables;
+pub mod multiscatter;
 mod tables;
 pub mod warp;
 
@@ -63,6 +67,10 @@ pub struct Roughness {
     /// GGX alpha along t.
     pub alpha_v: f32,
     pub shadowing: Shadowing,
+    /// Energy-compensated GGX (`multiscatter`, default false): Kulla &
+    /// Conty 2017 for conductors, Turquin 2019 for dielectrics (see
+    /// `multiscatter.rs`).
+    pub multiscatter: bool,
 }
 
 impl Roughness {
@@ -70,6 +78,7 @@ impl Roughness {
         alpha_u: 0.0,
         alpha_v: 0.0,
         shadowing: Shadowing::Correlated,
+        multiscatter: false,
     };
     pub fn is_smooth(&self) -> bool {
         self.alpha_u.max(self.alpha_v) < SMOOTH_ALPHA_THRESHOLD

@@ -51,6 +51,7 @@ fn isotropic(alpha: f32) -> Roughness {
         alpha_u: alpha,
         alpha_v: alpha,
         shadowing: Shadowing::Correlated,
+        multiscatter: false,
     }
 }
 
@@ -149,7 +150,14 @@ fn bsdf_from_gltf(m: &gltf::Material) -> Result<Bsdf, String> {
 }
 
 const TYPES: &str = "diffuse, conductor, roughconductor, dielectric or roughdielectric";
-const ROUGH_KEYS: &[&str] = &["alpha", "alpha_u", "alpha_v", "distribution", "shadowing"];
+const ROUGH_KEYS: &[&str] = &[
+    "alpha",
+    "alpha_u",
+    "alpha_v",
+    "distribution",
+    "shadowing",
+    "multiscatter",
+];
 
 /// Parse `extras.bsdf` with Mitsuba 3's plugin names and parameters. Like
 /// Mitsuba, a parameter the type does not take is an error (it catches typos).
@@ -271,6 +279,11 @@ fn parse_roughness(obj: &Map<String, Value>) -> Result<Roughness, String> {
             }
         },
     };
+    let multiscatter = match obj.get("multiscatter") {
+        None => false,
+        Some(Value::Bool(b)) => *b,
+        Some(v) => return Err(format!("\"multiscatter\" must be true or false, got {v}")),
+    };
     let a = |key| number(obj, key, 0.0, f32::INFINITY);
     let (alpha_u, alpha_v) = match (a("alpha")?, a("alpha_u")?, a("alpha_v")?) {
         (Some(a), None, None) => (a, a),
@@ -285,6 +298,7 @@ fn parse_roughness(obj: &Map<String, Value>) -> Result<Roughness, String> {
         alpha_u,
         alpha_v,
         shadowing,
+        multiscatter,
     })
 }
 

@@ -377,6 +377,7 @@ pub fn rough(alpha_u: f32, alpha_v: f32, shadowing: Shadowing) -> Roughness {
         alpha_u,
         alpha_v,
         shadowing,
+        multiscatter: false,
     }
 }
 

@@ -1,0 +1,350 @@
+//! Energy-compensated GGX (`multiscatter`): the white furnace of an F = 1
+//! conductor is 1 within 1% up to alpha = 1 (its albedo, and a rendered
+//! furnace), sampling stays consistent with eval and pdf (chi-square and
+//! per-sample checks), reciprocity holds, and the embedded tables equal
+//! their GLSL twin and glint's own single-scattering albedo.
+
+mod common;
+mod render_common;
+
+use common::*;
+use glam::Vec3;
+use glint_cpu::bsdf::ms_tables::{MS_E, MS_E_AVG, MS_N};
+use glint_cpu::bsdf::multiscatter::{ms_albedo, ms_albedo_reference};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
+use rayon::prelude::*;
+
+const SHADOWINGS: [Shadowing; 2] = [Shadowing::Correlated, Shadowing::Separable];
+
+/// eta = 0, k = 1 (Mitsuba's "none"): F = 1 at every angle.
+fn white(alpha_u: f32, alpha_v: f32, sh: Shadowing, ms: bool) -> Bsdf {
+    Bsdf::Conductor(ConductorParams {
+        eta: Vec3::ZERO,
+        k: Vec3::ONE,
+        specular_reflectance: Vec3::ONE,
+        roughness: Roughness {
+            alpha_u,
+            alpha_v,
+            shadowing: sh,
+            multiscatter: ms,
+        },
+    })
+}
+
+fn albedo(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
+    let mut rng = Pcg32::new(seed, 9);
+    let (mut s1, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let v = b
+            .sample(wo, rng.f32(), rng.vec2())
+            .map_or(0.0, |s| s.weight.max_element() as f64);
+        s1 += v;
+        s2 += v * v;
+    }
+    let m = s1 / n as f64;
+    (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+}
+
+#[test]
+fn white_furnace_albedo_is_one_within_one_percent() {
+    let mut failures = Vec::new();
+    let mut lines = Vec::new();
+    for sh in SHADOWINGS {
+        for alpha in [0.05f32, 0.2, 0.5, 0.8, 1.0] {
+            for c in [1.0f32, 0.5, 0.1, -0.7] {
+                let wo = dir_cos(c, PHI_O);
+                let (m, se) = albedo(&white(alpha, alpha, sh, true), wo, 100_000, 1);
+                let (m0, _) = albedo(&white(alpha, alpha, sh, false), wo, 100_000, 1);
+                lines.push(format!(
+                    "{sh:?} alpha {alpha} cos {c}: {m0:.4} -> {m:.4} +- {se:.4}"
+                ));
+                // 1% except at grazing angles with small alpha, where the
+                // 32 x 32 table's bilinear interpolation errs by up to 2%.
+                let tol = if alpha < 0.1 && c.abs() < 0.2 {
+                    0.02
+                } else {
+                    0.01
+                };
+                if (m - 1.0).abs() > tol + 3.0 * se {
+                    failures.push(lines.last().unwrap().clone());
+                }
+            }
+        }
+        // Anisotropic: looked up at sqrt(alpha_u alpha_v), an
+        // approximation (92% .. 94% for a 1:4 ratio, up from 86%).
+        let (m, se) = albedo(&white(0.2, 0.8, sh, true), dir_cos(0.5, PHI_O), 100_000, 2);
+        if (m - 1.0).abs() > 0.09 + 3.0 * se {
+            failures.push(format!("{sh:?} anisotropic 0.2/0.8: {m}"));
+        }
+    }
+    eprintln!("{}", lines.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn multiscatter_sampling_matches_eval_and_pdf() {
+    let mut bad = Vec::new();
+    for sh in SHADOWINGS {
+        for (au, av) in [(0.05, 0.05), (0.3, 0.3), (1.0, 1.0), (0.1, 0.6)] {
+            let mut r = rough(au, av, sh);
+            r.multiscatter = true;
+            let b = Bsdf::Conductor(gold(r));
+            let mut rng = Pcg32::new(3, 3);
+            for c in [1.0f32, 0.4, 0.05, -0.5] {
+                let wo = dir_cos(c, PHI_O);
+                for _ in 0..3000 {
+                    let Some(s) = b.sample(wo, rng.f32(), rng.vec2()) else {
+                        continue;
+                    };
+                    let pdf = b.pdf(wo, s.wi);
+                    let w = b.eval(wo, s.wi) * s.wi.z.abs() / pdf;
+                    if (pdf - s.pdf).abs() > 1e-3 * pdf
+                        || (w - s.weight).abs().max_element() > 1e-3 * w.max_element() + 1e-6
+                    {
+                        bad.push(format!("{b:?} wo {wo}: {s:?} vs pdf {pdf} w {w}"));
+                    }
+                }
+                // Reciprocity: f_ss and f_ms are both symmetric.
+                for _ in 0..300 {
+                    let wi = dir_cos(rng.f32() * c.signum(), std::f32::consts::TAU * rng.f32());
+                    let (a, bb) = (b.eval(wo, wi), b.eval(wi, wo));
+                    if (a - bb).abs().max_element()
+                        > 1e-3 * a.max_element().max(bb.max_element()) + 1e-6
+                    {
+                        bad.push(format!("reciprocity {wo} {wi}: {a} vs {bb}"));
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        bad.len() <= 3,
+        "{}\n{}",
+        bad.len(),
+        bad[..bad.len().min(6)].join("\n")
+    );
+}
+
+#[test]
+fn multiscatter_chi2() {
+    let level = sidak(0.01, 8);
+    let cases: Vec<(Bsdf, Vec3)> = SHADOWINGS
+        .iter()
+        .flat_map(|&sh| {
+            [(0.3f32, 0.5f32), (1.0, 1.0), (0.1, 0.6), (0.6, 0.05)].map(move |(a, c)| {
+                let mut r = rough(a, a, sh);
+                r.multiscatter = true;
+                (Bsdf::Conductor(gold(r)), dir_cos(c, PHI_O))
+            })
+        })
+        .collect();
+    let fails: Vec<String> = cases
+        .par_iter()
+        .enumerate()
+        .filter_map(|(i, (b, wo))| {
+            let r = chi2_test(
+                &|uc, u| b.sample(*wo, uc, u).map(|s| (s.wi, s.delta)),
+                &|wi| b.pdf(*wo, wi) as f64,
+                &[],
+                300_000,
+                77 + i as u64,
+                &Grid::for_case(b, *wo),
+            );
+            match r {
+                Ok(r) if r.p_value >= level => None,
+                other => Some(format!("{b:?} {wo}: {other:?}")),
+            }
+        })
+        .collect();
+    assert!(fails.is_empty(), "{}", fails.join("\n"));
+}
+
+/// The embedded tables: the GLSL include holds the same numbers, and a few
+/// entries recomputed from the single-scattering lobe agree.
+#[test]
+fn tables_match_glsl_and_recomputation() {
+    let p = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shaders/bsdf/ms_tables.glsl"
+    );
+    let src = std::fs::read_to_string(p).unwrap();
+    let numbers = |name: &str| -> Vec<f32> {
+        let start = src.find(&format!("const float {name}[")).unwrap();
+        let body = &src[start..];
+        let open = body.find("float[](").unwrap() + 8;
+        let close = body.find(");").unwrap();
+        body[open..close]
+            .split(',')
+            .map(|t| t.trim().parse::<f32>().unwrap())
+            .collect()
+    };
+    assert!(src.contains(&format!("#define MS_N {MS_N}")));
+    assert_eq!(numbers("MS_E"), MS_E.concat());
+    assert_eq!(numbers("MS_E_AVG"), MS_E_AVG.concat());
+    for sep in [false, true] {
+        for (i, j) in [(31, 31), (10, 20), (3, 31), (31, 5), (16, 16)] {
+            let mu = i as f32 / (MS_N - 1) as f32;
+            let alpha = j as f32 / (MS_N - 1) as f32;
+            let r = ms_albedo_reference(mu, alpha, sep, 128);
+            let t = ms_albedo(mu, alpha, sep) as f64;
+            assert!(
+                (r - t).abs() < 3e-3,
+                "sep {sep} mu {mu} alpha {alpha}: {t} vs {r}"
+            );
+        }
+    }
+    // E decreases with alpha; E_avg in (0, 1].
+    for t in &MS_E_AVG {
+        for j in 1..MS_N {
+            assert!(t[j] <= t[j - 1] + 1e-3);
+            assert!(t[j] > 0.0 && t[j] <= 1.0 + 1e-3);
+        }
+    }
+}
+
+/// A rendered white furnace: a sphere of the F = 1 conductor in a uniform
+/// background of radiance 1 renders 1 everywhere with `multiscatter`
+/// (statistically, to 1%), and visibly darker without it at alpha = 1.
+#[test]
+fn rendered_furnace_is_one() {
+    use render_common::*;
+    for (alpha, ms) in [(1.0f32, true), (0.5, true), (1.0, false)] {
+        let mut mats = vec![diffuse("unused", 0.5)];
+        let b = white(alpha, alpha, Shadowing::Correlated, ms);
+        mats[0].bsdf = b;
+        let sc = scene(
+            uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
+            mats,
+            vec![],
+            look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0),
+            Vec3::ONE,
+        );
+        let film = render(&sc, &opts(24, 64, -1, 9));
+        let (mut s, mut n) = (0.0f64, 0usize);
+        for y in 0..24 {
+            for x in 0..24 {
+                s += film.mean(film.index(x, y)).x as f64;
+                n += 1;
+            }
+        }
+        let mean = s / n as f64;
+        eprintln!("furnace alpha {alpha} multiscatter {ms}: mean {mean:.4}");
+        if ms {
+            assert!((mean - 1.0).abs() < 0.01, "alpha {alpha}: {mean}");
+        } else {
+            assert!(mean < 0.97, "alpha {alpha} single scattering: {mean}");
+        }
+    }
+}
+
+fn glass(eta: f32, alpha: f32, ms: bool) -> Bsdf {
+    Bsdf::Dielectric {
+        eta,
+        roughness: Roughness {
+            alpha_u: alpha,
+            alpha_v: alpha,
+            shadowing: Shadowing::Correlated,
+            multiscatter: ms,
+        },
+    }
+}
+
+/// Flux albedo (transmission's 1/eta_rel^2 undone) of rough glass.
+fn flux_albedo(b: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
+    let mut rng = Pcg32::new(seed, 11);
+    let (mut s1, mut s2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let v = b
+            .sample(wo, rng.f32(), rng.vec2())
+            .map_or(0.0, |s| (s.weight.x * s.eta * s.eta) as f64);
+        s1 += v;
+        s2 += v * v;
+    }
+    let m = s1 / n as f64;
+    (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+}
+
+#[test]
+fn rough_glass_furnace_is_one_from_both_sides() {
+    let mut failures = Vec::new();
+    let mut lines = Vec::new();
+    for eta in [1.5f32, 1.333, 2.42] {
+        for alpha in [0.05f32, 0.3, 0.6, 1.0] {
+            for c in [1.0f32, 0.5, 0.1, -0.2, -0.7, -1.0] {
+                let wo = dir_cos(c, PHI_O);
+                let (m, se) = flux_albedo(&glass(eta, alpha, true), wo, 60_000, 4);
+                let (m0, _) = flux_albedo(&glass(eta, alpha, false), wo, 60_000, 4);
+                lines.push(format!(
+                    "eta {eta} alpha {alpha} cos {c}: {m0:.4} -> {m:.4} +- {se:.4}"
+                ));
+                if (m - 1.0).abs() > 0.01 + 3.0 * se {
+                    failures.push(lines.last().unwrap().clone());
+                }
+            }
+        }
+    }
+    eprintln!("{}", lines.join("\n"));
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn rough_glass_sampling_matches_eval_and_pdf() {
+    let mut bad = 0;
+    let mut total = 0;
+    let mut rng = Pcg32::new(5, 5);
+    for alpha in [0.05f32, 0.3, 1.0] {
+        let b = glass(1.5, alpha, true);
+        for c in [0.9f32, 0.3, -0.3, -0.9] {
+            let wo = dir_cos(c, PHI_O);
+            for _ in 0..3000 {
+                let Some(s) = b.sample(wo, rng.f32(), rng.vec2()) else {
+                    continue;
+                };
+                total += 1;
+                let pdf = b.pdf(wo, s.wi);
+                let w = b.eval(wo, s.wi) * s.wi.z.abs() / pdf;
+                if (pdf - s.pdf).abs() > 1e-3 * pdf
+                    || (w - s.weight).abs().max_element() > 1e-3 * w.max_element() + 1e-6
+                {
+                    bad += 1;
+                }
+            }
+        }
+    }
+    assert!(bad * 1000 <= total, "{bad} of {total} inconsistent");
+}
+
+/// A rendered furnace of a rough glass sphere renders 1 within 1.5%: each
+/// interaction's albedo is 1 within the tables' interpolation error
+/// (~0.3%), which compounds over the internal bounces (0.989 measured at
+/// alpha = 1, up from 0.96 without compensation).
+#[test]
+fn rendered_glass_furnace_is_one() {
+    use render_common::*;
+    for (alpha, ms) in [(1.0f32, true), (0.3, true), (1.0, false)] {
+        let mut mats = vec![diffuse("unused", 0.5)];
+        mats[0].bsdf = glass(1.5, alpha, ms);
+        let sc = scene(
+            uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
+            mats,
+            vec![],
+            look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0),
+            Vec3::ONE,
+        );
+        let film = render(&sc, &opts(24, 64, -1, 10));
+        let (mut s, mut n) = (0.0f64, 0usize);
+        for y in 0..24 {
+            for x in 0..24 {
+                s += film.mean(film.index(x, y)).x as f64;
+                n += 1;
+            }
+        }
+        let mean = s / n as f64;
+        eprintln!("glass furnace alpha {alpha} multiscatter {ms}: mean {mean:.4}");
+        if ms {
+            assert!((mean - 1.0).abs() < 0.015, "alpha {alpha}: {mean}");
+        } else {
+            assert!(mean < 0.985, "alpha {alpha} single scattering: {mean}");
+        }
+    }
+}
