@@ -159,7 +159,8 @@ impl Features {
 ///   nothing and reflects nothing (F = 0), so it is a pass-through either way;
 /// - punctual lights that emit nothing (black colour or zero intensity) are
 ///   dropped: they add zero, and would only take light-selection odds;
-/// - materials identical in every parameter (names aside) are merged.
+/// - materials identical in every parameter (names aside) are merged, in
+///   scenes without textures.
 pub fn simplify(scene: &mut Scene) -> Vec<String> {
     let mut notes = Vec::new();
     let mut snapped = 0;
@@ -210,7 +211,12 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
         ));
     }
 
-    // Merge identical materials: the first of each kind stays.
+    // Merge identical materials: the first of each kind stays. Not with
+    // textures: their tables are indexed by material, and two materials
+    // with equal factors may still differ in their textures.
+    if !scene.textures.materials.is_empty() {
+        return notes;
+    }
     let n = scene.materials.len();
     let mut remap: Vec<u32> = (0..n as u32).collect();
     let mut keep: Vec<usize> = Vec::new();

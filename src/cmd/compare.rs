@@ -36,6 +36,25 @@ pub fn run(args: &CompareArgs) -> Result<()> {
         glint::cpu::compare::compare_films_masked(&gpu.film, &cpu.film, &|_, _| true, args.alpha)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;
     println!("{}: gpu ({}) vs cpu: {report}", path.display(), gpu.device);
+    // The metrics module's view of the same pair (the CPU image as the
+    // reference): how far apart the two noisy images are.
+    let (gm, cm) = (gpu.film.means(), cpu.film.means());
+    let (w, h) = (opts.width, opts.height);
+    let m = glint::cpu::metrics::compute(
+        &glint::cpu::metrics::ImageRef::new(w, h, &gm)?,
+        &glint::cpu::metrics::ImageRef::new(w, h, &cm)?,
+    )?;
+    let ratio = m.mean_ratio();
+    println!(
+        "{}: relMSE {:.3e}, RMSE {:.3e}, FLIP {:.4}, mean ratio gpu/cpu {:.4} {:.4} {:.4}",
+        path.display(),
+        m.relmse,
+        m.rmse,
+        m.flip,
+        ratio.x,
+        ratio.y,
+        ratio.z
+    );
     if report.pass {
         Ok(())
     } else {

@@ -230,12 +230,9 @@ impl Fnv {
     }
 }
 
-/// The reference's cache key: what the loaded scene holds (so external
-/// buffers count, not only the file's bytes), the options that shape the
-/// image, and glint's version.
-pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
-    let mut h = Fnv::new();
-    h.add(env!("CARGO_PKG_VERSION").as_bytes());
+/// Add what the loaded scene holds to `h`: geometry, shading data,
+/// materials, lights, cameras, background, textures and environment map.
+pub(super) fn hash_scene(h: &mut Fnv, scene: &Scene) {
     h.add(bytemuck::cast_slice(&scene.triangles));
     h.add(bytemuck::cast_slice(&scene.shading));
     h.add(
@@ -245,6 +242,22 @@ pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
         )
         .as_bytes(),
     );
+    let t = &scene.textures;
+    h.add(bytemuck::cast_slice(&t.texels));
+    h.add(format!("{:?}|{:?}|{:?}", t.table, t.materials, t.uvs).as_bytes());
+    if let Some(e) = &scene.envmap {
+        h.add(bytemuck::cast_slice(&e.texels));
+        h.add(format!("{}x{} {}", e.width, e.height, e.rotation).as_bytes());
+    }
+}
+
+/// The reference's cache key: what the loaded scene holds (so external
+/// buffers count, not only the file's bytes), the options that shape the
+/// image, and glint's version.
+pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
+    let mut h = Fnv::new();
+    h.add(env!("CARGO_PKG_VERSION").as_bytes());
+    hash_scene(&mut h, scene);
     h.add(
         format!(
             "{}x{} spp {} depth {} seed {} camera {} {:?} {:?} {:?} {}",

@@ -73,15 +73,7 @@ pub fn apply(opts: &mut RenderOptions, shard: Shard) -> Result<()> {
 /// their own, so `merge` can say which one differs.
 pub fn image_key(scene: &Scene, opts: &RenderOptions) -> String {
     let mut h = Fnv::new();
-    h.add(bytemuck::cast_slice(&scene.triangles));
-    h.add(bytemuck::cast_slice(&scene.shading));
-    h.add(
-        format!(
-            "{:?}|{:?}|{:?}|{:?}",
-            scene.materials, scene.lights, scene.cameras, scene.background
-        )
-        .as_bytes(),
-    );
+    super::converge::hash_scene(&mut h, scene);
     h.add(
         format!(
             "{}x{} depth {} camera {} {:?} {:?}",
