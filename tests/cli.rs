@@ -424,8 +424,13 @@ fn gpu_backend_renders_and_compare_finds_the_backends_agree() {
         "{stdout}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert_eq!(stdout.lines().count(), 1, "{stdout}");
-    assert!(stdout.contains("pass"), "{stdout}");
+    // The verdict, then the metrics module's view of the same pair.
+    assert_eq!(stdout.lines().count(), 2, "{stdout}");
+    assert!(stdout.lines().next().unwrap().contains("pass"), "{stdout}");
+    assert!(
+        stdout.contains("relMSE") && stdout.contains("FLIP"),
+        "{stdout}"
+    );
     // Nothing written.
     assert_eq!(files_in(&dir), ["scene.bin", "scene.gltf"]);
 

@@ -120,7 +120,7 @@ fn exr_records_attributes_variance_and_a_success_line() {
             meta.sampler.as_str(),
             meta.shard.as_str()
         ),
-        (8, 7, "independent", "0/1")
+        (8, 7, "sobol", "0/1")
     );
     assert_eq!(meta.version, env!("CARGO_PKG_VERSION"));
     assert_eq!(meta.samples, [(0, 8)]);

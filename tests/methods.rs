@@ -13,11 +13,22 @@ mod common;
 
 use std::path::{Path, PathBuf};
 
-use glint::cpu::compare::compare_films;
+use glint::cpu::compare::compare_films_masked;
 use glint::cpu::{Film, Mis, RenderOptions, Scene};
 use glint::gpu::render::render_on;
 
 const SIZE: u32 = 32;
+/// Overall significance of each comparison. This file makes about 40 of
+/// them (7 scenes, 2-3 methods, 2 backends): 1e-4 each keeps the chance of
+/// a false alarm anywhere in the family near 4e-3 (Bonferroni). At the
+/// single-test 1e-3 one of them, roughconductor's GPU `--mis none`, failed
+/// at max |z| 4.47 against 4.41, and agreed (max |z| 1.4) at 512 spp with
+/// `glint diff`: a false alarm at the stated rate.
+const ALPHA: f64 = 1e-4;
+
+fn compare_films(a: &Film, b: &Film) -> glint::cpu::compare::CompareReport {
+    compare_films_masked(a, b, &|_, _| true, ALPHA).unwrap()
+}
 const SPP: u32 = 64;
 
 fn asset(name: &str) -> PathBuf {
@@ -69,7 +80,7 @@ fn check(file: &str) {
             ("cpu", cpu(&scene, &opts(seed, nee, mis))),
             ("gpu", gpu(&ctx, &scene, &opts(seed + 1, nee, mis))),
         ] {
-            let r = compare_films(&film, &reference).unwrap();
+            let r = compare_films(&film, &reference);
             assert!(r.pass, "{file} {name} ({backend}) vs default: {r}");
         }
     }
@@ -110,5 +121,5 @@ fn nee_off_misses_a_point_light_and_is_told_apart() {
     assert!(!scene.lights.is_empty());
     let reference = cpu(&scene, &opts(1, true, Mis::Power));
     let off = cpu(&scene, &opts(2, false, Mis::Power));
-    assert!(!compare_films(&off, &reference).unwrap().pass);
+    assert!(!compare_films(&off, &reference).pass);
 }

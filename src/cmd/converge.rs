@@ -513,7 +513,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let title = title(&args.scene, &devices);
     let spec = ChartSpec {
-        title: format!("{title}"),
+        title: title.clone(),
         x_label: "render time (seconds, log)".into(),
         y_label: "relMSE (log)".into(),
         curves: variants

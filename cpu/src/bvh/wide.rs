@@ -123,7 +123,9 @@ impl Bvh4Node {
 
 /// The reference to a leaf of `count` (1..=16) triangles from `first`.
 pub fn leaf_ref(first: u32, count: u32) -> u32 {
-    assert!(first <= MAX_LEAF_FIRST && (1..=16).contains(&count));
+    // Counts up to MAX_LEAF_SIZE (the builder's limit): 16 with the largest
+    // `first` would spell SLOT_EMPTY.
+    assert!(first <= MAX_LEAF_FIRST && (1..=MAX_LEAF_SIZE as u32).contains(&count));
     LEAF_BIT | (count - 1) << LEAF_FIRST_BITS | first
 }
 
@@ -213,7 +215,12 @@ mod tests {
 
     #[test]
     fn leaf_refs_round_trip() {
-        for (first, count) in [(0, 1), (7, 4), (MAX_LEAF_FIRST, 16), (1 << 24, 3)] {
+        for (first, count) in [
+            (0, 1),
+            (7, 4),
+            (MAX_LEAF_FIRST, MAX_LEAF_SIZE as u32),
+            (1 << 24, 3),
+        ] {
             let r = leaf_ref(first, count);
             assert!(is_leaf_ref(r) && r != SLOT_EMPTY);
             assert_eq!(leaf_range(r), (first as usize, count as usize));
