@@ -7,20 +7,24 @@ use anyhow::Result;
 use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness};
 use glint::cpu::lights::{GpuEmitter, GpuLight};
 use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF};
-use glint::cpu::{BvhNode, GpuMaterial, PunctualLight, Scene, Triangle, TriangleShading};
+use glint::cpu::{Bvh4Node, GpuMaterial, PunctualLight, Scene, Triangle, TriangleShading};
 
 use super::{check_scene_path, load_quiet, one_line};
 use crate::cli::InfoArgs;
 
 pub fn run(args: &InfoArgs) -> Result<()> {
     check_scene_path(&args.scene)?;
-    let scene = load_quiet(&args.scene, args.allow_any_path, args.background)?;
+    let mut scene = load_quiet(&args.scene, args.allow_any_path, args.background)?;
+    let simplified = glint::cpu::features::simplify(&mut scene);
     if args.strict
         && let Some(w) = scene.warnings.first()
     {
         anyhow::bail!("{}: {} (--strict)", args.scene.display(), one_line(w));
     }
     print!("{}", describe(&args.scene.display().to_string(), &scene));
+    for n in simplified {
+        println!("simplified at load: {n}");
+    }
     Ok(())
 }
 
@@ -209,26 +213,20 @@ pub fn describe(path: &str, s: &Scene) -> String {
     let (lo, hi) = s.bounds();
     let _ = writeln!(o, "triangles: {}", s.triangles.len());
     let _ = writeln!(o, "bounds: min {} max {}", rgb(lo), rgb(hi));
-    let mut features = Vec::new();
+    // What the specialised GPU kernel is built for (at the default
+    // options: unbounded depth, NEE on), plus the data it reads.
+    let f = glint::cpu::features::Features::of(s, &glint::cpu::RenderOptions::new(1, 1));
+    let mut features: Vec<&str> = f.names();
     if !t.is_empty() {
         features.push("textures");
     }
     if t.has_masks() {
-        features.push("alpha masks");
-    }
-    if emitters > 0 {
-        features.push("area lights");
-    }
-    if !s.lights.is_empty() {
-        features.push("punctual lights");
-    }
-    if s.background.max_element() > 0.0 {
-        features.push("background");
+        features.push("alpha-masks");
     }
     let _ = writeln!(o, "kernel features: {}", features.join(", "));
     let rows = [
         ("triangles", s.triangles.len() * size_of::<Triangle>()),
-        ("bvh nodes", s.bvh.nodes.len() * size_of::<BvhNode>()),
+        ("bvh nodes", s.bvh.nodes.len() * size_of::<Bvh4Node>()),
         ("shading", s.shading.len() * size_of::<TriangleShading>()),
         ("materials", s.materials.len() * size_of::<GpuMaterial>()),
         ("emitters", emitters * size_of::<GpuEmitter>()),
