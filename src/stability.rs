@@ -533,21 +533,25 @@ pub fn measure_cpu(pt: &Point, size: Size, seed: u64) -> Row {
 
 // ------------------------------------------------------------------ GPU
 
+/// One query of `shaders/tests/bsdf_test.comp` (std430 mirror): wo, wi,
+/// and the sample's random numbers (uc, u.x, u.y).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct Query {
-    wo: [f32; 4],
-    wi: [f32; 4],
-    u: [f32; 4],
+pub struct Query {
+    pub wo: [f32; 4],
+    pub wi: [f32; 4],
+    pub u: [f32; 4],
 }
 
+/// One answer of `shaders/tests/bsdf_test.comp` (std430 mirror): f and
+/// pdf of (wo, wi), then the sample's wi, pdf, weight, eta and flags.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct GpuResult {
-    f_pdf: [f32; 4],
-    s_wi_pdf: [f32; 4],
-    s_weight_eta: [f32; 4],
-    flags: [u32; 4],
+pub struct GpuResult {
+    pub f_pdf: [f32; 4],
+    pub s_wi_pdf: [f32; 4],
+    pub s_weight_eta: [f32; 4],
+    pub flags: [u32; 4],
 }
 
 type CpuOut = (Vec3, f32, Option<(Vec3, f32, Vec3, f32, bool)>, bool);

@@ -14,28 +14,12 @@
 
 mod common;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use glint::gpu::groups;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::{GpuMaterial, Material};
 
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct Query {
-    wo: [f32; 4],
-    wi: [f32; 4],
-    u: [f32; 4],
-}
-
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-struct GpuResult {
-    f_pdf: [f32; 4],
-    s_wi_pdf: [f32; 4],
-    s_weight_eta: [f32; 4],
-    flags: [u32; 4],
-}
+use glint::stability::{GpuResult, Query};
 
 /// Deterministic PCG32, as in the CPU crate's test helpers.
 struct Rng(u64);

@@ -270,7 +270,18 @@ impl Scene {
 
     /// Closest hit, alpha masks applied when the scene has any.
     pub fn intersect(&self, ray: &crate::bvh::Ray) -> Option<crate::bvh::Hit> {
-        if self.textures.has_masks() {
+        self.intersect_with(ray, self.textures.has_masks())
+    }
+
+    /// Any hit, alpha masks applied when the scene has any.
+    pub fn occluded(&self, ray: &crate::bvh::Ray) -> bool {
+        self.occluded_with(ray, self.textures.has_masks())
+    }
+
+    /// [`Scene::intersect`] with the scene's `has_masks()` answered by the
+    /// caller, once per render rather than once per ray.
+    pub fn intersect_with(&self, ray: &crate::bvh::Ray, masks: bool) -> Option<crate::bvh::Hit> {
+        if masks {
             self.bvh
                 .intersect_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v))
         } else {
@@ -278,9 +289,9 @@ impl Scene {
         }
     }
 
-    /// Any hit, alpha masks applied when the scene has any.
-    pub fn occluded(&self, ray: &crate::bvh::Ray) -> bool {
-        if self.textures.has_masks() {
+    /// [`Scene::occluded`] with `has_masks()` answered by the caller.
+    pub fn occluded_with(&self, ray: &crate::bvh::Ray, masks: bool) -> bool {
+        if masks {
             self.bvh
                 .occluded_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v))
         } else {

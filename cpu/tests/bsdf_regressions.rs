@@ -448,6 +448,13 @@ fn constants_agree_with_the_glsl() {
     ] {
         assert_eq!(define_u32(&lights, name), m.code(), "{name}");
     }
+    let sobol = glsl("integrator/sobol.glsl");
+    for (name, k) in [
+        ("SAMPLER_INDEPENDENT", glint_cpu::SamplerKind::Independent),
+        ("SAMPLER_SOBOL", glint_cpu::SamplerKind::Sobol),
+    ] {
+        assert_eq!(define_u32(&sobol, name), k.code(), "{name}");
+    }
     assert_eq!(define_f32(&mf, "GLINT_PI"), std::f32::consts::PI);
     assert_eq!(
         define_f32(&bsdf, "GLINT_INV_PI"),

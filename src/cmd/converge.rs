@@ -11,6 +11,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::Parser;
 use glam::Vec3;
 use glint::backend::{Backend, BackendRender};
+use glint::cache::Fnv;
 use glint::chart::{ChartSpec, Curve};
 use glint::cpu::exr_file::{RadianceImage, RenderMeta};
 use glint::cpu::metrics::{self, ImageRef, Metrics};
@@ -211,23 +212,6 @@ pub fn markdown(title: &str, command: &str, rows: &[Row], variants: &[Variant]) 
          `render_seconds` (sampling alone).\n",
     );
     s
-}
-
-/// 64-bit FNV-1a: a stable content key (std's hasher may change between
-/// Rust releases, which would silently orphan every cached reference).
-pub(super) struct Fnv(pub(super) u64);
-impl Fnv {
-    pub(super) fn new() -> Self {
-        Fnv(0xcbf2_9ce4_8422_2325)
-    }
-    pub(super) fn add(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x0000_0100_0000_01b3);
-        }
-        // A separator, so that ("ab", "c") and ("a", "bc") differ.
-        self.0 = self.0.rotate_left(7) ^ 0xff;
-    }
 }
 
 /// Add what the loaded scene holds to `h`: geometry, shading data,

@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use glint::cpu::exr_file::RenderMeta;
 use glint::cpu::{RenderOptions, Scene};
 
-use super::converge::Fnv;
+use glint::cache::Fnv;
 
 /// Shard `index` of `count` (0-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

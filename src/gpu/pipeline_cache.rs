@@ -13,6 +13,7 @@ use ash::vk;
 
 use super::GpuError;
 use super::context::Context;
+use crate::cache::fnv64;
 
 pub struct PipelineCache<'a> {
     ctx: &'a Context,
@@ -20,15 +21,6 @@ pub struct PipelineCache<'a> {
     path: PathBuf,
     /// Bytes of driver data loaded (0: started empty).
     pub loaded_bytes: usize,
-}
-
-fn fnv64(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
 }
 
 /// The driver data of a cache file, if its checksum and its header (for

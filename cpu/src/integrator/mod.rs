@@ -266,6 +266,9 @@ pub struct PathTracer<'a> {
     pub sample_start: u32,
     /// Sampling budget in seconds (`RenderOptions::time_limit`).
     pub time_limit: Option<f64>,
+    /// Whether traversal runs the alpha test (`Scene::textures.has_masks()`,
+    /// asked once here, not per ray).
+    pub masks: bool,
 }
 
 /// The interpolated shading frame at a hit, with the geometric normal.
@@ -294,6 +297,7 @@ impl<'a> PathTracer<'a> {
             sampler: opts.sampler,
             sample_start: opts.sample_start,
             time_limit: opts.time_limit,
+            masks: scene.textures.has_masks(),
         })
     }
 
@@ -385,7 +389,7 @@ impl<'a> PathTracer<'a> {
 
         loop {
             *rays += 1;
-            let Some(hit) = scene.intersect(&ray) else {
+            let Some(hit) = scene.intersect_with(&ray, self.masks) else {
                 if self.lights.probs.background > 0.0 {
                     let w = if !prev_mis {
                         1.0
@@ -449,7 +453,7 @@ impl<'a> PathTracer<'a> {
                     if f.max_element() > 0.0 {
                         let shadow = self.shadow_ray(p, p_err, sf.ng, &ls);
                         *rays += 1;
-                        if shadow.tmax > 0.0 && !scene.occluded(&shadow) {
+                        if shadow.tmax > 0.0 && !scene.occluded_with(&shadow, self.masks) {
                             let w = if ls.delta {
                                 1.0
                             } else {
