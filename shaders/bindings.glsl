@@ -4,12 +4,14 @@
 //   binding 0  uniform Params          glint_cpu::integrator::GpuParams (std140, 176 B)
 //   binding 1  Triangle triangles[]    glint_cpu::Triangle (48 B), BVH leaf order
 //   binding 2  Bvh4Node bvh_nodes[]    glint_cpu::Bvh4Node (128 B), the 4-wide BVH
-//   binding 3  TriangleShading shading[]  glint_cpu::TriangleShading (96 B)
+//   binding 3  vec4 shading[]          glint_cpu::Scene::shading: packed normals and tangents
+//                                      of the triangles that have them (Triangle flags)
 //   binding 4  Material materials[]    glint_cpu::GpuMaterial (96 B)
 //   binding 5  Emitter emitters[]      glint_cpu::lights::GpuEmitter (16 B), emitter order
 //   binding 6  Light lights[]          glint_cpu::lights::GpuLight (48 B)
-//   binding 7  vec4 accum[]            2 per pixel: (sum, sum of squares); ADDED to,
-//                                      sample by sample in sample order (the host zeroes it)
+//   binding 7  vec4 accum[]            4 per pixel: sum, sum of squares, variance batch
+//                                      running sum, sum of squared batch sums (glint_cpu::Film);
+//                                      continued sample by sample in sample order (the host zeroes it)
 //   binding 8  uint ray_counts[]       1 per pixel; ADDED to
 //   binding 9  uint texels[]           glint_cpu::texture::SceneTextures::texels (RGBA8)
 //   binding 10 Texture textures[]      glint_cpu::texture::GpuTexture (16 B)
@@ -32,12 +34,11 @@
 #include "bsdf/material.glsl"
 #include "texture_types.glsl"
 
-struct TriangleShading {
-    // .w of each normal: 1 when the mesh had NORMAL (else use the
-    // geometric normal); .w of each tangent: 1 when a tangent is known.
-    vec4 n[3];
-    vec4 t[3];
-};
+// glint_cpu::scene::TRI_*: Triangle flags (p2.w) say which shading data a
+// triangle has, and its offset in vec4s into shading[].
+#define TRI_NORMALS 2u
+#define TRI_TANGENTS 4u
+#define TRI_SHADING_SHIFT 3u
 
 struct Emitter {
     uint tri;   // index into triangles[]
@@ -80,7 +81,7 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
     float p_area;
     float p_punctual;
     float p_background;
-    float eps_abs;     // unused (0): ray offsets come from hit_error
+    uint variance_batch; // samples per variance batch (glint_cpu::Film::batch)
     uint textured;    // 1: some material has textures (bindings 9-12 are real)
     uint masked;      // 1: some material has an alpha mask (traversal tests it)
     uint env_width;   // environment map size; 0: none (bindings 13-14 dummies)
@@ -93,7 +94,7 @@ layout(std140, set = 0, binding = 0) uniform ParamsBlock {
 
 layout(std430, set = 0, binding = 1) readonly buffer TriangleBuffer { Triangle triangles[]; };
 layout(std430, set = 0, binding = 2) readonly buffer BvhNodeBuffer { Bvh4Node bvh_nodes[]; };
-layout(std430, set = 0, binding = 3) readonly buffer ShadingBuffer { TriangleShading shading[]; };
+layout(std430, set = 0, binding = 3) readonly buffer ShadingBuffer { vec4 shading[]; };
 layout(std430, set = 0, binding = 4) readonly buffer MaterialBuffer { Material materials[]; };
 layout(std430, set = 0, binding = 5) readonly buffer EmitterBuffer { Emitter emitters[]; };
 layout(std430, set = 0, binding = 6) readonly buffer LightBuffer { Light lights[]; };

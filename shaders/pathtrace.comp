@@ -4,8 +4,8 @@
 // Russian roulette, ray offset and light-leak rules). Binding table:
 // bindings.glsl. One invocation per pixel renders samples
 // [push.sample_start, push.sample_start + push.sample_count), adding each
-// sample and its square to the running sums in accum, in sample order, and
-// the rays traced to ray_counts.
+// sample to the running sums in accum (glint_cpu::film::add_sample), in
+// sample order, and the rays traced to ray_counts.
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "features.glsl"
@@ -98,13 +98,16 @@ struct SurfaceFrame {
 
 SurfaceFrame surface(uint tri, float u, float v) {
     Triangle t = triangles[tri];
-    TriangleShading sh = shading[tri];
     SurfaceFrame sf;
     sf.ng = normalize(triangle_normal(t));
     float w = 1.0 - u - v;
     sf.ns = sf.ng;
-    if (sh.n[0].w == 1.0) {
-        vec3 n = w * sh.n[0].xyz + u * sh.n[1].xyz + v * sh.n[2].xyz;
+    // The triangle's packed shading data (glint_cpu::Scene::set_shading).
+    uint flags = floatBitsToUint(t.p2.w);
+    uint off = flags >> TRI_SHADING_SHIFT;
+    if ((flags & TRI_NORMALS) != 0u) {
+        vec3 n = w * shading[off].xyz + u * shading[off + 1u].xyz + v * shading[off + 2u].xyz;
+        off += 3u;
         float len2 = dot(n, n);
         if (len2 > 0.0 && !isinf(len2)) {
             n = n / sqrt(len2);
@@ -112,8 +115,8 @@ SurfaceFrame surface(uint tri, float u, float v) {
             sf.ns = dot(n, sf.ng) < 0.0 ? -n : n;
         }
     }
-    if (sh.t[0].w == 1.0) {
-        sf.frame = frame_from_normal_tangent(sf.ns, w * sh.t[0].xyz + u * sh.t[1].xyz + v * sh.t[2].xyz);
+    if ((flags & TRI_TANGENTS) != 0u) {
+        sf.frame = frame_from_normal_tangent(sf.ns, w * shading[off].xyz + u * shading[off + 1u].xyz + v * shading[off + 2u].xyz);
     } else {
         sf.frame = frame_from_normal(sf.ns);
     }
@@ -285,8 +288,11 @@ void main() {
     // sum: the additions then happen in sample order whatever the batch
     // sizes (which the host picks from timings), so an image does not
     // depend on them, and matches the CPU's sample-order sums.
-    vec3 sum = accum[2u * pixel].xyz;
-    vec3 sum_sq = accum[2u * pixel + 1u].xyz;
+    vec3 sum = accum[4u * pixel].xyz;
+    vec3 sum_sq = accum[4u * pixel + 1u].xyz;
+    vec3 run = accum[4u * pixel + 2u].xyz;
+    vec3 sq = accum[4u * pixel + 3u].xyz;
+    uint batch = max(params.variance_batch, 1u);
     for (uint s = push.sample_start; s < push.sample_start + push.sample_count; s++) {
         vec3 l = path_sample(px.x, px.y, s, rays);
         // A NaN or infinity would poison the pixel for good: drop it.
@@ -295,8 +301,15 @@ void main() {
         }
         sum += l;
         sum_sq += l * l;
+        run += l;
+        if ((s + 1u) % batch == 0u) {
+            sq += run * run;
+            run = vec3(0.0);
+        }
     }
-    accum[2u * pixel] = vec4(sum, 0.0);
-    accum[2u * pixel + 1u] = vec4(sum_sq, 0.0);
+    accum[4u * pixel] = vec4(sum, 0.0);
+    accum[4u * pixel + 1u] = vec4(sum_sq, 0.0);
+    accum[4u * pixel + 2u] = vec4(run, 0.0);
+    accum[4u * pixel + 3u] = vec4(sq, 0.0);
     ray_counts[pixel] += rays;
 }

@@ -597,6 +597,65 @@ fn info_describes_the_textured_asset() {
 }
 
 #[test]
+fn info_bytes_per_triangle_match_the_uploaded_buffers() {
+    // The per-triangle buffers the GPU path uploads (triangles, packed
+    // shading, triangle uvs: glint::gpu::render::SceneBytes) against what
+    // `glint info` reports: a mesh with normals alone (the bunny: no
+    // tangent record), meshes with normals and texture coordinates
+    // (Cornell), a textured scene.
+    for (name, expect) in [
+        ("bunny.glb", Some(96.0)),
+        ("cornell.gltf", None),
+        ("textured.gltf", None),
+    ] {
+        let asset = Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("assets")
+            .join(name);
+        let out = glint().arg("info").arg(&asset).output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        let line = text
+            .lines()
+            .find(|l| l.starts_with("bytes per triangle: "))
+            .unwrap_or_else(|| panic!("{name}: no bytes per triangle in\n{text}"));
+        let reported: f64 = line["bytes per triangle: ".len()..]
+            .split_whitespace()
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let scene = glint::cpu::loader::load(&asset).unwrap();
+        let opts = glint::cpu::RenderOptions::new(8, 8);
+        let data = glint::cpu::integrator::gpu_scene_data(&scene, &opts).unwrap();
+        let b = glint::gpu::render::SceneBytes::new(&scene, &data);
+        // An untextured scene's uv binding holds one dummy element (a
+        // Vulkan buffer cannot be empty): not scene data, not counted.
+        let uvs = if scene.textures.uvs.is_empty() {
+            0
+        } else {
+            b.uvs.len()
+        };
+        let uploaded =
+            (b.triangles.len() + b.shading.len() + uvs) as f64 / scene.triangles.len() as f64;
+        assert!(
+            (reported - uploaded).abs() < 0.05,
+            "{name}: {line} vs {uploaded}"
+        );
+        if let Some(e) = expect {
+            assert_eq!(uploaded, e, "{name}");
+        }
+        assert!(
+            line.contains("with a shading record on every triangle"),
+            "{line}"
+        );
+    }
+}
+
+#[test]
 fn envmap_file_renders_like_the_same_constant_background() {
     let dir = scratch("envmap");
     let scene = write_unlit_scene(&dir);

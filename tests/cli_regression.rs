@@ -312,17 +312,18 @@ fn render_exr(
         version: env!("CARGO_PKG_VERSION").into(),
         samples: vec![(0, spp)],
         scene: None,
+        variance_batch: 1,
     };
     RadianceImage::from_film(&film, true, Some(meta))
         .write_file(path)
         .unwrap();
 }
 
-/// The samplers glint has: the calibration must hold for each (QMC samples
-/// are not independent; the variance estimate treats them as if they were,
-/// which overestimates the variance of a scrambled-Sobol pixel mean, 4-6x
-/// in cpu/tests/render_stats.rs, and keeps the test conservative).
-const SAMPLERS: &[SamplerKind] = &[SamplerKind::Independent, SamplerKind::Sobol];
+/// The samplers glint has, each at a sample count: the calibration must
+/// hold for each. QMC samples are not independent: at 64 spp a Sobol film
+/// estimates its variance from 16 batch means of 4 samples
+/// (`Film::variance_of_mean`), the estimate this checks.
+const SAMPLERS: &[(SamplerKind, u32)] = &[(SamplerKind::Independent, 16), (SamplerKind::Sobol, 64)];
 
 #[test]
 fn diff_false_positive_rate_is_calibrated() {
@@ -333,13 +334,13 @@ fn diff_false_positive_rate_is_calibrated() {
     let dir = scratch("calib");
     let scene = glint::cpu::loader::load(&cornell()).unwrap();
     const PAIRS: u64 = 200;
-    for &sampler in SAMPLERS {
+    for &(sampler, spp) in SAMPLERS {
         let mut fails = [0usize; 2];
         let alphas = [1e-3, 0.05];
         for pair in 0..PAIRS {
             let (a, b) = (dir.join("a.exr"), dir.join("b.exr"));
-            render_exr(&scene, &a, 24, 16, 2 * pair, sampler);
-            render_exr(&scene, &b, 24, 16, 2 * pair + 1, sampler);
+            render_exr(&scene, &a, 24, spp, 2 * pair, sampler);
+            render_exr(&scene, &b, 24, spp, 2 * pair + 1, sampler);
             for (k, alpha) in alphas.iter().enumerate() {
                 let out = diff(&a, &b, &["--alpha", &alpha.to_string()]);
                 match out.status.code() {
@@ -368,12 +369,14 @@ fn diff_false_positive_rate_is_calibrated() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// A change of one material on one object is caught at 256 spp. The issue
-/// asks for 2%: on the bundled scenes that is beyond the block test at 256
-/// spp (measured: 2% on the diffuse sphere at 64 and 128 pixels wide gives
-/// max |z| 3.0 and 4.0 against thresholds 4.6 and 4.9; 5% gives 5.7,
-/// too near the threshold for a test that must not flake), so this pins
-/// 10% (max |z| about 10) and the README states the measured power.
+/// A 2% change of one material on one object is caught at 256 spp (the
+/// default Sobol sampler). The sphere is about 35 pixels across at 96
+/// wide, some 15 of the 8x8 blocks. Two things made this reachable
+/// (before: max |z| 3-4 against a threshold of 4.6 at 64 wide): Sobol
+/// films estimate their variance from batch means (the independent
+/// formula overestimated it 10-15x at 256 spp), and the block test also
+/// tests coarser blocks, where a change spread over several 8x8 blocks
+/// adds up. Measured at seeds 1, 5, 7, 11: max |z| 10.1-11.7 against 4.9.
 #[test]
 fn diff_catches_a_material_change() {
     let dir = scratch("power");
@@ -384,7 +387,7 @@ fn diff_catches_a_material_change() {
     assert_eq!(m["name"], "diffuse");
     for c in 0..3 {
         let v = m["extras"]["bsdf"]["reflectance"][c].as_f64().unwrap();
-        m["extras"]["bsdf"]["reflectance"][c] = (v * 1.10).into();
+        m["extras"]["bsdf"]["reflectance"][c] = (v * 1.02).into();
     }
     let changed = dir.join("changed.gltf");
     std::fs::write(&changed, serde_json::to_vec(&g).unwrap()).unwrap();
@@ -399,7 +402,7 @@ fn diff_catches_a_material_change() {
                 "--backend",
                 "cpu",
                 "--width",
-                "64",
+                "96",
                 "--spp",
                 "256",
                 "--variance",
@@ -427,7 +430,7 @@ fn diff_catches_a_material_change() {
     let j: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
     assert_eq!(j["verdict"], "differ");
     let d = image::open(&png).unwrap();
-    assert!(d.width() > 64 && d.height() >= 48);
+    assert!(d.width() > 96 && d.height() >= 72);
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -482,6 +485,7 @@ fn diff_exit_status_and_guards() {
                 version: "0".into(),
                 samples: vec![(0, spp)],
                 scene: None,
+                variance_batch: 1,
             }),
         }
         .write_file(p)

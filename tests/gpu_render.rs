@@ -66,16 +66,33 @@ fn plumbing(ctx: common::ValidatedContext) {
             let base = [x as f64 + 0.75, y as f64 + 1.125, 5.0];
             let mut sum = [0.0f64; 3];
             let mut sq = [0.0f64; 3];
+            // The stand-in's variance batches of 4: 9 whole, 1 sample left.
+            let mut run = [0.0f64; 3];
+            let mut bsq = [0.0f64; 3];
             for s in 0..spp {
                 for c in 0..3 {
                     let v = base[c] + if c == 2 { s as f64 } else { 0.0 };
                     sum[c] += v;
                     sq[c] += v * v;
+                    run[c] += v;
+                    if (s + 1) % 4 == 0 {
+                        bsq[c] += run[c] * run[c];
+                        run[c] = 0.0;
+                    }
                 }
             }
             let got = r.film.sum[i].to_array();
             let got_sq = r.film.sum_sq[i].to_array();
+            let (got_run, got_bsq) = (
+                r.film.batch_run[i].to_array(),
+                r.film.batch_sq[i].to_array(),
+            );
             for c in 0..3 {
+                assert!(
+                    (got_run[c] as f64 - run[c]).abs() <= 1e-5 * run[c].abs().max(1.0)
+                        && (got_bsq[c] as f64 - bsq[c]).abs() <= 1e-5 * bsq[c].abs().max(1.0),
+                    "pixel {x},{y} batch sums {got_run:?} {got_bsq:?} vs {run:?} {bsq:?}"
+                );
                 assert!(
                     (got[c] as f64 - sum[c]).abs() <= 1e-5 * sum[c].abs().max(1.0),
                     "pixel {x},{y} sum {got:?} vs {sum:?}"

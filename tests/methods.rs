@@ -37,9 +37,23 @@ fn asset(name: &str) -> PathBuf {
         .join(name)
 }
 
+/// `--mis none` renders at 16x the samples, against a reference of as
+/// many. Light sampling alone for the background on a glossy surface at
+/// grazing angles (roughconductor's sphere rim) finds the lobe only with
+/// rare, large samples: measured at a rim pixel, 32x32 at 256 spp, one
+/// seed gave 0.110 +- 0.004 where the mean is 0.181 (no rare sample
+/// drawn, so the variance estimate misses them too), another 0.169 +-
+/// 0.050. The block test assumes near-normal block means, which such a
+/// pixel reaches only with many more samples (4 of 5 seed pairs failed at
+/// 256 spp, none of them at 1024 or 4096 non-square). An unbiased but
+/// heavy-tailed method, not a bias: the power heuristic has no such tail.
+fn spp_for(mis: Mis) -> u32 {
+    if mis == Mis::None { 16 * SPP } else { SPP }
+}
+
 fn opts(seed: u64, nee: bool, mis: Mis) -> RenderOptions {
     RenderOptions {
-        spp: SPP,
+        spp: spp_for(mis),
         seed,
         nee,
         mis,
@@ -67,6 +81,13 @@ fn check(file: &str) {
     let ctx = common::context();
     let scene = load(file);
     let reference = cpu(&scene, &opts(1, true, Mis::Power));
+    let reference_none = cpu(
+        &scene,
+        &RenderOptions {
+            spp: spp_for(Mis::None),
+            ..opts(3, true, Mis::Power)
+        },
+    );
     let mut variants = vec![
         ("mis balance", true, Mis::Balance),
         ("mis none", true, Mis::None),
@@ -80,7 +101,14 @@ fn check(file: &str) {
             ("cpu", cpu(&scene, &opts(seed, nee, mis))),
             ("gpu", gpu(&ctx, &scene, &opts(seed + 1, nee, mis))),
         ] {
-            let r = compare_films(&film, &reference);
+            let r = compare_films(
+                &film,
+                if mis == Mis::None {
+                    &reference_none
+                } else {
+                    &reference
+                },
+            );
             assert!(r.pass, "{file} {name} ({backend}) vs default: {r}");
         }
     }

@@ -56,6 +56,8 @@ fn gpu_kernel_traces_the_cpu_paths() {
             max_depth,
             seed: 7,
             sampler,
+            // Sobol films in variance batches of 4 (independent: 1).
+            variance_batch: 4,
             ..RenderOptions::new(40, 32)
         };
         let (gpu, gpu_rays) = gpu_render(&ctx, &scene, &opts);
@@ -64,11 +66,17 @@ fn gpu_kernel_traces_the_cpu_paths() {
 
         let r = compare_films(&gpu, &cpu).unwrap();
         assert!(r.pass, "{what}: {r}");
+        assert_eq!(
+            (gpu.batch, cpu.batch),
+            (opts.batch(), opts.batch()),
+            "{what}"
+        );
+        let near = |a: glam::Vec3, b: glam::Vec3| {
+            (a - b).abs().max_element() <= 1e-3 * a.abs().max(b.abs()).max_element().max(1e-3)
+        };
+        // The same paths give the same sums and the same batch sums.
         let close = (0..cpu.sum.len())
-            .filter(|&i| {
-                let (a, b) = (gpu.sum[i], cpu.sum[i]);
-                (a - b).abs().max_element() <= 1e-3 * a.abs().max(b.abs()).max_element().max(1e-3)
-            })
+            .filter(|&i| near(gpu.sum[i], cpu.sum[i]) && near(gpu.batch_sq[i], cpu.batch_sq[i]))
             .count();
         assert!(
             close as f64 >= 0.99 * cpu.sum.len() as f64,

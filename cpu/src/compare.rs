@@ -19,7 +19,14 @@
 //! 3. Two one-sided tests share the overall significance `alpha` (default
 //!    1e-3) equally:
 //!    - local: any |z| above the Sidak-corrected two-sided threshold for N
-//!      tests at alpha/2 fails (a strongly wrong region);
+//!      tests at alpha/2 fails (a strongly wrong region). The z's are those
+//!      of the 8x8 blocks and of coarser blocks, 16x16, 32x32, ... up to
+//!      the whole image (each from the pixels it covers, the same way): a
+//!      change spread over k blocks has sqrt(k) times the z in the block
+//!      that covers them, while the extra tests cost little (N grows by a
+//!      third, the threshold by ~0.1). Sidak's inequality holds for
+//!      two-sided tests of jointly normal z's whatever their correlation
+//!      (Sidak 1967), so the nested blocks keep the level;
 //!    - global: the count of blocks with some channel's |z| above the
 //!      two-sided 1% threshold must be consistent with Binomial(blocks,
 //!      1 - 0.99^3) at alpha/2 (a mild bias spread over the image, which
@@ -32,20 +39,22 @@
 //! 1 - alpha (the z's are only approximately normal at low spp).
 //!
 //! Quasi-Monte Carlo films (`--sampler sobol`): a pixel's samples are then
-//! a scrambled net, not independent, so the film's sample variance over n
-//! is not the variance V of the pixel mean. Each sample is still uniformly
-//! distributed (Owen scrambling), with per-sample variance s^2, so the
-//! expected sample variance is (n s^2 - n V) / (n - 1) and the estimate
-//! averages (s^2 - V) / (n - 1): at least V exactly when V <= s^2 / n, i.e.
-//! when the scrambled points do no worse than independent ones. Pixels
-//! stay independent of each other (each has its own scrambles and index
-//! shuffles, `sobol`), so block variances still add, and a block's z is
-//! then smaller than its true standardised difference: the tests stay
-//! valid and conservative (less power only where QMC actually removed
-//! noise). Measured rather than assumed: `cpu/tests/render_stats.rs`
-//! (`the_film_variance_overestimates_a_sobol_mean`) renders scenes under
-//! 40 seeds and finds the film's estimate 4-6x the seed-to-seed variance
-//! of the pixel means (and 1.03-1.11x for independent samples).
+//! a scrambled net, not independent, and the sample variance over n
+//! overestimates the variance V of the pixel mean (measured 4-15x, growing
+//! with n, since QMC converges faster than 1/n). From 32 spp a Sobol film
+//! estimates V from batch means instead (`Film::variance_of_mean`: 16 or
+//! more batches of L consecutive sample indices, each a scrambled net), an
+//! estimate that is conservative as long as the batches are not positively
+//! correlated and measured 2-4x V; below 32 spp (too few batches) it falls
+//! back to the independent formula, conservative as long as the scrambled
+//! points do no worse than independent ones. Pixels stay independent of
+//! each other (each has its own scrambles and index shuffles, `sobol`), so
+//! block variances still add. Both are measured rather than assumed:
+//! `cpu/tests/render_stats.rs`
+//! (`the_film_variance_is_calibrated_for_both_samplers`) renders scenes
+//! under 40 seeds and compares the estimates with the seed-to-seed
+//! variance of the pixel means; `tests/cli_regression.rs` checks the
+//! false-positive rate of `glint diff` over 200 pairs for both samplers.
 
 // `!(a <= b)` on floats is meant: it is true for NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -83,9 +92,11 @@ pub enum CompareError {
 pub struct CompareReport {
     /// Block-channel tests performed.
     pub tests: usize,
-    /// Largest |z| and where: block (x, y) in block units, channel.
+    /// Largest |z| and where: block (x, y) in units of its edge, channel.
     pub z_max: f64,
     pub worst: (u32, u32, usize),
+    /// Edge in pixels of the block where |z| is largest.
+    pub worst_edge: u32,
     /// Sidak threshold of the local test.
     pub z_local: f64,
     /// Blocks with a channel above the 1% threshold, and how many chance allows.
@@ -103,7 +114,7 @@ impl std::fmt::Display for CompareReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{}: {} block tests, max |z| {:.2} at block {:?} (local threshold {:.2}), \
+            "{}: {} block tests, max |z| {:.2} at {e}x{e} block {:?} (local threshold {:.2}), \
              {} blocks above the 1% level (chance allows {}), means {:?} vs {:?}",
             if self.pass { "pass" } else { "FAIL" },
             self.tests,
@@ -114,6 +125,7 @@ impl std::fmt::Display for CompareReport {
             self.allowed_global,
             self.mean_a.to_array(),
             self.mean_b.to_array(),
+            e = self.worst_edge,
         )?;
         if self.skipped > 0 {
             write!(
@@ -127,15 +139,17 @@ impl std::fmt::Display for CompareReport {
 }
 
 /// A noisy image as the test sees it: per-pixel means and variances of
-/// the mean (a film's, or an EXR's `variance.*` channels), and the samples
-/// per pixel behind them when known.
+/// the mean (a film's, or an EXR's `variance.*` channels), and how many
+/// independent values per pixel each variance was estimated from, when
+/// known: the samples per pixel, or the variance batches of a Sobol film
+/// (`Film::variance_batch`).
 #[derive(Clone, Copy, Debug)]
 pub struct Estimate<'a> {
     pub width: u32,
     pub height: u32,
     pub mean: &'a [Vec3],
     pub variance: &'a [Vec3],
-    pub spp: Option<u32>,
+    pub samples: Option<u32>,
 }
 
 /// Fewest samples (pixels x spp) a block needs to be tested: below it the
@@ -152,9 +166,9 @@ struct Blocks {
     data: Vec<(glam::DVec3, glam::DVec3, u32)>,
 }
 
-fn blocks(img: &Estimate, mask: &dyn Fn(u32, u32) -> bool) -> Blocks {
-    let bx = img.width.div_ceil(BLOCK);
-    let by = img.height.div_ceil(BLOCK);
+fn blocks(img: &Estimate, mask: &dyn Fn(u32, u32) -> bool, edge: u32) -> Blocks {
+    let bx = img.width.div_ceil(edge);
+    let by = img.height.div_ceil(edge);
     let mut acc = vec![(glam::DVec3::ZERO, glam::DVec3::ZERO, 0u32); (bx * by) as usize];
     for y in 0..img.height {
         for x in 0..img.width {
@@ -162,7 +176,7 @@ fn blocks(img: &Estimate, mask: &dyn Fn(u32, u32) -> bool) -> Blocks {
                 continue;
             }
             let i = y as usize * img.width as usize + x as usize;
-            let b = &mut acc[((y / BLOCK) * bx + x / BLOCK) as usize];
+            let b = &mut acc[((y / edge) * bx + x / edge) as usize];
             b.0 += img.mean[i].as_dvec3();
             b.1 += img.variance[i].as_dvec3();
             b.2 += 1;
@@ -296,28 +310,39 @@ pub fn binomial_upper_quantile(n: usize, p: f64, alpha: f64) -> usize {
     n
 }
 
-fn decide(
-    zs: &[(f64, (u32, u32, usize))],
-    alpha: f64,
-    mean_a: Vec3,
-    mean_b: Vec3,
-) -> CompareReport {
+/// One block-channel test: its z, where (block x, y in units of `edge`,
+/// channel) and the block edge in pixels.
+#[derive(Clone, Copy, Debug)]
+struct BlockZ {
+    z: f64,
+    at: (u32, u32, usize),
+    edge: u32,
+}
+
+/// The verdict over every block test; the first `fine` are the 8x8 blocks'
+/// (the global test counts those alone).
+fn decide(zs: &[BlockZ], fine: usize, alpha: f64, mean_a: Vec3, mean_b: Vec3) -> CompareReport {
     let n = zs.len().max(1);
     let a_local = 1.0 - (1.0 - alpha / 2.0).powf(1.0 / n as f64);
     let z_local = normal_quantile(1.0 - a_local / 2.0);
     let z_global = normal_quantile(1.0 - P_GLOBAL / 2.0);
     let mut z_max = 0.0f64;
     let mut worst = (0, 0, 0);
+    let mut worst_edge = BLOCK;
     // Blocks (not block-channels) with some channel above the 1% level:
     // the channels of one block share their paths and are far from
     // independent, so they count once.
     let mut exceeding_blocks = std::collections::BTreeSet::new();
     let mut blocks = std::collections::BTreeSet::new();
-    for &(z, at) in zs {
-        let z = z.abs();
+    for (k, t) in zs.iter().enumerate() {
+        let (z, at) = (t.z.abs(), t.at);
         if z.is_nan() || z > z_max {
             z_max = if z.is_nan() { f64::INFINITY } else { z };
             worst = at;
+            worst_edge = t.edge;
+        }
+        if k >= fine {
+            continue;
         }
         blocks.insert((at.0, at.1));
         if !(z <= z_global) {
@@ -327,7 +352,7 @@ fn decide(
     // Under the null hypothesis a block exceeds with probability between
     // P_GLOBAL (channels identical) and 1 - (1 - P_GLOBAL)^3 (independent
     // channels); the latter bound keeps the test valid either way.
-    let channels = (zs.len() / blocks.len().max(1)).max(1) as i32;
+    let channels = (fine / blocks.len().max(1)).max(1) as i32;
     let p_block = 1.0 - (1.0 - P_GLOBAL).powi(channels);
     let allowed_global = binomial_upper_quantile(blocks.len(), p_block, alpha / 2.0);
     let exceed_global = exceeding_blocks.len();
@@ -335,6 +360,7 @@ fn decide(
         tests: zs.len(),
         z_max,
         worst,
+        worst_edge,
         z_local,
         exceed_global,
         allowed_global,
@@ -391,14 +417,14 @@ pub fn compare_films_masked(
         height: a.height,
         mean: &pa.0,
         variance: &pa.1,
-        spp: Some(a.spp),
+        samples: Some(a.spp / a.variance_batch()),
     };
     let eb = Estimate {
         width: b.width,
         height: b.height,
         mean: &pb.0,
         variance: &pb.1,
-        spp: Some(b.spp),
+        samples: Some(b.spp / b.variance_batch()),
     };
     compare_core(&ea, &eb, false, mask, alpha)
 }
@@ -446,7 +472,7 @@ fn compare_core(
             ));
         }
     }
-    if a.spp == Some(0) || b.spp == Some(0) {
+    if a.samples == Some(0) || b.samples == Some(0) {
         return Err(CompareError::Empty);
     }
     // An overflowed sum or sum of squares (radiance near f32's limit) is
@@ -455,42 +481,68 @@ fn compare_core(
     if bad > 0 {
         return Err(CompareError::NonFinite(bad));
     }
-    let ba = blocks(a, mask);
-    let bb = blocks(b, mask);
     // Samples behind a block, the smaller side's (exact side: unlimited).
     let samples =
         |pixels: u32, spp: Option<u32>| spp.map_or(u64::MAX, |s| pixels as u64 * s as u64);
-    let mut zs = Vec::new();
+    // The 8x8 blocks first (the global test counts those), then each
+    // coarser level up to the one that holds the whole image.
+    let mut zs: Vec<BlockZ> = Vec::new();
+    let mut fine_tests = 0;
     let mut skipped = 0;
     let mut most = 0u64;
-    for by in 0..ba.by {
-        for bx in 0..ba.bx {
-            let i = (by * ba.bx + bx) as usize;
-            let (ma, va, n) = ba.data[i];
-            let (mb, vb, _) = bb.data[i];
-            if n == 0 {
-                continue;
-            }
-            let s = samples(n, a.spp).min(if b_exact { u64::MAX } else { samples(n, b.spp) });
-            most = most.max(s);
-            if s < MIN_BLOCK_SAMPLES {
-                skipped += 1;
-                continue;
-            }
-            for c in 0..3 {
-                let z = welch_z(ma[c], va[c], mb[c], vb[c], b_exact);
-                zs.push((z, (bx, by, c)));
+    let mut means = None;
+    let mut edge = BLOCK;
+    loop {
+        let ba = blocks(a, mask, edge);
+        let bb = blocks(b, mask, edge);
+        for by in 0..ba.by {
+            for bx in 0..ba.bx {
+                let i = (by * ba.bx + bx) as usize;
+                let (ma, va, n) = ba.data[i];
+                let (mb, vb, _) = bb.data[i];
+                if n == 0 {
+                    continue;
+                }
+                let s = samples(n, a.samples).min(if b_exact {
+                    u64::MAX
+                } else {
+                    samples(n, b.samples)
+                });
+                if s < MIN_BLOCK_SAMPLES {
+                    if edge == BLOCK {
+                        most = most.max(s);
+                        skipped += 1;
+                    }
+                    continue;
+                }
+                for c in 0..3 {
+                    let z = welch_z(ma[c], va[c], mb[c], vb[c], b_exact);
+                    zs.push(BlockZ {
+                        z,
+                        at: (bx, by, c),
+                        edge,
+                    });
+                }
             }
         }
+        if edge == BLOCK {
+            if zs.is_empty() {
+                return Err(if skipped > 0 {
+                    CompareError::NoPower(most)
+                } else {
+                    CompareError::Empty
+                });
+            }
+            fine_tests = zs.len();
+            means = Some((overall_mean(&ba), overall_mean(&bb)));
+        }
+        if ba.bx * ba.by <= 1 {
+            break;
+        }
+        edge *= 2;
     }
-    if zs.is_empty() {
-        return Err(if skipped > 0 {
-            CompareError::NoPower(most)
-        } else {
-            CompareError::Empty
-        });
-    }
-    let mut r = decide(&zs, alpha, overall_mean(&ba), overall_mean(&bb));
+    let (mean_a, mean_b) = means.expect("the 8x8 level ran");
+    let mut r = decide(&zs, fine_tests, alpha, mean_a, mean_b);
     r.skipped = skipped;
     Ok(r)
 }
@@ -532,14 +584,14 @@ pub fn compare_to_reference(
         height: film.height,
         mean: &pa.0,
         variance: &pa.1,
-        spp: Some(film.spp),
+        samples: Some(film.spp / film.variance_batch()),
     };
     let eb = Estimate {
         width: film.width,
         height: film.height,
         mean: reference,
         variance: &zero,
-        spp: None,
+        samples: None,
     };
     compare_core(&ea, &eb, true, mask, ALPHA)
 }
@@ -653,6 +705,32 @@ mod tests {
         // Edge blocks too small are skipped, the rest tested.
         let a = film_from(|_, _, s| Vec3::splat(s as f32), 9, 7, 4);
         let r = compare_films(&a, &a).unwrap();
-        assert_eq!((r.skipped, r.tests, r.pass), (1, 3, true));
+        // One 8x8 level block (3 channels) and the 16x16 one over all.
+        assert_eq!((r.skipped, r.tests, r.pass), (1, 6, true));
+    }
+
+    #[test]
+    fn a_change_spread_over_blocks_is_caught_by_the_coarser_ones() {
+        // +0.03 over a 32x32 quarter of a 64x64 image: z about 1.7 in each
+        // of its sixteen 8x8 blocks (per-block sd of the difference 0.018),
+        // below any single-block threshold and within what chance allows
+        // the global count; the 32x32 block over it sees z about 6.6.
+        let noise = |seed: u32, bias: f32| {
+            move |x: u32, y: u32, s: u32| {
+                let mut r = crate::sampling::Rng::new(seed, y * 64 + x, s);
+                let b = if x < 32 && y < 32 { bias } else { 0.0 };
+                Vec3::splat(0.5 + b + r.next_f32() - r.next_f32())
+            }
+        };
+        let mut caught = 0;
+        for pair in 0..5u32 {
+            let a = film_from(noise(2 * pair, 0.0), 64, 64, 16);
+            let b = film_from(noise(2 * pair + 1, 0.03), 64, 64, 16);
+            let r = compare_films(&a, &b).unwrap();
+            let fine_max = r.z_max >= r.z_local && r.worst_edge == BLOCK;
+            assert!(!fine_max, "an 8x8 block alone should not see it: {r}");
+            caught += (!r.pass && r.worst_edge >= 32) as u32;
+        }
+        assert_eq!(caught, 5);
     }
 }

@@ -12,6 +12,7 @@
 //! | `glint.version` | string | the glint version that wrote the file |
 //! | `glint.samples` | string | the sample indices held, half-open ranges `a-b,c-d` (merge's overlap check) |
 //! | `glint.scene` | string | a content key of the scene and the image-defining options (merge's same-scene check) |
+//! | `glint.variance_batch` | int | samples per batch of the variance estimate (`Film::variance_of_mean`; 1: samples treated as independent); 1 when absent |
 //!
 //! The attributes come from [`RenderMeta`], which the caller builds from
 //! the render options (the film holds sums, not how they were taken).
@@ -44,6 +45,8 @@ pub struct RenderMeta {
     /// Content key of the scene and the options that define the image
     /// (size, camera, depth, methods); absent in files from elsewhere.
     pub scene: Option<String>,
+    /// Samples per batch of the variance estimate ([`Film::variance_batch`]).
+    pub variance_batch: u32,
 }
 
 /// A radiance image read back or about to be written: the film-like view
@@ -81,6 +84,7 @@ pub mod attr {
     pub const VERSION: &str = "glint.version";
     pub const SAMPLES: &str = "glint.samples";
     pub const SCENE: &str = "glint.scene";
+    pub const VARIANCE_BATCH: &str = "glint.variance_batch";
 }
 
 /// `a-b,c-d` for half-open ranges.
@@ -103,8 +107,13 @@ pub fn parse_ranges(s: &str) -> Option<Vec<(u32, u32)>> {
 }
 
 impl RadianceImage {
-    /// The film's means, and its variances of the mean when `variance`.
+    /// The film's means, and its variances of the mean when `variance`;
+    /// `meta`'s batch is set to the one the film's estimate used.
     pub fn from_film(film: &Film, variance: bool, meta: Option<RenderMeta>) -> Self {
+        let meta = meta.map(|m| RenderMeta {
+            variance_batch: film.variance_batch(),
+            ..m
+        });
         Self {
             width: film.width,
             height: film.height,
@@ -121,6 +130,12 @@ impl RadianceImage {
     /// Samples per pixel, when recorded.
     pub fn spp(&self) -> Option<u32> {
         self.meta.as_ref().map(|m| m.spp)
+    }
+
+    /// How many independent values per pixel the variance was estimated
+    /// from (samples, or variance batches), when recorded.
+    pub fn variance_samples(&self) -> Option<u32> {
+        self.meta.as_ref().map(|m| m.spp / m.variance_batch.max(1))
     }
 
     /// Encode as EXR (32-bit float, ZIP-compressed, lossless).
@@ -160,6 +175,10 @@ impl RadianceImage {
             if let Some(k) = &m.scene {
                 put(attr::SCENE, text(k));
             }
+            put(
+                attr::VARIANCE_BATCH,
+                AttributeValue::I32(m.variance_batch.min(i32::MAX as u32) as i32),
+            );
         }
         let layer = Layer::new(
             (self.width as usize, self.height as usize),
@@ -265,6 +284,16 @@ fn parse_meta(other: &HashMap<Text, AttributeValue>) -> Result<Option<RenderMeta
             })?
         }
     };
+    let variance_batch = match get(attr::VARIANCE_BATCH) {
+        None => 1,
+        Some(AttributeValue::I32(v)) if *v >= 1 && spp % *v as u32 == 0 => *v as u32,
+        _ => {
+            return Err(ExrError::Attribute(
+                attr::VARIANCE_BATCH,
+                format!("not a positive integer dividing glint.spp {spp}"),
+            ));
+        }
+    };
     let held: u64 = samples.iter().map(|(a, b)| (b - a) as u64).sum();
     if held != spp as u64 {
         return Err(ExrError::Attribute(
@@ -280,6 +309,7 @@ fn parse_meta(other: &HashMap<Text, AttributeValue>) -> Result<Option<RenderMeta
         version: text(attr::VERSION)?,
         samples,
         scene: get(attr::SCENE).map(|_| text(attr::SCENE)).transpose()?,
+        variance_batch,
     }))
 }
 
@@ -305,6 +335,7 @@ mod tests {
             version: "0.1.0".into(),
             samples: vec![(4, 8)],
             scene: Some("00ff".into()),
+            variance_batch: 1,
         };
         let img = RadianceImage::from_film(&f, true, Some(meta.clone()));
         let path = dir.join("a.exr");

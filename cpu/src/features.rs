@@ -254,7 +254,7 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::bsdf::ConductorParams;
-    use crate::scene::{Material, NO_LIGHT, Triangle, TriangleShading};
+    use crate::scene::{Material, NO_LIGHT, Triangle};
     use glam::Vec3;
 
     fn material(bsdf: Bsdf) -> Material {
@@ -296,10 +296,9 @@ mod tests {
                 flags: 0,
             })
             .collect::<Vec<_>>();
-        let n = triangles.len();
         let mut s = Scene {
             triangles,
-            shading: vec![TriangleShading::default(); n],
+            shading: Vec::new(),
             materials,
             lights,
             cameras: vec![],

@@ -34,6 +34,10 @@ pub struct RenderOptions {
     /// Stop at the last whole sample pass that fits this many seconds of
     /// sampling (`spp` is then the most samples taken).
     pub time_limit: Option<f64>,
+    /// Samples per batch of the variance estimate ([`Film::batch`]); 0:
+    /// chosen by [`RenderOptions::batch`]. Shards of one render must share
+    /// it, so `render --shard` sets it from the full sample count.
+    pub variance_batch: u32,
 }
 
 /// Multiple importance sampling between next-event estimation and BSDF
@@ -108,6 +112,13 @@ pub struct Film {
     pub sum: Vec<Vec3>,
     /// Sum of the squared radiance samples (per channel).
     pub sum_sq: Vec<Vec3>,
+    /// Samples per variance batch: consecutive sample indices
+    /// `[k L, (k + 1) L)` form batch k (see [`Film::variance_of_mean`]).
+    pub batch: u32,
+    /// Sum of the samples of the batch in progress (0 between batches).
+    pub batch_run: Vec<Vec3>,
+    /// Sum over the completed batches of (the batch's sum of samples)^2.
+    pub batch_sq: Vec<Vec3>,
 }
 
 /// Counts and timings a backend reports for `--stats`.
@@ -134,8 +145,41 @@ impl RenderOptions {
             sampler: SamplerKind::default(),
             sample_start: 0,
             time_limit: None,
+            variance_batch: 0,
         }
     }
+
+    /// Samples per batch of the variance estimate ([`Film::batch`]): 1
+    /// (every sample its own batch, the independent estimate) for the
+    /// independent sampler; for Sobol, `variance_batch` when set, else
+    /// [`variance_batch_for`] of the render's sample count. A batch that
+    /// does not divide `sample_start` falls back to 1 (batches must start
+    /// where the render starts).
+    pub fn batch(&self) -> u32 {
+        let l = match (self.sampler, self.variance_batch) {
+            (SamplerKind::Independent, _) => 1,
+            (SamplerKind::Sobol, 0) => variance_batch_for(self.spp, 1),
+            (SamplerKind::Sobol, l) => l,
+        };
+        if self.sample_start % l == 0 { l } else { 1 }
+    }
+}
+
+/// Fewest batches a batched variance estimate uses: 15 degrees of freedom
+/// per pixel, about a thousand per 8x8 block of `compare`.
+pub const MIN_VARIANCE_BATCHES: u32 = 16;
+
+/// The batch size for `spp` Sobol samples split into `shards`: the largest
+/// power of two L that divides `spp` and leaves at least
+/// max([`MIN_VARIANCE_BATCHES`], shards) batches (so every shard holds
+/// whole batches); 1 when none does.
+pub fn variance_batch_for(spp: u32, shards: u32) -> u32 {
+    let need = MIN_VARIANCE_BATCHES.max(shards);
+    let mut l = 1u32;
+    while l <= u32::MAX / 2 && spp % (2 * l) == 0 && spp / (2 * l) >= need {
+        l *= 2;
+    }
+    l
 }
 
 /// The image formats `glint render` writes, chosen by file extension.
@@ -167,6 +211,27 @@ pub enum ImageWriteError {
     Io { path: PathBuf, message: String },
 }
 
+/// One sample into a pixel's sums (both backends' order of operations:
+/// the GPU kernel does the same in `pathtrace.comp`).
+#[inline]
+pub fn add_sample(
+    batch: u32,
+    s: u32,
+    l: Vec3,
+    sum: &mut Vec3,
+    sum_sq: &mut Vec3,
+    run: &mut Vec3,
+    sq: &mut Vec3,
+) {
+    *sum += l;
+    *sum_sq += l * l;
+    *run += l;
+    if (s + 1) % batch.max(1) == 0 {
+        *sq += *run * *run;
+        *run = Vec3::ZERO;
+    }
+}
+
 /// The sRGB OETF (IEC 61966-2-1) of a linear value clamped to [0, 1],
 /// quantised to 8 bits with rounding.
 pub fn srgb_encode_u8(linear: f32) -> u8 {
@@ -193,6 +258,42 @@ impl Film {
             spp: 0,
             sum: vec![Vec3::ZERO; n],
             sum_sq: vec![Vec3::ZERO; n],
+            batch: 1,
+            batch_run: vec![Vec3::ZERO; n],
+            batch_sq: vec![Vec3::ZERO; n],
+        }
+    }
+
+    /// An empty film whose variance estimate uses batches of `batch` samples.
+    pub fn with_batch(width: u32, height: u32, batch: u32) -> Self {
+        Self {
+            batch: batch.max(1),
+            ..Self::new(width, height)
+        }
+    }
+
+    /// Add sample `s` (its global index) with radiance `l` to pixel `i`'s
+    /// sums. Samples must come in index order, the first at a multiple of
+    /// the batch size.
+    #[inline]
+    pub fn add_sample(&mut self, i: usize, s: u32, l: Vec3) {
+        let (sum, sum_sq, run, sq) = (
+            &mut self.sum[i],
+            &mut self.sum_sq[i],
+            &mut self.batch_run[i],
+            &mut self.batch_sq[i],
+        );
+        add_sample(self.batch, s, l, sum, sum_sq, run, sq);
+    }
+
+    /// The batch size the variance estimate uses: [`Film::batch`] when the
+    /// samples are whole batches (at least two), else 1.
+    pub fn variance_batch(&self) -> u32 {
+        let l = self.batch.max(1);
+        if l > 1 && self.spp % l == 0 && self.spp / l >= 2 {
+            l
+        } else {
+            1
         }
     }
 
@@ -209,10 +310,32 @@ impl Film {
         }
     }
 
-    /// Unbiased estimate of the variance of pixel i's mean:
-    /// (sum_sq - n mean^2) / (n (n - 1)), clamped at 0 against rounding.
-    /// Zero with fewer than two samples (unknown).
+    /// Estimate of the variance of pixel i's mean, clamped at 0 against
+    /// rounding; zero with fewer than two samples (unknown).
+    ///
+    /// Independent samples (batch 1): (sum_sq - n mean^2) / (n (n - 1)),
+    /// unbiased. Scrambled Sobol points are not independent (the sample
+    /// variance / n overestimates a pixel mean's variance 4-6x), so their
+    /// films use batch means: with C = n / L batches of L consecutive
+    /// sample indices, batch means y_k, the estimate is
+    /// sum (y_k - y)^2 / (C (C - 1)) (batch means, as in MCMC output
+    /// analysis; randomised QMC error estimates by Owen). Each aligned
+    /// batch of a scrambled net is itself a scrambled net; the estimate
+    /// is unbiased when batches are uncorrelated and conservative when
+    /// they are negatively correlated, as sub-nets of one net are (the
+    /// full net stratifies better than its parts). Measured, not assumed:
+    /// `cpu/tests/render_stats.rs`.
     pub fn variance_of_mean(&self, i: usize) -> Vec3 {
+        let l = self.variance_batch();
+        if l > 1 {
+            let c = (self.spp / l) as f64;
+            let lf = l as f64;
+            let s = self.sum[i].as_dvec3() / lf;
+            let s2 = self.batch_sq[i].as_dvec3() / (lf * lf);
+            return ((s2 - s * s / c) / (c * (c - 1.0)))
+                .max(glam::DVec3::ZERO)
+                .as_vec3();
+        }
         let n = self.spp as f64;
         if self.spp < 2 {
             return Vec3::ZERO;
@@ -226,18 +349,6 @@ impl Film {
     /// The image: per-pixel means, row-major, top row first.
     pub fn means(&self) -> Vec<Vec3> {
         (0..self.sum.len()).map(|i| self.mean(i)).collect()
-    }
-
-    /// Add another film's samples (same size) to this one.
-    pub fn accumulate(&mut self, other: &Film) {
-        assert_eq!((self.width, self.height), (other.width, other.height));
-        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
-            *a += *b;
-        }
-        for (a, b) in self.sum_sq.iter_mut().zip(&other.sum_sq) {
-            *a += *b;
-        }
-        self.spp += other.spp;
     }
 
     /// Encode the image in `format` into `w`.

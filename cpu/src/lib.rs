@@ -28,6 +28,6 @@ pub use film::{Film, Mis, OutputFormat, RenderOptions, RenderStats, SamplerKind}
 pub use frame::Frame;
 pub use integrator::{PathTracer, RenderError, render};
 pub use scene::{
-    Camera, GpuMaterial, Material, NO_LIGHT, PunctualLight, Scene, TRI_DOUBLE_SIDED, Triangle,
-    TriangleShading,
+    Camera, GpuMaterial, Material, NO_LIGHT, PunctualLight, Scene, TRI_DOUBLE_SIDED, TRI_NORMALS,
+    TRI_SHADING_SHIFT, TRI_TANGENTS, Triangle, TriangleShading,
 };

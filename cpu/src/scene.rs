@@ -17,6 +17,15 @@ use crate::bvh::Bvh4;
 pub const NO_LIGHT: u32 = u32::MAX;
 /// `Triangle::flags` bit: the material emits on both faces (glTF doubleSided).
 pub const TRI_DOUBLE_SIDED: u32 = 1;
+/// `Triangle::flags` bit: the triangle has shading normals, three `vec4`s
+/// at its shading offset in [`Scene::shading`].
+pub const TRI_NORMALS: u32 = 1 << 1;
+/// `Triangle::flags` bit: the triangle has tangents, three `vec4`s after
+/// its normals (or at its offset when it has none).
+pub const TRI_TANGENTS: u32 = 1 << 2;
+/// `Triangle::flags >> TRI_SHADING_SHIFT`: the triangle's shading offset,
+/// in `vec4`s, into [`Scene::shading`] (meaningful with either bit above).
+pub const TRI_SHADING_SHIFT: u32 = 3;
 
 /// A world-space triangle as traversal reads it: three `vec4`s in std430,
 /// the integers riding in `.w` (read with `floatBitsToUint` in GLSL).
@@ -30,7 +39,9 @@ pub struct Triangle {
     /// Index of this triangle in the emitter list, or [`NO_LIGHT`].
     pub light: u32,
     pub p2: [f32; 3],
-    /// Bit 0: the triangle's material emits on both sides.
+    /// Bit 0 ([`TRI_DOUBLE_SIDED`]): the triangle's material emits on
+    /// both sides; bits 1-2 ([`TRI_NORMALS`], [`TRI_TANGENTS`]): what
+    /// shading data it has; bits 3-31: where ([`TRI_SHADING_SHIFT`]).
     pub flags: u32,
 }
 const _: () = assert!(size_of::<Triangle>() == 48);
@@ -51,10 +62,12 @@ impl Triangle {
     }
 }
 
-/// Per-triangle shading data, in the same order as the triangles.
-/// `.w` of each normal is 1 when the mesh had NORMAL (0: use the geometric
-/// normal); `.w` of each tangent is 1 when a tangent is known (TANGENT, or
-/// dP/du from TEXCOORD_0), else 0 and the frame is built from the normal.
+/// One triangle's shading data as the loader makes it and
+/// [`Scene::shading_of`] gives it back. `.w` of each normal is 1 when the
+/// mesh had NORMAL (0: use the geometric normal); `.w` of each tangent is
+/// 1 when a tangent is known (TANGENT, or dP/du from TEXCOORD_0), else 0
+/// and the frame is built from the normal. The scene stores only what is
+/// known ([`Scene::set_shading`]).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
 pub struct TriangleShading {
@@ -206,7 +219,11 @@ pub struct Camera {
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     pub triangles: Vec<Triangle>,
-    pub shading: Vec<TriangleShading>,
+    /// Shading normals and tangents of the triangles that have them, packed
+    /// (`Triangle::flags` says which and where; [`Scene::set_shading`]):
+    /// a mesh without NORMAL, TANGENT or texture coordinates costs nothing
+    /// here. The GPU's binding 3 unchanged.
+    pub shading: Vec<[f32; 4]>,
     pub materials: Vec<Material>,
     pub lights: Vec<PunctualLight>,
     /// Cameras of the default scene, in depth-first node order.
@@ -231,14 +248,78 @@ impl Scene {
     /// GPU reads unchanged); then number the emitters in that final order.
     pub fn build_bvh(&mut self) {
         let (bvh, order) = Bvh4::build(&self.triangles);
+        let records: Vec<TriangleShading> =
+            order.iter().map(|&i| self.shading_of(i as usize)).collect();
         self.triangles = order.iter().map(|&i| self.triangles[i as usize]).collect();
-        self.shading = order.iter().map(|&i| self.shading[i as usize]).collect();
+        // Repacked in leaf order, so neighbouring leaves read neighbouring
+        // shading data.
+        self.set_shading(&records);
         if !self.textures.uvs.is_empty() {
             let uvs = &self.textures.uvs;
             self.textures.uvs = order.iter().map(|&i| uvs[i as usize]).collect();
         }
         self.bvh = bvh;
         self.assign_emitters();
+    }
+
+    /// Store per-triangle shading records (one per triangle, in triangle
+    /// order) packed: normals only where `n[0].w` is 1, tangents only where
+    /// `t[0].w` is 1 (the readers' tests), with each triangle's flags
+    /// saying which and where.
+    pub fn set_shading(&mut self, records: &[TriangleShading]) {
+        assert_eq!(records.len(), self.triangles.len());
+        let mut packed = Vec::new();
+        for (t, r) in self.triangles.iter_mut().zip(records) {
+            let offset = packed.len();
+            let mut bits = 0;
+            if r.n[0][3] == 1.0 {
+                packed.extend_from_slice(&r.n);
+                bits |= TRI_NORMALS;
+            }
+            if r.t[0][3] == 1.0 {
+                packed.extend_from_slice(&r.t);
+                bits |= TRI_TANGENTS;
+            }
+            // At most 6 vec4s for each of at most 2^24 triangles
+            // (loader::MAX_TRIANGLES): far inside the 29 bits.
+            assert!(
+                offset < (1 << (32 - TRI_SHADING_SHIFT)),
+                "shading offset overflow"
+            );
+            let offset = if bits == 0 { 0 } else { offset as u32 };
+            t.flags = (t.flags & TRI_DOUBLE_SIDED) | bits | (offset << TRI_SHADING_SHIFT);
+        }
+        self.shading = packed;
+    }
+
+    /// Triangle `tri`'s shading record: what [`Scene::set_shading`] stored,
+    /// the geometric normal (`.w` 0) where it stored no normals and zero
+    /// tangents where it stored none.
+    pub fn shading_of(&self, tri: usize) -> TriangleShading {
+        let t = &self.triangles[tri];
+        let mut off = (t.flags >> TRI_SHADING_SHIFT) as usize;
+        let mut r = TriangleShading::default();
+        if t.flags & TRI_NORMALS != 0 {
+            r.n.copy_from_slice(&self.shading[off..off + 3]);
+            off += 3;
+        } else {
+            let geo = t.geometric_normal().normalize_or_zero();
+            r.n = [geo.extend(0.0).to_array(); 3];
+        }
+        if t.flags & TRI_TANGENTS != 0 {
+            r.t.copy_from_slice(&self.shading[off..off + 3]);
+        }
+        r
+    }
+
+    /// Bytes per triangle of the GPU's per-triangle buffers (triangles,
+    /// shading, and texture coordinates when textured), as uploaded.
+    pub fn gpu_bytes_per_triangle(&self) -> f64 {
+        let n = self.triangles.len().max(1) as f64;
+        let bytes = self.triangles.len() * size_of::<Triangle>()
+            + self.shading.len() * 16
+            + self.textures.uvs.len() * size_of::<crate::texture::TriangleUv>();
+        bytes as f64 / n
     }
 
     /// Set `Triangle::light` to 0, 1, 2, ... for the emissive triangles of

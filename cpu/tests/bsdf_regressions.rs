@@ -441,6 +441,15 @@ fn constants_agree_with_the_glsl() {
     assert_eq!(define_u32(&mat, "SHADOWING_SEPARABLE"), 1);
     assert_eq!(define_u32(&lights, "NO_LIGHT"), NO_LIGHT);
     assert_eq!(define_u32(&lights, "TRI_DOUBLE_SIDED"), TRI_DOUBLE_SIDED);
+    assert_eq!(define_u32(&bindings, "TRI_NORMALS"), glint_cpu::TRI_NORMALS);
+    assert_eq!(
+        define_u32(&bindings, "TRI_TANGENTS"),
+        glint_cpu::TRI_TANGENTS
+    );
+    assert_eq!(
+        define_u32(&bindings, "TRI_SHADING_SHIFT"),
+        glint_cpu::TRI_SHADING_SHIFT
+    );
     for (name, m) in [
         ("MIS_POWER", glint_cpu::Mis::Power),
         ("MIS_BALANCE", glint_cpu::Mis::Balance),

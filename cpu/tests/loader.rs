@@ -61,7 +61,9 @@ fn indexed_and_non_indexed_primitives() {
             [v(5., 1., 0.), v(6., 0., 0.), v(5., 0., 0.)],
         ]
     );
-    assert_eq!(s.shading.len(), 4);
+    // No NORMAL, TANGENT or texture coordinates: no shading data at all.
+    assert!(s.shading.is_empty());
+    assert!(s.triangles.iter().all(|t| t.flags >> 1 == 0));
     assert!(s.bvh.nodes.is_empty(), "parse does not build the BVH");
 }
 
@@ -139,7 +141,7 @@ fn normals_use_the_inverse_transpose_and_mark_w() {
     d.node(json!({ "mesh": with, "scale": [2, 1, 1] }));
     d.node(json!({ "mesh": without, "scale": [2, 1, 1] }));
     let s = parse_doc(&d, "normals");
-    let sh = &s.shading[0];
+    let sh = &s.shading_of(0);
     // Non-uniform scale diag(2,1,1): normals go through diag(1/2, 1, 1).
     assert_close(
         Vec3::from_slice(&sh.n[0][..3]),
@@ -147,7 +149,7 @@ fn normals_use_the_inverse_transpose_and_mark_w() {
     );
     assert_close(Vec3::from_slice(&sh.n[2][..3]), Vec3::Z);
     assert!(sh.n.iter().all(|v| v[3] == 1.0));
-    let plain = &s.shading[1];
+    let plain = &s.shading_of(1);
     assert!(plain.n.iter().all(|v| v[3] == 0.0), "no NORMAL: w = 0");
     assert!(plain.t.iter().all(|v| v[3] == 0.0), "no tangent: w = 0");
 }
@@ -167,10 +169,10 @@ fn negative_determinant_keeps_the_outside() {
     let s = parse_doc(&d, "mirror");
     let gz = s.triangles[0].geometric_normal().normalize();
     assert_close(gz, -Vec3::Z);
-    assert_close(Vec3::from_slice(&s.shading[0].n[0][..3]), -Vec3::Z);
+    assert_close(Vec3::from_slice(&s.shading_of(0).n[0][..3]), -Vec3::Z);
     let gx = s.triangles[1].geometric_normal().normalize();
     assert_close(gx, Vec3::Z);
-    assert_close(Vec3::from_slice(&s.shading[1].n[1][..3]), Vec3::Z);
+    assert_close(Vec3::from_slice(&s.shading_of(1).n[1][..3]), Vec3::Z);
     // Swapped vertices carry their own normals and positions along.
     let v = s.triangles[1].vertices();
     assert_eq!(v[0], Vec3::ZERO);
@@ -190,7 +192,7 @@ fn tangent_attribute_is_transformed() {
     let q = Quat::from_rotation_z(FRAC_PI_2);
     d.node(json!({ "mesh": m, "rotation": q.to_array() }));
     let s = parse_doc(&d, "tangent");
-    let t = s.shading[0].t;
+    let t = s.shading_of(0).t;
     // TANGENT wins over TEXCOORD_0; x -> y under the rotation.
     assert_close(Vec3::from_slice(&t[0][..3]), Vec3::Y);
     assert_close(Vec3::from_slice(&t[2][..3]), Vec3::Y);
@@ -210,12 +212,12 @@ fn texcoords_give_dp_du_tangents() {
     ]);
     d.node(json!({ "mesh": m, "translation": [0, 0, 5] }));
     let s = parse_doc(&d, "dpdu");
-    for t in s.shading[0].t {
+    for t in s.shading_of(0).t {
         assert_close(Vec3::from_slice(&t[..3]), Vec3::Y);
         assert_eq!(t[3], 1.0);
     }
     assert!(
-        s.shading[1].t.iter().all(|t| t[3] == 0.0),
+        s.shading_of(1).t.iter().all(|t| t[3] == 0.0),
         "degenerate UVs give no tangent"
     );
 }
@@ -825,7 +827,7 @@ fn bundled_assets_load() {
         assert_eq!(s.cameras.len(), 1, "{name}");
         assert!(s.triangles.len() > 500, "{name}");
         assert!(
-            s.shading.iter().all(|sh| sh.n.iter().all(|n| n[3] == 1.0)),
+            (0..s.triangles.len()).all(|i| s.shading_of(i).n.iter().all(|n| n[3] == 1.0)),
             "{name}: NORMAL everywhere"
         );
         let has = |ty: fn(&Bsdf) -> bool| s.materials.iter().any(|m| ty(&m.bsdf));
@@ -895,7 +897,10 @@ fn bunny_parses() {
         s.triangles.len()
     );
     assert_eq!(s.triangles.len(), 69_451);
-    assert!(s.shading.iter().all(|sh| sh.n.iter().all(|n| n[3] == 1.0)));
+    assert!((0..s.triangles.len()).all(|i| s.shading_of(i).n.iter().all(|n| n[3] == 1.0)));
+    // Normals only (no TANGENT, no texture coordinates): three vec4s each.
+    assert_eq!(s.shading.len(), 3 * s.triangles.len());
+    assert_eq!(s.gpu_bytes_per_triangle(), 96.0);
     assert_eq!(s.materials.len(), 1);
     assert!(s.cameras.is_empty());
 }
@@ -912,7 +917,7 @@ fn load_builds_the_bvh_and_keeps_emitters() {
         );
         assert!(!s.bvh.nodes.is_empty());
         assert_eq!(s.triangles.len(), parsed.triangles.len());
-        assert_eq!(s.shading.len(), s.triangles.len());
+        assert_eq!(s.shading.len(), parsed.shading.len());
         // Reordered into leaf order, emitters renumbered 0.. in the new order.
         let emitters = s.emitter_triangles();
         assert_eq!(emitters.len(), parsed.emitter_triangles().len());
@@ -920,21 +925,14 @@ fn load_builds_the_bvh_and_keeps_emitters() {
             assert_eq!(s.triangles[t as usize].light, k as u32);
         }
         // The same multiset of triangles, each still with its own shading.
-        let key = |t: &glint_cpu::Triangle, sh: &glint_cpu::TriangleShading| {
-            format!("{:?}{:?}{}", t.vertices(), sh.n, t.material)
+        let key = |s: &Scene, i: usize| {
+            let (t, sh) = (&s.triangles[i], s.shading_of(i));
+            format!("{:?}{:?}{:?}{}", t.vertices(), sh.n, sh.t, t.material)
         };
-        let mut a: Vec<String> = parsed
-            .triangles
-            .iter()
-            .zip(&parsed.shading)
-            .map(|(t, sh)| key(t, sh))
+        let mut a: Vec<String> = (0..parsed.triangles.len())
+            .map(|i| key(&parsed, i))
             .collect();
-        let mut b: Vec<String> = s
-            .triangles
-            .iter()
-            .zip(&s.shading)
-            .map(|(t, sh)| key(t, sh))
-            .collect();
+        let mut b: Vec<String> = (0..s.triangles.len()).map(|i| key(&s, i)).collect();
         a.sort();
         b.sort();
         assert!(a == b, "{name}: load changed the triangle set");
@@ -1049,5 +1047,5 @@ fn quantized_accessors_are_read() {
             Vec3::new(0.0, 2.0, 0.0)
         ]
     );
-    assert_close(Vec3::from_slice(&s.shading[0].n[0][..3]), Vec3::Z);
+    assert_close(Vec3::from_slice(&s.shading_of(0).n[0][..3]), Vec3::Z);
 }

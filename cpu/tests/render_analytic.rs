@@ -124,7 +124,7 @@ fn glass_slab_under_white_sky_is_invisible() {
 fn smooth_sphere_under_sky(m: Material, n_phi: u32, n_theta: u32) -> Scene {
     let mut s = sphere_under_sky(m);
     s.triangles = uv_sphere(Vec3::ZERO, 1.0, n_phi, n_theta, 0);
-    s.shading = s
+    let records: Vec<TriangleShading> = s
         .triangles
         .iter()
         .map(|t| {
@@ -135,6 +135,7 @@ fn smooth_sphere_under_sky(m: Material, n_phi: u32, n_theta: u32) -> Scene {
             sh
         })
         .collect();
+    s.set_shading(&records);
     s.build_bvh();
     s
 }

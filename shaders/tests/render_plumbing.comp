@@ -38,12 +38,23 @@ void main() {
                      emitters[0].x + lights[0].y);
     vec3 sum = vec3(0.0);
     vec3 sum_sq = vec3(0.0);
+    // Variance batches of 4 samples, the running batch sum carried from
+    // dispatch to dispatch in accum like pathtrace.comp's.
+    vec3 run = accum[4 * pixel + 2].xyz;
+    vec3 sq = vec3(0.0);
     for (uint s = sample_start; s < sample_start + sample_count; s++) {
         vec3 v = base + vec3(0.0, 0.0, float(s));
         sum += v;
         sum_sq += v * v;
+        run += v;
+        if ((s + 1u) % 4u == 0u) {
+            sq += run * run;
+            run = vec3(0.0);
+        }
     }
-    accum[2 * pixel] += vec4(sum, 0.0);
-    accum[2 * pixel + 1] += vec4(sum_sq, 0.0);
+    accum[4 * pixel] += vec4(sum, 0.0);
+    accum[4 * pixel + 1] += vec4(sum_sq, 0.0);
+    accum[4 * pixel + 2] = vec4(run, 0.0);
+    accum[4 * pixel + 3] += vec4(sq, 0.0);
     ray_counts[pixel] += 3u * sample_count;
 }

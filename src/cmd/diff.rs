@@ -161,14 +161,14 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
                 height: a.height,
                 mean: &a.mean,
                 variance: va,
-                spp: a.spp(),
+                samples: a.variance_samples(),
             };
             let eb = Estimate {
                 width: b.width,
                 height: b.height,
                 mean: &b.mean,
                 variance: vb,
-                spp: b.spp(),
+                samples: b.variance_samples(),
             };
             Some(
                 compare::compare_estimates(&ea, &eb, args.alpha)

@@ -227,7 +227,7 @@ pub fn describe(path: &str, s: &Scene) -> String {
     let rows = [
         ("triangles", s.triangles.len() * size_of::<Triangle>()),
         ("bvh nodes", s.bvh.nodes.len() * size_of::<Bvh4Node>()),
-        ("shading", s.shading.len() * size_of::<TriangleShading>()),
+        ("shading", s.shading.len() * 16),
         ("materials", s.materials.len() * size_of::<GpuMaterial>()),
         ("emitters", emitters * size_of::<GpuEmitter>()),
         ("lights", s.lights.len() * size_of::<GpuLight>()),
@@ -247,6 +247,20 @@ pub fn describe(path: &str, s: &Scene) -> String {
             let _ = writeln!(o, "  {name}: {}", bytes(n));
         }
     }
+    // Per triangle: what the triangles, shading and uv buffers hold, and
+    // what one full shading record per triangle (the layout before
+    // Scene::set_shading packed them) would have made it.
+    let n_tris = s.triangles.len().max(1) as f64;
+    let uv_bytes = t.uvs.len() as f64 * 64.0 / n_tris;
+    let _ = writeln!(
+        o,
+        "bytes per triangle: {:.1} (triangle {}, shading {:.1}, uv {:.1}; {:.1} with a shading record on every triangle)",
+        s.gpu_bytes_per_triangle(),
+        size_of::<Triangle>(),
+        s.shading.len() as f64 * 16.0 / n_tris,
+        uv_bytes,
+        (size_of::<Triangle>() + size_of::<TriangleShading>()) as f64 + uv_bytes,
+    );
     let _ = writeln!(o, "warnings: {}", s.warnings.len());
     for w in &s.warnings {
         let _ = writeln!(o, "  {}", one_line(w));

@@ -10,6 +10,13 @@
 //! variance the pooled one: what one render of all the samples gives, up
 //! to the order of the floating-point additions. Nothing beyond what
 //! `--variance` writes is stored.
+//!
+//! Sobol renders estimate the variance from batch means
+//! (`glint.variance_batch` = L samples per batch, `Film::variance_of_mean`):
+//! the same pooling then runs over batches, n / L per shard, each a batch
+//! mean. Shards of one render share L and hold whole batches
+//! (`render --shard`), so the pooled estimate is again exactly the single
+//! render's; shards with different L are refused.
 
 use std::path::{Path, PathBuf};
 
@@ -89,6 +96,14 @@ fn check(shards: &[Shard]) -> Result<()> {
                 }
             );
         }
+        if s.img.variance.is_some() && a.variance_batch != b.variance_batch {
+            bail!(
+                "{p}: variance estimated in batches of {} samples but {f} in batches of {} \
+                 (render the shards with one --spp and shard count)",
+                b.variance_batch,
+                a.variance_batch
+            );
+        }
         if a.version != b.version {
             eprintln!(
                 "glint: warning: {p}: written by glint {} but {f} by glint {}",
@@ -128,7 +143,8 @@ fn check(shards: &[Shard]) -> Result<()> {
     Ok(())
 }
 
-/// Pool the shards (see the module notes), in f64.
+/// Pool the shards (see the module notes), in f64: each with its count of
+/// samples (or of variance batches).
 pub fn pool(images: &[(&RadianceImage, u32)]) -> RadianceImage {
     let (w, h) = (images[0].0.width, images[0].0.height);
     let n_px = images[0].0.mean.len();
@@ -200,7 +216,11 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         .map(|p| read(p))
         .collect::<Result<Vec<_>>>()?;
     check(&shards)?;
-    let images: Vec<(&RadianceImage, u32)> = shards.iter().map(|s| (&s.img, s.meta.spp)).collect();
+    // Pooled in units of variance batches (module notes).
+    let images: Vec<(&RadianceImage, u32)> = shards
+        .iter()
+        .map(|s| (&s.img, s.meta.spp / s.meta.variance_batch.max(1)))
+        .collect();
     let mut merged = pool(&images);
     let samples = coalesce(shards.iter().flat_map(|s| s.meta.samples.clone()).collect());
     let spp: u32 = shards.iter().map(|s| s.meta.spp).sum();
@@ -222,6 +242,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         version: env!("CARGO_PKG_VERSION").to_string(),
         samples: samples.clone(),
         scene: first.scene.clone(),
+        variance_batch: first.variance_batch,
     });
     outputs.write(slot, |w| merged.write(w).map_err(|e| anyhow!("{e}")))?;
     outputs.commit()?;

@@ -20,11 +20,15 @@ pub struct Shard {
 impl Shard {
     pub const WHOLE: Shard = Shard { index: 0, count: 1 };
 
-    /// Sample indices `[start, end)` of this shard of `spp` samples:
-    /// `[floor(I spp / N), floor((I + 1) spp / N))`. The N ranges tile
-    /// `[0, spp)` exactly, each within one sample of spp / N.
-    pub fn range(self, spp: u32) -> (u32, u32) {
-        let at = |i: u32| (i as u64 * spp as u64 / self.count as u64) as u32;
+    /// Sample indices `[start, end)` of this shard of `spp` samples in
+    /// whole variance batches of `batch` samples (which divides `spp`):
+    /// `[floor(I C / N) L, floor((I + 1) C / N) L)` with C = spp / L
+    /// batches. The N ranges tile `[0, spp)` exactly, each within one
+    /// batch of spp / N.
+    pub fn range(self, spp: u32, batch: u32) -> (u32, u32) {
+        let batch = batch.max(1);
+        let c = (spp / batch) as u64;
+        let at = |i: u32| (i as u64 * c / self.count as u64) as u32 * batch;
         (at(self.index), at(self.index + 1))
     }
 }
@@ -53,8 +57,21 @@ impl FromStr for Shard {
 
 /// Set `opts` to render only `shard` of its samples; a shard that would
 /// hold no samples is an error.
+///
+/// Sobol shards share the variance batch of the full render
+/// ([`glint::cpu::film::variance_batch_for`] of `--spp` and N), and each
+/// holds whole batches, so that merging them pools exactly what one render
+/// of all the samples estimates.
 pub fn apply(opts: &mut RenderOptions, shard: Shard) -> Result<()> {
-    let (start, end) = shard.range(opts.spp);
+    if opts.variance_batch == 0 {
+        opts.variance_batch = match opts.sampler {
+            glint::cpu::SamplerKind::Sobol => {
+                glint::cpu::film::variance_batch_for(opts.spp, shard.count)
+            }
+            glint::cpu::SamplerKind::Independent => 1,
+        };
+    }
+    let (start, end) = shard.range(opts.spp, opts.variance_batch);
     if start == end {
         bail!(
             "--shard {shard} of --spp {} holds no samples (at most {} shards)",
@@ -95,6 +112,7 @@ pub fn render_meta(scene: &Scene, opts: &RenderOptions, shard: Shard, spp: u32) 
         version: env!("CARGO_PKG_VERSION").to_string(),
         samples: vec![(opts.sample_start, opts.sample_start + spp)],
         scene: Some(image_key(scene, opts)),
+        variance_batch: opts.batch(),
     }
 }
 
@@ -104,11 +122,13 @@ mod tests {
 
     #[test]
     fn shards_tile_the_samples() {
-        for spp in [1u32, 3, 4, 7, 64, 100] {
+        for spp in [1u32, 3, 4, 7, 64, 100, 256, 4096] {
             for n in 1..=spp.min(9) {
                 let mut next = 0;
                 for i in 0..n {
-                    let (a, b) = Shard { index: i, count: n }.range(spp);
+                    let batch = glint::cpu::film::variance_batch_for(spp, n);
+                    let (a, b) = Shard { index: i, count: n }.range(spp, batch);
+                    assert_eq!(a % batch, 0);
                     assert_eq!(a, next);
                     assert!(b > a, "{i}/{n} of {spp}");
                     next = b;

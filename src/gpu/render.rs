@@ -3,8 +3,9 @@
 //!
 //! The binding table is `shaders/bindings.glsl` (set 0): 0 uniform Params,
 //! 1 triangles, 2 bvh_nodes, 3 shading, 4 materials, 5 emitters, 6 lights,
-//! 7 accum (two `vec4` per pixel: sum, sum of squares; added to by every
-//! dispatch), 8 ray_counts (one `uint` per pixel, added to), 9 texels,
+//! 7 accum (four `vec4` per pixel: sum, sum of squares, the variance
+//! batch's running sum, the sum of squared batch sums; `Film`'s fields,
+//! continued by every dispatch), 8 ray_counts (one `uint` per pixel, added to), 9 texels,
 //! 10 textures, 11 material_textures, 12 triangle_uvs, 13 env_texels,
 //! 14 env_dist. Push constants:
 //! `uint sample_start; uint sample_count;`. One invocation per pixel, local
@@ -22,7 +23,7 @@ use ash::vk;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use glint_cpu::features::Features;
-use glint_cpu::integrator::{GpuSceneData, gpu_scene_data};
+use glint_cpu::integrator::{GpuParams, GpuSceneData, gpu_scene_data};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::buffer::{Buffer, BufferKind};
@@ -210,6 +211,18 @@ pub fn render_film(
     render_film_range(ctx, &kernel, scene, width, height, range, progress)
 }
 
+/// `Params.variance_batch` of the uploaded parameters (1 for parameter
+/// blocks of another layout: kernel tests).
+fn variance_batch(params: &[u8]) -> u32 {
+    if params.len() == std::mem::size_of::<GpuParams>() {
+        bytemuck::pod_read_unaligned::<GpuParams>(params)
+            .variance_batch
+            .max(1)
+    } else {
+        1
+    }
+}
+
 /// Which kernel renders, and how its pipeline is built.
 #[derive(Clone, Copy, Debug)]
 pub struct KernelConfig<'k> {
@@ -253,9 +266,9 @@ pub fn render_film_range(
     let env_dist = storage("environment map distribution", scene.env_dist)?;
     let accum = Buffer::new(
         ctx,
-        &format!("accumulation film ({width}x{height} pixels, 32 bytes each)"),
+        &format!("accumulation film ({width}x{height} pixels, 64 bytes each)"),
         BufferKind::Storage,
-        pixels * 32,
+        pixels * 64,
     )?;
     let rays = Buffer::new(
         ctx,
@@ -357,16 +370,20 @@ pub fn render_film_range(
     let sums: Vec<[f32; 4]> = accum.read()?;
     let counts: Vec<u32> = rays.read()?;
     let n = pixels as usize;
+    let plane = |k: usize| -> Vec<Vec3> {
+        (0..n)
+            .map(|i| Vec3::from_slice(&sums[4 * i + k][..3]))
+            .collect()
+    };
     let film = Film {
         width,
         height,
         spp: done,
-        sum: (0..n)
-            .map(|i| Vec3::from_slice(&sums[2 * i][..3]))
-            .collect(),
-        sum_sq: (0..n)
-            .map(|i| Vec3::from_slice(&sums[2 * i + 1][..3]))
-            .collect(),
+        sum: plane(0),
+        sum_sq: plane(1),
+        batch: variance_batch(scene.params),
+        batch_run: plane(2),
+        batch_sq: plane(3),
     };
     let stats = RenderStats {
         rays: counts.iter().map(|&c| c as u64).sum(),

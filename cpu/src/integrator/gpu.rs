@@ -49,9 +49,8 @@ pub struct GpuParams {
     pub p_area: f32,
     pub p_punctual: f32,
     pub p_background: f32,
-    /// Unused since ray offsets come from the hit point's error bound
-    /// (always 0; kept so that the layout stays put).
-    pub eps_abs: f32,
+    /// Samples per variance batch (`RenderOptions::batch`, `Film::batch`).
+    pub variance_batch: u32,
     /// 1: some material has textures (bindings 9-12 hold them).
     pub textured: u32,
     /// 1: some material has an alpha mask (traversal tests it).
@@ -132,7 +131,7 @@ pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneDat
         p_area: pt.lights.probs.area,
         p_punctual: pt.lights.probs.punctual,
         p_background: pt.lights.probs.background,
-        eps_abs: 0.0,
+        variance_batch: pt.batch,
         textured: !scene.textures.is_empty() as u32,
         masked: scene.textures.has_masks() as u32,
         env_width: scene.envmap.as_ref().map_or(0, |e| e.width),

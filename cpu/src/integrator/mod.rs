@@ -58,11 +58,11 @@ pub use gpu::{GpuParams, GpuSceneData, gpu_scene_data};
 use crate::bsdf::Bsdf;
 use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
-use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind};
+use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind, add_sample};
 use crate::frame::Frame;
 use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{mis_bsdf, mis_light, seed_key};
-use crate::scene::{NO_LIGHT, Scene};
+use crate::scene::{NO_LIGHT, Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::PathSampler;
 use crate::texture::{MaterialTextures, normal_mapped, textured_bsdf};
 
@@ -229,8 +229,9 @@ pub fn precision_warning(scene: &Scene) -> Option<String> {
     }
 }
 
-/// One tile's output: its index, per-pixel (sum, sum_sq), rays traced.
-type TileResult = (u32, Vec<(Vec3, Vec3)>, u64);
+/// One tile's output: its index, per-pixel [sum, sum_sq, batch_run,
+/// batch_sq], rays traced.
+type TileResult = (u32, Vec<[Vec3; 4]>, u64);
 
 /// Samples per pass for a time-limited render: the passes left in the
 /// budget at the last pass's rate, growing at most 4x per pass (the first
@@ -266,6 +267,8 @@ pub struct PathTracer<'a> {
     pub sample_start: u32,
     /// Sampling budget in seconds (`RenderOptions::time_limit`).
     pub time_limit: Option<f64>,
+    /// Samples per variance batch (`RenderOptions::batch`).
+    pub batch: u32,
     /// Whether traversal runs the alpha test (`Scene::textures.has_masks()`,
     /// asked once here, not per ray).
     pub masks: bool,
@@ -297,28 +300,31 @@ impl<'a> PathTracer<'a> {
             sampler: opts.sampler,
             sample_start: opts.sample_start,
             time_limit: opts.time_limit,
+            batch: opts.batch(),
             masks: scene.textures.has_masks(),
         })
     }
 
     fn surface(&self, tri: u32, u: f32, v: f32) -> SurfaceFrame {
         let t = &self.scene.triangles[tri as usize];
-        let sh = &self.scene.shading[tri as usize];
         let ng = t.geometric_normal().normalize();
         let w = 1.0 - u - v;
         let mut ns = ng;
-        if sh.n[0][3] == 1.0 {
-            let n = |i: usize| Vec3::new(sh.n[i][0], sh.n[i][1], sh.n[i][2]);
-            let n = (w * n(0) + u * n(1) + v * n(2)).normalize_or_zero();
+        // The triangle's packed shading data (Scene::set_shading).
+        let mut off = (t.flags >> TRI_SHADING_SHIFT) as usize;
+        let at = |k: usize| Vec3::from_slice(&self.scene.shading[k][..3]);
+        let lerp = |o: usize| w * at(o) + u * at(o + 1) + v * at(o + 2);
+        if t.flags & TRI_NORMALS != 0 {
+            let n = lerp(off).normalize_or_zero();
+            off += 3;
             if n != Vec3::ZERO {
                 // The shading normal lives on the geometric normal's side,
                 // so the BSDF's +z is a dielectric's outside.
                 ns = if n.dot(ng) < 0.0 { -n } else { n };
             }
         }
-        let frame = if sh.t[0][3] == 1.0 {
-            let tg = |i: usize| Vec3::new(sh.t[i][0], sh.t[i][1], sh.t[i][2]);
-            Frame::from_normal_tangent(ns, w * tg(0) + u * tg(1) + v * tg(2))
+        let frame = if t.flags & TRI_TANGENTS != 0 {
+            Frame::from_normal_tangent(ns, lerp(off))
         } else {
             Frame::from_normal(ns)
         };
@@ -507,7 +513,7 @@ impl<'a> PathTracer<'a> {
         let start = Instant::now();
         let (w, h) = (self.camera.width, self.camera.height);
         let tiles = w.div_ceil(TILE) * h.div_ceil(TILE);
-        let mut film = Film::new(w, h);
+        let mut film = Film::with_batch(w, h, self.batch);
         let mut rays = 0u64;
         let mut count = if self.time_limit.is_some() { 1 } else { spp };
         while film.spp < spp && count > 0 {
@@ -563,6 +569,8 @@ impl<'a> PathTracer<'a> {
                         let i = prior.index(x, y);
                         let mut sum = prior.sum[i];
                         let mut sum_sq = prior.sum_sq[i];
+                        let mut run = prior.batch_run[i];
+                        let mut sq = prior.batch_sq[i];
                         for s in first..first + count {
                             let mut l = self.sample(x, y, s, &mut rays);
                             // A NaN or infinity (a degenerate pdf somewhere)
@@ -570,10 +578,9 @@ impl<'a> PathTracer<'a> {
                             if !l.is_finite() {
                                 l = Vec3::ZERO;
                             }
-                            sum += l;
-                            sum_sq += l * l;
+                            add_sample(prior.batch, s, l, &mut sum, &mut sum_sq, &mut run, &mut sq);
                         }
-                        px.push((sum, sum_sq));
+                        px.push([sum, sum_sq, run, sq]);
                     }
                 }
                 progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
@@ -588,8 +595,12 @@ impl<'a> PathTracer<'a> {
             for y in y0..(y0 + TILE).min(h) {
                 for x in x0..(x0 + TILE).min(w) {
                     let i = film.index(x, y);
-                    film.sum[i] = px[k].0;
-                    film.sum_sq[i] = px[k].1;
+                    [
+                        film.sum[i],
+                        film.sum_sq[i],
+                        film.batch_run[i],
+                        film.batch_sq[i],
+                    ] = px[k];
                     k += 1;
                 }
             }

@@ -129,7 +129,7 @@ fn parse_inner(path: &Path, options: LoadOptions) -> Result<Scene, String> {
         .map_err(|e| format!("scene {scene_index}: extras.background: {e}"))?;
     let mut scene = Scene {
         triangles: collected.triangles,
-        shading: collected.shading,
+        shading: Vec::new(),
         materials,
         lights: collected.lights,
         cameras: collected.cameras,
@@ -139,6 +139,7 @@ fn parse_inner(path: &Path, options: LoadOptions) -> Result<Scene, String> {
         textures,
         envmap: None,
     };
+    scene.set_shading(&collected.shading);
     scene.assign_emitters();
     Ok(scene)
 }

@@ -3,10 +3,7 @@
 
 use glam::{Mat4, Vec3};
 use glint_cpu::bsdf::Bsdf;
-use glint_cpu::{
-    Camera, Film, Material, NO_LIGHT, PunctualLight, RenderOptions, Scene, Triangle,
-    TriangleShading,
-};
+use glint_cpu::{Camera, Film, Material, NO_LIGHT, PunctualLight, RenderOptions, Scene, Triangle};
 
 pub fn diffuse(name: &str, rho: f32) -> Material {
     Material {
@@ -145,10 +142,9 @@ pub fn scene(
     camera: Camera,
     background: Vec3,
 ) -> Scene {
-    let n = triangles.len();
     let mut s = Scene {
         triangles,
-        shading: vec![TriangleShading::default(); n],
+        shading: Vec::new(),
         materials,
         lights,
         cameras: vec![camera],
