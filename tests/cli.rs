@@ -567,16 +567,23 @@ fn warnings_strict_background_and_the_no_light_rule() {
     assert_one_line_error(&out, "R,G,B");
 }
 
-#[test]
-fn info_describes_the_textured_asset() {
-    let asset = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/textured.gltf");
-    let out = glint().arg("info").arg(&asset).output().unwrap();
+/// `glint info` of a bundled asset, which must succeed.
+fn info_of(asset: &str) -> String {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(asset);
+    let out = glint().arg("info").arg(&path).output().unwrap();
     assert!(
         out.status.success(),
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8_lossy(&out.stdout);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+#[test]
+fn info_describes_the_textured_asset() {
+    let text = info_of("textured.gltf");
     for needle in [
         "cameras: 1",
         "materials: 4",
@@ -611,13 +618,7 @@ fn info_bytes_per_triangle_match_the_uploaded_buffers() {
         let asset = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets")
             .join(name);
-        let out = glint().arg("info").arg(&asset).output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let text = String::from_utf8_lossy(&out.stdout);
+        let text = info_of(name);
         let line = text
             .lines()
             .find(|l| l.starts_with("bytes per triangle: "))
