@@ -263,20 +263,35 @@ impl Scene {
     }
 
     /// Store per-triangle shading records (one per triangle, in triangle
-    /// order) packed: normals only where `n[0].w` is 1, tangents only where
-    /// `t[0].w` is 1 (the readers' tests), with each triangle's flags
-    /// saying which and where.
+    /// order) packed, with each triangle's flags saying what it kept and
+    /// where. Kept: normals where `n[0].w` is 1 and they are not all the
+    /// geometric normal (a flat face's vertex normals: interpolating them
+    /// gives the geometric normal up to rounding, which the readers use
+    /// without them); tangents where `t[0].w` is 1 and the material needs
+    /// an orientation about the normal (an anisotropic rough lobe, or a
+    /// normal map). An isotropic BSDF is the same in any frame rotated
+    /// about its normal, so without them the readers' `Frame::from_normal`
+    /// renders the same image in distribution.
     pub fn set_shading(&mut self, records: &[TriangleShading]) {
         assert_eq!(records.len(), self.triangles.len());
+        let needs_tangent: Vec<bool> = (0..self.materials.len())
+            .map(|m| self.material_needs_tangent(m))
+            .collect();
         let mut packed = Vec::new();
         for (t, r) in self.triangles.iter_mut().zip(records) {
             let offset = packed.len();
             let mut bits = 0;
-            if r.n[0][3] == 1.0 {
+            let ng = t.geometric_normal().normalize_or_zero();
+            let flat = r.n.iter().all(|n| {
+                let n = Vec3::from_slice(&n[..3]);
+                (n - ng).abs().max_element() <= 1e-6 || (n + ng).abs().max_element() <= 1e-6
+            });
+            if r.n[0][3] == 1.0 && !flat {
                 packed.extend_from_slice(&r.n);
                 bits |= TRI_NORMALS;
             }
-            if r.t[0][3] == 1.0 {
+            let tangent = needs_tangent.get(t.material as usize).copied().unwrap_or(true);
+            if r.t[0][3] == 1.0 && tangent {
                 packed.extend_from_slice(&r.t);
                 bits |= TRI_TANGENTS;
             }
@@ -290,6 +305,23 @@ impl Scene {
             t.flags = (t.flags & TRI_DOUBLE_SIDED) | bits | (offset << TRI_SHADING_SHIFT);
         }
         self.shading = packed;
+    }
+
+    /// Whether material `m`'s shading needs a tangent: an anisotropic rough
+    /// lobe, or a normal map (tangent space).
+    pub fn material_needs_tangent(&self, m: usize) -> bool {
+        let aniso = |r: &crate::bsdf::Roughness| !r.is_smooth() && r.alpha_u != r.alpha_v;
+        let lobe = match &self.materials[m].bsdf {
+            Bsdf::Diffuse { .. } => false,
+            Bsdf::Conductor(c) => aniso(&c.roughness),
+            Bsdf::Dielectric { roughness, .. } => aniso(roughness),
+            Bsdf::Metallic { conductor, .. } => aniso(&conductor.roughness),
+        };
+        lobe || self
+            .textures
+            .materials
+            .get(m)
+            .is_some_and(|t| t.normal.is_some())
     }
 
     /// Triangle `tri`'s shading record: what [`Scene::set_shading`] stored,

@@ -186,8 +186,10 @@ fn tangent_attribute_is_transformed() {
     let pos = d.floats(&[0., 0., 0., 1., 0., 0., 0., 1., 0.], "VEC3");
     let tan = d.floats(&[1., 0., 0., 1., 1., 0., 0., -1., 3., 0., 0., 1.], "VEC4");
     let uv = d.floats(&[0., 0., 0., 1., 1., 0.], "VEC2");
+    // An anisotropic lobe needs the tangent (an isotropic one gets none).
+    let aniso = d.material(anisotropic_material());
     let m = d.mesh(vec![
-        json!({ "attributes": { "POSITION": pos, "TANGENT": tan, "TEXCOORD_0": uv } }),
+        json!({ "attributes": { "POSITION": pos, "TANGENT": tan, "TEXCOORD_0": uv }, "material": aniso }),
     ]);
     let q = Quat::from_rotation_z(FRAC_PI_2);
     d.node(json!({ "mesh": m, "rotation": q.to_array() }));
@@ -206,9 +208,11 @@ fn texcoords_give_dp_du_tangents() {
     // u runs along +y, v along +x.
     let uv = d.floats(&[0., 0., 0., 1., 1., 0.], "VEC2");
     let flat = d.floats(&[0., 0., 0., 0., 0., 0.], "VEC2");
+    let aniso = d.material(anisotropic_material());
     let m = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos, "TEXCOORD_0": uv }, "material": aniso }),
+        json!({ "attributes": { "POSITION": pos, "TEXCOORD_0": flat }, "material": aniso }),
         json!({ "attributes": { "POSITION": pos, "TEXCOORD_0": uv } }),
-        json!({ "attributes": { "POSITION": pos, "TEXCOORD_0": flat } }),
     ]);
     d.node(json!({ "mesh": m, "translation": [0, 0, 5] }));
     let s = parse_doc(&d, "dpdu");
@@ -220,6 +224,39 @@ fn texcoords_give_dp_du_tangents() {
         s.shading_of(1).t.iter().all(|t| t[3] == 0.0),
         "degenerate UVs give no tangent"
     );
+    // The default (isotropic) material needs no orientation: no tangent
+    // stored, and no shading data at all for this flat triangle.
+    assert!(s.shading_of(2).t.iter().all(|t| t[3] == 0.0));
+    assert_eq!(s.triangles[2].flags >> 1, 0);
+}
+
+/// A rough conductor with alpha_u != alpha_v.
+fn anisotropic_material() -> serde_json::Value {
+    json!({ "extras": { "bsdf": { "type": "roughconductor", "eta": [1, 1, 1], "k": [2, 2, 2],
+        "alpha_u": 0.05, "alpha_v": 0.3 } } })
+}
+
+#[test]
+fn flat_faces_and_isotropic_materials_store_no_shading_data() {
+    // A quad whose NORMALs all equal its face normal: interpolating them
+    // gives the geometric normal, so none are stored; a bent one keeps
+    // its normals. Bytes per triangle follow.
+    let mut d = Doc::new();
+    let pos = d.floats(&[0., 0., 0., 1., 0., 0., 0., 1., 0.], "VEC3");
+    let up = d.floats(&[0., 0., 1., 0., 0., 1., 0., 0., 1.], "VEC3");
+    let bent = d.floats(&[0., 0.6, 0.8, 0., 0., 1., 0.6, 0., 0.8], "VEC3");
+    let m = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos, "NORMAL": up } }),
+        json!({ "attributes": { "POSITION": pos, "NORMAL": bent } }),
+    ]);
+    d.node(json!({ "mesh": m }));
+    let s = parse_doc(&d, "flat");
+    assert_eq!(s.triangles[0].flags & glint_cpu::TRI_NORMALS, 0);
+    assert_close(Vec3::from_slice(&s.shading_of(0).n[0][..3]), Vec3::Z);
+    assert_ne!(s.triangles[1].flags & glint_cpu::TRI_NORMALS, 0);
+    assert_close(Vec3::from_slice(&s.shading_of(1).n[0][..3]), Vec3::new(0., 0.6, 0.8));
+    assert_eq!(s.shading.len(), 3);
+    assert_eq!(s.gpu_bytes_per_triangle(), (2.0 * 48.0 + 48.0) / 2.0);
 }
 
 fn material_doc(materials: Vec<serde_json::Value>) -> Doc {
@@ -826,9 +863,11 @@ fn bundled_assets_load() {
         let s = parse(&assets_dir().join(format!("{name}.gltf"))).unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(s.cameras.len(), 1, "{name}");
         assert!(s.triangles.len() > 500, "{name}");
+        // NORMAL on every mesh: kept wherever the faces are curved (the
+        // spheres), dropped on flat faces (their geometric normal).
         assert!(
-            (0..s.triangles.len()).all(|i| s.shading_of(i).n.iter().all(|n| n[3] == 1.0)),
-            "{name}: NORMAL everywhere"
+            s.triangles.iter().any(|t| t.flags & glint_cpu::TRI_NORMALS != 0),
+            "{name}: smooth normals kept"
         );
         let has = |ty: fn(&Bsdf) -> bool| s.materials.iter().any(|m| ty(&m.bsdf));
         assert!(has(|b| matches!(b, Bsdf::Diffuse { .. })), "{name}");
@@ -1024,7 +1063,8 @@ fn quantized_accessors_are_read() {
     d.json["bufferViews"][v]["byteStride"] = json!(4);
     let pos8 =
         d.accessor(json!({ "bufferView": v, "componentType": 5121, "count": 3, "type": "VEC3" }));
-    let n: [i8; 12] = [0, 0, 127, 0, 0, 0, 127, 0, 0, 0, 127, 0];
+    // Not all the face normal (flat faces store none): +Z, +X, -Y.
+    let n: [i8; 12] = [0, 0, 127, 0, 127, 0, 0, 0, 0, -127, 0, 0];
     let v = d.view(&n.map(|x| x as u8));
     d.json["bufferViews"][v]["byteStride"] = json!(4);
     let nrm = d.accessor(json!({ "bufferView": v, "componentType": 5120, "normalized": true, "count": 3, "type": "VEC3" }));
@@ -1047,5 +1087,8 @@ fn quantized_accessors_are_read() {
             Vec3::new(0.0, 2.0, 0.0)
         ]
     );
-    assert_close(Vec3::from_slice(&s.shading_of(0).n[0][..3]), Vec3::Z);
+    let sh = s.shading_of(0);
+    assert_close(Vec3::from_slice(&sh.n[0][..3]), Vec3::Z);
+    assert_close(Vec3::from_slice(&sh.n[1][..3]), Vec3::X);
+    assert_close(Vec3::from_slice(&sh.n[2][..3]), Vec3::NEG_Y);
 }
