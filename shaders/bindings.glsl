@@ -21,6 +21,7 @@
 //   binding 13 vec4 env_texels[]       glint_cpu::envmap::EnvMap::texels (radiance, row 0 the top)
 //   binding 14 float env_dist[]        EnvMap::marginal then EnvMap::conditional
 //   (bindings 13-14 hold one dummy element when params.env_width == 0)
+//   binding 15 float ms_tables[]       glint_cpu::bsdf::multiscatter::gpu_tables (multiscatter)
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders
 // samples [sample_start, sample_start + sample_count) of every pixel, one
@@ -106,6 +107,9 @@ layout(std430, set = 0, binding = 11) readonly buffer MaterialTextureBuffer { Ma
 layout(std430, set = 0, binding = 12) readonly buffer TriangleUvBuffer { TriangleUv triangle_uvs[]; };
 layout(std430, set = 0, binding = 13) readonly buffer EnvTexelBuffer { vec4 env_texels[]; };
 layout(std430, set = 0, binding = 14) readonly buffer EnvDistBuffer { float env_dist[]; };
+layout(std430, set = 0, binding = 15) readonly buffer MsTableBuffer { float ms_tables[]; };
+// bsdf/multiscatter.glsl reads its tables through this hook.
+#define MS_TABLE(i) ms_tables[i]
 
 layout(push_constant) uniform SamplePush {
     uint sample_start;

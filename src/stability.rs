@@ -675,7 +675,11 @@ pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>,
     let n = queries.len() as u32;
     ctx.run_kernel(
         "tests/bsdf_test",
-        &[bytemuck::cast_slice(&mats), bytemuck::cast_slice(&queries)],
+        &[
+            bytemuck::cast_slice(&mats),
+            bytemuck::cast_slice(&queries),
+            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
+        ],
         &mut [bytemuck::cast_slice_mut(&mut results)],
         bytemuck::bytes_of(&n),
         [groups(n, 64), 1, 1],

@@ -82,8 +82,17 @@ fn materials() -> Vec<(u32, Bsdf)> {
         (0.5, 0.0005),
     ];
     for (i, &(au, av)) in alphas.iter().enumerate() {
-        for sep in [false, true] {
-            let r = rough(au, av, sep);
+        // Energy compensation on every other alpha (both Smith forms).
+        let forms: &[(bool, bool)] = if i % 2 == 0 {
+            &[(false, false), (true, false), (false, true), (true, true)]
+        } else {
+            &[(false, false), (true, false)]
+        };
+        for &(sep, ms) in forms {
+            let r = Roughness {
+                multiscatter: ms,
+                ..rough(au, av, sep)
+            };
             let m = ["Au", "Ag", "Cu", "Al", "Cr"][i % 5];
             v.push((1, Bsdf::Conductor(metal(m, r))));
             for eta in [1.5, 1.0 / 1.5, 1.333, 2.419] {
@@ -258,6 +267,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
         &[
             bytemuck::cast_slice(&gpu_mats),
             bytemuck::cast_slice(&queries),
+            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
         ],
         &mut [bytemuck::cast_slice_mut(&mut results)],
         bytemuck::bytes_of(&n),

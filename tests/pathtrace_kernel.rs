@@ -46,11 +46,36 @@ fn gpu_kernel_traces_the_cpu_paths() {
         ("textured.gltf", -1),
     ];
     let samplers = [SamplerKind::Sobol, SamplerKind::Independent];
-    for ((asset, max_depth), sampler) in cases.into_iter().flat_map(|c| samplers.map(|s| (c, s))) {
+    // "+ms": every rough lobe energy-compensated (`multiscatter`).
+    let cases = cases.into_iter().chain([
+        ("roughconductor.gltf+ms", -1),
+        ("roughdielectric.gltf+ms", -1),
+    ]);
+    for ((asset, max_depth), sampler) in cases.flat_map(|c| samplers.map(|s| (c, s))) {
+        let (file, ms) = match asset.strip_suffix("+ms") {
+            Some(f) => (f, true),
+            None => (asset, false),
+        };
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets")
-            .join(asset);
-        let scene = glint::cpu::loader::load(&path).unwrap();
+            .join(file);
+        let mut scene = glint::cpu::loader::load(&path).unwrap();
+        if ms {
+            let mut rough = 0;
+            for m in &mut scene.materials {
+                let r = match &mut m.bsdf {
+                    glint::cpu::Bsdf::Conductor(c) => &mut c.roughness,
+                    glint::cpu::Bsdf::Dielectric { roughness, .. } => roughness,
+                    glint::cpu::Bsdf::Metallic { conductor, .. } => &mut conductor.roughness,
+                    glint::cpu::Bsdf::Diffuse { .. } => continue,
+                };
+                if !r.is_smooth() {
+                    r.multiscatter = true;
+                    rough += 1;
+                }
+            }
+            assert!(rough > 0, "{asset}: no rough lobe to compensate");
+        }
         let opts = RenderOptions {
             spp: 16,
             max_depth,

@@ -108,7 +108,8 @@ pub struct GpuMaterial {
     pub alpha_v: f32,
     /// Diffuse reflectance (diffuse, metallic blend's base); `.w` = metallic weight.
     pub reflectance: [f32; 4],
-    /// Conductor eta (rgb); dielectric: `.x` = int_ior / ext_ior.
+    /// Conductor eta (rgb); dielectric: `.x` = int_ior / ext_ior. `.w` of
+    /// eta, k, specular: the conductor's F_avg (rgb) with `multiscatter`.
     pub eta: [f32; 4],
     /// Conductor k (rgb).
     pub k: [f32; 4],
@@ -144,9 +145,16 @@ impl From<&Material> for GpuMaterial {
             ..Default::default()
         };
         let conductor = |g: &mut GpuMaterial, c: &ConductorParams| {
-            g.eta = vec4(c.eta, 0.0);
-            g.k = vec4(c.k, 0.0);
-            g.specular = vec4(c.specular_reflectance, 0.0);
+            // With `multiscatter`, the .w's carry the Kulla-Conty lobe's
+            // average Fresnel term F_avg (rgb), computed once here.
+            let f_avg = if c.roughness.multiscatter {
+                crate::bsdf::multiscatter::fresnel_conductor_avg(c.eta, c.k)
+            } else {
+                Vec3::ZERO
+            };
+            g.eta = vec4(c.eta, f_avg.x);
+            g.k = vec4(c.k, f_avg.y);
+            g.specular = vec4(c.specular_reflectance, f_avg.z);
             g.alpha_u = c.roughness.alpha_u;
             g.alpha_v = c.roughness.alpha_v;
             g.shadowing = shadowing_bits(&c.roughness);
@@ -290,7 +298,10 @@ impl Scene {
                 packed.extend_from_slice(&r.n);
                 bits |= TRI_NORMALS;
             }
-            let tangent = needs_tangent.get(t.material as usize).copied().unwrap_or(true);
+            let tangent = needs_tangent
+                .get(t.material as usize)
+                .copied()
+                .unwrap_or(true);
             if r.t[0][3] == 1.0 && tangent {
                 packed.extend_from_slice(&r.t);
                 bits |= TRI_TANGENTS;

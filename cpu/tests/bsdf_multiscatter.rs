@@ -159,28 +159,35 @@ fn multiscatter_chi2() {
     assert!(fails.is_empty(), "{}", fails.join("\n"));
 }
 
-/// The embedded tables: the GLSL include holds the same numbers, and a few
-/// entries recomputed from the single-scattering lobe agree.
+/// The embedded tables: the GLSL reads them from the storage buffer
+/// `gpu_tables()` at the offsets it defines, which must be the Rust ones;
+/// a few entries recomputed from the single-scattering lobe agree.
 #[test]
 fn tables_match_glsl_and_recomputation() {
+    use glint_cpu::bsdf::ms_tables::{MS_T, MS_T_N};
+    use glint_cpu::bsdf::multiscatter::{MS_OFF_E_AVG, MS_OFF_T, gpu_tables};
     let p = concat!(
         env!("CARGO_MANIFEST_DIR"),
-        "/../shaders/bsdf/ms_tables.glsl"
+        "/../shaders/bsdf/multiscatter.glsl"
     );
     let src = std::fs::read_to_string(p).unwrap();
-    let numbers = |name: &str| -> Vec<f32> {
-        let start = src.find(&format!("const float {name}[")).unwrap();
-        let body = &src[start..];
-        let open = body.find("float[](").unwrap() + 8;
-        let close = body.find(");").unwrap();
-        body[open..close]
-            .split(',')
-            .map(|t| t.trim().parse::<f32>().unwrap())
-            .collect()
-    };
-    assert!(src.contains(&format!("#define MS_N {MS_N}")));
-    assert_eq!(numbers("MS_E"), MS_E.concat());
-    assert_eq!(numbers("MS_E_AVG"), MS_E_AVG.concat());
+    for (name, v) in [
+        ("MS_N", MS_N),
+        ("MS_T_N", MS_T_N),
+        ("MS_OFF_E", 0),
+        ("MS_OFF_E_AVG", MS_OFF_E_AVG),
+        ("MS_OFF_T", MS_OFF_T),
+    ] {
+        assert!(
+            src.contains(&format!("#define {name} {v}u\n")),
+            "{name} {v}"
+        );
+    }
+    let t = gpu_tables();
+    assert_eq!(&t[..MS_N * MS_N], &MS_E[0][..]);
+    assert_eq!(&t[MS_N * MS_N..MS_OFF_E_AVG], &MS_E[1][..]);
+    assert_eq!(&t[MS_OFF_E_AVG..MS_OFF_E_AVG + MS_N], &MS_E_AVG[0][..]);
+    assert_eq!(&t[MS_OFF_T..], &MS_T[..]);
     for sep in [false, true] {
         for (i, j) in [(31, 31), (10, 20), (3, 31), (31, 5), (16, 16)] {
             let mu = i as f32 / (MS_N - 1) as f32;

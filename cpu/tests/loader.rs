@@ -254,7 +254,10 @@ fn flat_faces_and_isotropic_materials_store_no_shading_data() {
     assert_eq!(s.triangles[0].flags & glint_cpu::TRI_NORMALS, 0);
     assert_close(Vec3::from_slice(&s.shading_of(0).n[0][..3]), Vec3::Z);
     assert_ne!(s.triangles[1].flags & glint_cpu::TRI_NORMALS, 0);
-    assert_close(Vec3::from_slice(&s.shading_of(1).n[0][..3]), Vec3::new(0., 0.6, 0.8));
+    assert_close(
+        Vec3::from_slice(&s.shading_of(1).n[0][..3]),
+        Vec3::new(0., 0.6, 0.8),
+    );
     assert_eq!(s.shading.len(), 3);
     assert_eq!(s.gpu_bytes_per_triangle(), (2.0 * 48.0 + 48.0) / 2.0);
 }
@@ -866,7 +869,9 @@ fn bundled_assets_load() {
         // NORMAL on every mesh: kept wherever the faces are curved (the
         // spheres), dropped on flat faces (their geometric normal).
         assert!(
-            s.triangles.iter().any(|t| t.flags & glint_cpu::TRI_NORMALS != 0),
+            s.triangles
+                .iter()
+                .any(|t| t.flags & glint_cpu::TRI_NORMALS != 0),
             "{name}: smooth normals kept"
         );
         let has = |ty: fn(&Bsdf) -> bool| s.materials.iter().any(|m| ty(&m.bsdf));

@@ -13,6 +13,7 @@
 #include "bsdf/fresnel.glsl"
 #include "bsdf/microfacet.glsl"
 #include "bsdf/warp.glsl"
+#include "bsdf/multiscatter.glsl"
 
 #define GLINT_INV_PI 0.31830988618379067154
 
@@ -41,8 +42,12 @@ vec2 rough_alphas(Material m) {
     return vec2(max(m.alpha_u, MIN_ALPHA), max(m.alpha_v, MIN_ALPHA));
 }
 
-// Material.shadowing: bit 0 separable; bit 1 multiscatter, which the GLSL
-// does not implement yet (the CPU crate does: cpu/src/bsdf/multiscatter.rs).
+// Material.shadowing: bit 0 separable; bit 1 multiscatter
+// (bsdf/multiscatter.glsl).
+bool material_multiscatter(Material m) {
+    return (m.shadowing & SHADOWING_MULTISCATTER) != 0u;
+}
+
 bool material_separable(Material m) {
     if (!HAS(F_SMITH_CORRELATED)) {
         return true;
@@ -92,6 +97,58 @@ bool diffuse_sample(vec3 rho, vec3 wo, vec2 u, out BsdfSample s) {
 
 // ---------------------------------------------------------------- conductor
 
+// The largest float below 1: a rescaled random number stays in [0, 1).
+#define ONE_MINUS_EPS uintBitsToFloat(0x3f7fffffu)
+
+// F_avg x specular_reflectance of the Kulla-Conty lobe: GpuMaterial
+// carries F_avg (glint_cpu::bsdf::multiscatter::fresnel_conductor_avg) in
+// the .w of eta, k and specular.
+vec3 conductor_f_avg(Material m) {
+    return vec3(m.eta.w, m.k.w, m.specular.w) * m.specular.xyz;
+}
+
+// conductor.rs conductor_sample_ms: u.x picks the lobe (multiple
+// scattering with probability 1 - E(mu_o)), rescaled for its own warp.
+bool conductor_sample_ms(Material m, vec3 wo, bool flip, vec2 u, vec2 a, out BsdfSample s) {
+    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+    float am = sqrt(a.x * a.y);
+    bool separable = material_separable(m);
+    float p_ms = conductor_ms_prob(wo.z, am, separable);
+    vec3 wi;
+    vec3 wm;
+    if (u.x < p_ms) {
+        wi = square_to_cosine_hemisphere(vec2(min(u.x / p_ms, ONE_MINUS_EPS), u.y));
+        if (wi.z <= 0.0) {
+            return false;
+        }
+        wm = normalize(wo + wi);
+    } else {
+        wm = ggx_sample_visible(wo, a.x, a.y, vec2(min((u.x - p_ms) / (1.0 - p_ms), ONE_MINUS_EPS), u.y));
+        wi = reflect_dir(wo, wm);
+        if (wi.z <= 0.0) {
+            return false;
+        }
+    }
+    float d = dot(wo, wm);
+    if (d <= 0.0) {
+        return false;
+    }
+    float pdf_ss = ggx_pdf_visible(wo, wm, a.x, a.y) / (4.0 * d);
+    vec3 f_ss = fresnel_conductor(d, m.eta.xyz, m.k.xyz) * m.specular.xyz
+        * (ggx_d(wm, a.x, a.y) * ggx_visibility(wo, wi, a.x, a.y, separable));
+    float pdf = (1.0 - p_ms) * pdf_ss + p_ms * wi.z * GLINT_INV_PI;
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        return false;
+    }
+    vec3 f = f_ss + conductor_ms_eval(wo.z, wi.z, am, separable, conductor_f_avg(m));
+    vec3 weight = f * (wi.z / pdf);
+    if (flip) {
+        wi.z = -wi.z;
+    }
+    s = BsdfSample(wi, pdf, weight, 1.0, false);
+    return true;
+}
+
 vec3 conductor_eval(Material m, vec3 wo, vec3 wi) {
     if (roughness_is_smooth(m.alpha_u, m.alpha_v)) {
         return vec3(0.0);
@@ -103,7 +160,11 @@ vec3 conductor_eval(Material m, vec3 wo, vec3 wi) {
     vec2 a = rough_alphas(m);
     vec3 wm = normalize(wo + wi);
     vec3 f = fresnel_conductor(dot(wo, wm), m.eta.xyz, m.k.xyz) * m.specular.xyz;
-    return f * (ggx_d(wm, a.x, a.y) * ggx_visibility(wo, wi, a.x, a.y, material_separable(m)));
+    vec3 f_ss = f * (ggx_d(wm, a.x, a.y) * ggx_visibility(wo, wi, a.x, a.y, material_separable(m)));
+    if (material_multiscatter(m)) {
+        f_ss += conductor_ms_eval(wo.z, wi.z, sqrt(a.x * a.y), material_separable(m), conductor_f_avg(m));
+    }
+    return f_ss;
 }
 
 float conductor_pdf(Material m, vec3 wo, vec3 wi) {
@@ -120,7 +181,12 @@ float conductor_pdf(Material m, vec3 wo, vec3 wi) {
     if (d <= 0.0) {
         return 0.0;
     }
-    return ggx_pdf_visible(wo, wm, a.x, a.y) / (4.0 * d);
+    float pdf_ss = ggx_pdf_visible(wo, wm, a.x, a.y) / (4.0 * d);
+    if (material_multiscatter(m)) {
+        float p = conductor_ms_prob(wo.z, sqrt(a.x * a.y), material_separable(m));
+        return (1.0 - p) * pdf_ss + p * wi.z * GLINT_INV_PI;
+    }
+    return pdf_ss;
 }
 
 bool conductor_sample(Material m, vec3 wo, vec2 u, out BsdfSample s) {
@@ -136,6 +202,9 @@ bool conductor_sample(Material m, vec3 wo, vec2 u, out BsdfSample s) {
         return true;
     }
     vec2 a = rough_alphas(m);
+    if (material_multiscatter(m)) {
+        return conductor_sample_ms(m, wo_up, flip, u, a, s);
+    }
     vec3 wm = ggx_sample_visible(wo_up, a.x, a.y, u);
     float d = dot(wo_up, wm);
     vec3 wi = reflect_dir(wo_up, wm);
@@ -161,6 +230,18 @@ bool conductor_sample(Material m, vec3 wo, vec2 u, out BsdfSample s) {
 
 bool dielectric_is_smooth(float eta, Material m) {
     return roughness_is_smooth(m.alpha_u, m.alpha_v) || abs(eta - 1.0) < ETA_SMOOTH_THRESHOLD;
+}
+
+// dielectric.rs dielectric_ms_scale: 1 / E(mu_o) of the single-scattering
+// lobe seen from wo's side with `multiscatter` (Turquin 2019), else 1.
+float dielectric_ms_scale(float eta, Material m, vec3 wo) {
+    if (!material_multiscatter(m)) {
+        return 1.0;
+    }
+    vec2 a = rough_alphas(m);
+    float side_eta = wo.z >= 0.0 ? eta : 1.0 / eta;
+    float e = dielectric_ms_albedo(abs(wo.z), sqrt(a.x * a.y), side_eta);
+    return e > 0.0 ? 1.0 / e : 1.0;
 }
 
 // Generalised half vector (Walter 2007 eq. 16), face-forwarded to +z;
@@ -205,8 +286,9 @@ vec3 dielectric_eval(float eta, Material m, vec3 wo, vec3 wi) {
     float d = ggx_d(wm, a.x, a.y);
     float v = ggx_visibility(wo, wi, a.x, a.y, material_separable(m));
     float f = fresnel_dielectric(dot(wo, wm), eta);
+    float scale = dielectric_ms_scale(eta, m, wo);
     if (is_reflection) {
-        return vec3(d * f * v);
+        return vec3(d * f * v * scale);
     }
     float dot_i = dot(wi, wm);
     float dot_o = dot(wo, wm);
@@ -215,7 +297,7 @@ vec3 dielectric_eval(float eta, Material m, vec3 wo, vec3 wi) {
         return vec3(0.0);
     }
     float ft = d * (1.0 - f) * 4.0 * v * abs(dot_i * dot_o) / denom;
-    return vec3(ft / (etap * etap));
+    return vec3(ft / (etap * etap) * scale);
 }
 
 float dielectric_pdf(float eta, Material m, vec3 wo, vec3 wi) {
@@ -314,7 +396,7 @@ bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out Bsd
     if (!dielectric_half_vector(eta, wo, wi, hm, hetap, hrefl)) {
         return false;
     }
-    s = BsdfSample(wi, pdf, vec3(weight), eta_rel, false);
+    s = BsdfSample(wi, pdf, vec3(weight * dielectric_ms_scale(eta, m, wo)), eta_rel, false);
     return true;
 }
 

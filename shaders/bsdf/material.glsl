@@ -11,6 +11,8 @@
 // Material.shadowing: 0 height-correlated Smith G2, 1 separable G1 G1.
 #define SHADOWING_CORRELATED 0u
 #define SHADOWING_SEPARABLE 1u
+// Material.shadowing bit 1: `multiscatter` energy compensation.
+#define SHADOWING_MULTISCATTER 2u
 
 struct Material {
     uint kind;

@@ -4,6 +4,11 @@
 // the results with the CPU crate (cpu/src/bsdf).
 layout(local_size_x = 64) in;
 
+// The multiscatter tables (glint_cpu::bsdf::multiscatter::gpu_tables),
+// declared before the BSDFs that read them.
+layout(std430, set = 0, binding = 2) readonly buffer MsTables { float ms_tables[]; };
+#define MS_TABLE(i) ms_tables[i]
+
 #include "bsdf/bsdf.glsl"
 #include "bsdf/bsdf.glsl" // twice on purpose: the include guards must hold
 
@@ -23,7 +28,7 @@ struct Result {
 
 layout(std430, set = 0, binding = 0) readonly buffer Materials { Material materials[]; };
 layout(std430, set = 0, binding = 1) readonly buffer Queries { Query queries[]; };
-layout(std430, set = 0, binding = 2) buffer Results { Result results[]; };
+layout(std430, set = 0, binding = 3) buffer Results { Result results[]; };
 
 layout(push_constant) uniform Push {
     uint n;

@@ -296,16 +296,6 @@ pub fn load_scene(args: &SceneArgs) -> Result<(Scene, RenderOptions)> {
     Ok((scene, opts))
 }
 
-/// Whether any material asks for energy-compensated GGX.
-fn uses_multiscatter(scene: &Scene) -> bool {
-    use glint::cpu::Bsdf;
-    scene.materials.iter().any(|m| match &m.bsdf {
-        Bsdf::Conductor(c) | Bsdf::Metallic { conductor: c, .. } => c.roughness.multiscatter,
-        Bsdf::Dielectric { roughness, .. } => roughness.multiscatter,
-        Bsdf::Diffuse { .. } => false,
-    })
-}
-
 /// Render with a progress bar on a terminal; errors name the scene.
 pub fn render_on(
     backend: Backend,
@@ -326,12 +316,6 @@ pub fn render_on(
         kernel: ro.kernel.into(),
         pipeline_cache: true,
     };
-    if backend == Backend::Gpu && uses_multiscatter(scene) {
-        eprintln!(
-            "glint: warning: {}: multiscatter is not on the GPU backend yet: its materials render single-scattering GGX there (use --backend cpu for energy compensation)",
-            path.display()
-        );
-    }
     let r = backend::render(backend, scene, opts, &gpu, &progress)
         .map_err(|e| anyhow!("{}: {e}", path.display()))?;
     if let Some(pb) = pb {

@@ -7,7 +7,8 @@
 //! batch's running sum, the sum of squared batch sums; `Film`'s fields,
 //! continued by every dispatch), 8 ray_counts (one `uint` per pixel, added to), 9 texels,
 //! 10 textures, 11 material_textures, 12 triangle_uvs, 13 env_texels,
-//! 14 env_dist. Push constants:
+//! 14 env_dist, 15 ms_tables (the multiscatter albedo tables, the same
+//! for every scene). Push constants:
 //! `uint sample_start; uint sample_count;`. One invocation per pixel, local
 //! size 8x8.
 //!
@@ -264,6 +265,10 @@ pub fn render_film_range(
     let uvs = storage("triangle uvs", scene.uvs)?;
     let env_texels = storage("environment map", scene.env_texels)?;
     let env_dist = storage("environment map distribution", scene.env_dist)?;
+    let ms_tables = storage(
+        "multiscatter tables",
+        bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
+    )?;
     let accum = Buffer::new(
         ctx,
         &format!("accumulation film ({width}x{height} pixels, 64 bytes each)"),
@@ -278,7 +283,7 @@ pub fn render_film_range(
     )?;
 
     let mut bindings = vec![BufferKind::Uniform];
-    bindings.extend([BufferKind::Storage; 14]);
+    bindings.extend([BufferKind::Storage; 15]);
     let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &kernel_cfg.options)?;
     kernel.bind(&[
         &params,
@@ -296,6 +301,7 @@ pub fn render_film_range(
         &uvs,
         &env_texels,
         &env_dist,
+        &ms_tables,
     ])?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 

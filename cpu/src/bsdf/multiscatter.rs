@@ -11,9 +11,10 @@
 //!
 //! E and E_avg come from glint's own single-scattering BSDF, one table per
 //! Smith form, over mu = cos theta and alpha on uniform grids: written by
-//! `cargo run -p glint-cpu --example ms_tables`, which writes
-//! both `cpu/src/bsdf/ms_tables.rs` and `shaders/bsdf/ms_tables.glsl` from
-//! the same numbers (a test pins them equal and recomputes a few entries).
+//! `cargo run -p glint-cpu --example ms_tables` into
+//! `cpu/src/bsdf/ms_tables.rs`; the GPU reads the same numbers from a
+//! storage buffer ([`gpu_tables`], `shaders/bsdf/multiscatter.glsl`; a test
+//! pins the offsets and recomputes a few entries).
 //! Anisotropic surfaces look the tables up at sqrt(alpha_u alpha_v).
 //!
 //! Rough dielectrics (Turquin 2019, "A Practical Multiple Scattering
@@ -111,6 +112,25 @@ pub fn ms_albedo_reference(mu: f32, alpha: f32, separable: bool, n: usize) -> f6
     }
     sum / (n * n) as f64
 }
+
+/// Every table in one array, the GPU's storage buffer (binding 15 of the
+/// path tracer; `shaders/bsdf/multiscatter.glsl` reads it at the offsets
+/// [`MS_OFF_E_AVG`] and [`MS_OFF_T`]): MS_E[0], MS_E[1], MS_E_AVG[0],
+/// MS_E_AVG[1], MS_T.
+pub fn gpu_tables() -> Vec<f32> {
+    let mut v = Vec::with_capacity(MS_OFF_T + MS_T.len());
+    v.extend_from_slice(&MS_E[0]);
+    v.extend_from_slice(&MS_E[1]);
+    v.extend_from_slice(&MS_E_AVG[0]);
+    v.extend_from_slice(&MS_E_AVG[1]);
+    v.extend_from_slice(&MS_T);
+    v
+}
+
+/// Offset of MS_E_AVG in [`gpu_tables`].
+pub const MS_OFF_E_AVG: usize = 2 * MS_N * MS_N;
+/// Offset of MS_T in [`gpu_tables`].
+pub const MS_OFF_T: usize = MS_OFF_E_AVG + 2 * MS_N;
 
 /// The dielectric table's eta' grid: log-uniform over [1/3, 3].
 pub const MS_T_ETA_MIN: f32 = 1.0 / 3.0;
