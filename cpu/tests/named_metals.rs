@@ -1,0 +1,277 @@
+//! `named_metal` pinned to the literature, not to itself.
+//!
+//! - Au, Ag, Cu, Al: pbrt-v4's measured spectra (`src/pbrt/util/spectrum.cpp`,
+//!   arrays `Au_eta`, `Au_k`, `Ag_eta`, `Ag_k`, `Cu_eta`, `Cu_k`, `Al_eta`,
+//!   `Al_k`, interleaved (wavelength nm, value) pairs). Only the tabulated
+//!   samples bracketing 450, 550 and 650 nm are copied here (all four
+//!   metals share the wavelength grid); the test interpolates linearly,
+//!   as pbrt's `PiecewiseLinearSpectrum` does.
+//! - Cr: the Lorentz-Drude model of Rakic, Djurisic, Elazar & Majewski,
+//!   Appl. Opt. 37, 5271 (1998), LD parameters for Cr: omega_p = 10.75 eV,
+//!   f0 = 0.168, Gamma0 = 0.047 eV and four Lorentz oscillators; the same
+//!   parameters are transcribed in MEEP's materials library.
+//!
+//! Channels are R = 650 nm, G = 550 nm, B = 450 nm (the table's doc). The
+//! table is compared to ~1e-3 relative (it is printed with four decimals);
+//! the doc comment's table in `cpu/src/bsdf/tables.rs` is parsed and its
+//! eta, k and normal-incidence reflectance columns are checked too.
+
+use glint_cpu::bsdf::named_metal;
+
+/// Wavelengths of the channels, nm.
+const LAMBDA: [f64; 3] = [650.0, 550.0, 450.0];
+
+/// The two tabulated (lambda, value) samples of pbrt-v4's arrays that
+/// bracket each of 650, 550 and 450 nm, in that order.
+type Brackets = [[(f64, f64); 2]; 3];
+
+const AU_ETA: Brackets = [
+    [(635.816284, 0.177750), (652.548279, 0.166000)],
+    [(539.061646, 0.402000), (551.040771, 0.345500)],
+    [(442.800629, 1.562000), (450.851562, 1.502125)],
+];
+const AU_K: Brackets = [
+    [(635.816284, 3.070000), (652.548279, 3.150000)],
+    [(539.061646, 2.540000), (551.040771, 2.730625)],
+    [(442.800629, 1.904000), (450.851562, 1.875875)],
+];
+const AG_ETA: Brackets = [
+    [(635.816284, 0.136125), (652.548279, 0.140000)],
+    [(539.061646, 0.129000), (551.040771, 0.124375)],
+    [(442.800629, 0.157000), (450.851562, 0.151063)],
+];
+const AG_K: Brackets = [
+    [(635.816284, 4.010625), (652.548279, 4.150000)],
+    [(539.061646, 3.250000), (551.040771, 3.348125)],
+    [(442.800629, 2.400000), (450.851562, 2.478750)],
+];
+const CU_ETA: Brackets = [
+    [(635.816284, 0.230813), (652.548279, 0.214000)],
+    [(539.061646, 1.040000), (551.040771, 0.950375)],
+    [(442.800629, 1.170000), (450.851562, 1.165312)],
+];
+const CU_K: Brackets = [
+    [(635.816284, 3.458187), (652.548279, 3.670000)],
+    [(539.061646, 2.583000), (551.040771, 2.576500)],
+    [(442.800629, 2.362000), (450.851562, 2.397625)],
+];
+const AL_ETA: Brackets = [
+    [(635.816284, 1.390000), (652.548279, 1.490000)],
+    [(539.061646, 0.912000), (551.040771, 0.963000)],
+    [(442.800629, 0.598000), (450.851562, 0.620313)],
+];
+const AL_K: Brackets = [
+    [(635.816284, 7.650000), (652.548279, 7.820000)],
+    [(539.061646, 6.550000), (551.040771, 6.700000)],
+    [(442.800629, 5.380000), (450.851562, 5.480000)],
+];
+
+/// Linear interpolation of the bracketing samples at the channel's
+/// wavelength (checking that they do bracket it).
+fn interp(b: &Brackets, c: usize) -> f64 {
+    let [(l0, v0), (l1, v1)] = b[c];
+    let l = LAMBDA[c];
+    assert!(l0 <= l && l <= l1, "{l} not in [{l0}, {l1}]");
+    v0 + (l - l0) / (l1 - l0) * (v1 - v0)
+}
+
+/// A minimal complex number for the Lorentz-Drude model.
+#[derive(Clone, Copy, Debug)]
+struct C(f64, f64);
+
+impl C {
+    fn add(self, o: C) -> C {
+        C(self.0 + o.0, self.1 + o.1)
+    }
+    fn mul(self, o: C) -> C {
+        C(self.0 * o.0 - self.1 * o.1, self.0 * o.1 + self.1 * o.0)
+    }
+    fn div(self, o: C) -> C {
+        let d = o.0 * o.0 + o.1 * o.1;
+        C(
+            (self.0 * o.0 + self.1 * o.1) / d,
+            (self.1 * o.0 - self.0 * o.1) / d,
+        )
+    }
+    /// Principal square root (real part >= 0; imaginary part with the
+    /// sign of the argument's, so k >= 0 for Im eps >= 0).
+    fn sqrt(self) -> C {
+        let r = (self.0 * self.0 + self.1 * self.1).sqrt();
+        C(
+            ((r + self.0) / 2.0).sqrt(),
+            ((r - self.0) / 2.0).sqrt().copysign(self.1),
+        )
+    }
+}
+
+/// Rakic et al. 1998, LD model, Cr: plasma frequency (eV), Drude strength
+/// and damping (eV), then the oscillators (f_j, Gamma_j eV, omega_j eV).
+const CR_WP: f64 = 10.75;
+const CR_F0: f64 = 0.168;
+const CR_G0: f64 = 0.047;
+const CR_OSC: [(f64, f64, f64); 4] = [
+    (0.151, 3.175, 0.121),
+    (0.150, 1.305, 0.543),
+    (1.149, 2.676, 1.970),
+    (0.825, 1.335, 8.775),
+];
+
+/// n + i k of Cr at `lambda` nm from the Lorentz-Drude model:
+/// eps = 1 - f0 wp^2 / (w (w + i G0)) + sum f_j wp^2 / (w_j^2 - w^2 - i w G_j).
+fn cr_nk(lambda: f64) -> (f64, f64) {
+    let w = 1239.84193 / lambda; // hbar omega, eV
+    let wp2 = CR_WP * CR_WP;
+    let mut eps = C(1.0, 0.0).add(C(-CR_F0 * wp2, 0.0).div(C(w, 0.0).mul(C(w, CR_G0))));
+    for (f, g, wj) in CR_OSC {
+        eps = eps.add(C(f * wp2, 0.0).div(C(wj * wj - w * w, -w * g)));
+    }
+    let n = eps.sqrt();
+    assert!(n.1 >= 0.0);
+    (n.0, n.1)
+}
+
+/// Normal-incidence reflectance of a conductor.
+fn r0(eta: f64, k: f64) -> f64 {
+    ((eta - 1.0).powi(2) + k * k) / ((eta + 1.0).powi(2) + k * k)
+}
+
+/// The literature's (eta, k) per channel for each metal symbol.
+fn literature(metal: &str) -> [(f64, f64); 3] {
+    let from = |e: &Brackets, k: &Brackets| std::array::from_fn(|c| (interp(e, c), interp(k, c)));
+    match metal {
+        "Au" => from(&AU_ETA, &AU_K),
+        "Ag" => from(&AG_ETA, &AG_K),
+        "Cu" => from(&CU_ETA, &CU_K),
+        "Al" => from(&AL_ETA, &AL_K),
+        "Cr" => std::array::from_fn(|c| cr_nk(LAMBDA[c])),
+        _ => unreachable!(),
+    }
+}
+
+const METALS: [(&str, &str); 5] = [
+    ("Au", "gold"),
+    ("Ag", "silver"),
+    ("Cu", "copper"),
+    ("Al", "aluminium"),
+    ("Cr", "chromium"),
+];
+
+fn rel(a: f64, b: f64) -> f64 {
+    (a - b).abs() / b.abs()
+}
+
+#[test]
+fn table_matches_literature() {
+    let mut failures = Vec::new();
+    for (sym, alias) in METALS {
+        let (eta, k) = named_metal(sym).unwrap();
+        assert_eq!(named_metal(alias), Some((eta, k)), "{alias}");
+        let lit = literature(sym);
+        let mut worst = 0.0f64;
+        for c in 0..3 {
+            let (le, lk) = lit[c];
+            let (te, tk) = (eta[c] as f64, k[c] as f64);
+            eprintln!(
+                "{sym} {} nm: table eta {te:.4} k {tk:.4} | literature eta {le:.5} k {lk:.5} | rel {:.1e} {:.1e}",
+                LAMBDA[c],
+                rel(te, le),
+                rel(tk, lk)
+            );
+            worst = worst.max(rel(te, le)).max(rel(tk, lk));
+            if rel(te, le) > 1e-3 || rel(tk, lk) > 1e-3 {
+                failures.push(format!(
+                    "{sym} at {} nm: table ({te}, {tk}) vs literature ({le:.5}, {lk:.5})",
+                    LAMBDA[c]
+                ));
+            }
+        }
+        eprintln!("{sym}: max relative difference {worst:.1e}");
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// The interpolation and the LD model themselves, against independent
+/// anchors: pbrt-v4's sample at 551.04 nm is gold's (0.3455, 2.730625)
+/// exactly (quoted in bsdf_physics' fresnel test), and Cr's dielectric
+/// function at 550 nm is a strongly absorbing metal's (Re eps < 0).
+#[test]
+fn literature_helpers_are_sane() {
+    assert_eq!(AU_ETA[1][1], (551.040771, 0.3455));
+    assert_eq!(AU_K[1][1], (551.040771, 2.730625));
+    // Interpolation at a tabulated wavelength returns the sample.
+    let b: Brackets = [[(600.0, 1.0), (700.0, 3.0)]; 3];
+    assert!((interp(&b, 0) - 2.0).abs() < 1e-12);
+    // Cr: n^2 - k^2 = Re eps < 0 in the visible (a metal), k > n / 2.
+    for l in LAMBDA {
+        let (n, k) = cr_nk(l);
+        assert!(n * n - k * k < 0.0 && k > 0.5 * n, "{l}: {n} {k}");
+    }
+    // The principal root: sqrt(-1) = i, sqrt(i) = (1 + i)/sqrt 2.
+    let s = C(-1.0, 0.0).sqrt();
+    assert!(s.0.abs() < 1e-15 && (s.1 - 1.0).abs() < 1e-15);
+    let s = C(0.0, 1.0).sqrt();
+    assert!((s.0 - s.1).abs() < 1e-15 && (s.0 - 0.5f64.sqrt()).abs() < 1e-15);
+}
+
+/// The doc comment's table of `cpu/src/bsdf/tables.rs`: its eta and k
+/// columns equal the table, and its normal-incidence R column equals
+/// ((eta-1)^2 + k^2) / ((eta+1)^2 + k^2) from the literature values within
+/// one unit of its third printed decimal (~1e-3 relative, the standard of
+/// the eta and k check). Every entry is the correctly rounded value except
+/// Au at 550 nm: R = 0.84748 (0.84749 from the table's own eta and k) is
+/// printed 0.848, a double rounding (0.8475 -> 0.848); 0.847 would be
+/// right. Reported, not edited here (the table is not this test's file).
+#[test]
+fn doc_table_columns() {
+    let src = include_str!("../src/bsdf/tables.rs");
+    let mut seen = 0;
+    for line in src.lines() {
+        let Some(rest) = line.trim().strip_prefix("/// |") else {
+            continue;
+        };
+        let cols: Vec<&str> = rest.split('|').map(str::trim).collect();
+        let Some(&(sym, _)) = METALS.iter().find(|(s, _)| *s == cols[0]) else {
+            continue;
+        };
+        let nums =
+            |s: &str| -> Vec<f64> { s.split_whitespace().map(|x| x.parse().unwrap()).collect() };
+        let (de, dk, dr) = (nums(cols[1]), nums(cols[2]), nums(cols[3]));
+        assert_eq!((de.len(), dk.len(), dr.len()), (3, 3, 3), "{line}");
+        let (eta, k) = named_metal(sym).unwrap();
+        let lit = literature(sym);
+        for c in 0..3 {
+            assert!(
+                (de[c] - eta[c] as f64).abs() < 1e-6,
+                "{sym} doc eta {} vs table {}",
+                de[c],
+                eta[c]
+            );
+            assert!(
+                (dk[c] - k[c] as f64).abs() < 1e-6,
+                "{sym} doc k {} vs table {}",
+                dk[c],
+                k[c]
+            );
+            let want = r0(lit[c].0, lit[c].1);
+            let rounded = (want * 1e3).round() / 1e3;
+            eprintln!(
+                "{sym} {} nm: doc R {:.3} literature R {want:.5}{}",
+                LAMBDA[c],
+                dr[c],
+                if (rounded - dr[c]).abs() > 1e-9 {
+                    format!("  (rounds to {rounded:.3})")
+                } else {
+                    String::new()
+                }
+            );
+            assert!(
+                (dr[c] - want).abs() < 1e-3,
+                "{sym} at {} nm: doc R {} vs literature {want:.5}",
+                LAMBDA[c],
+                dr[c]
+            );
+        }
+        seen += 1;
+    }
+    assert_eq!(seen, METALS.len(), "doc table rows found");
+}
