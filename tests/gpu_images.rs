@@ -33,23 +33,23 @@ fn asset(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn options(seed: u64) -> RenderOptions {
+fn options(seed: u64, size: u32) -> RenderOptions {
     RenderOptions {
         spp: SPP,
         max_depth: -1,
         seed,
-        ..RenderOptions::new(SIZE, SIZE)
+        ..RenderOptions::new(size, size)
     }
 }
 
-fn gpu_film(ctx: &common::ValidatedContext, scene: &Scene) -> Film {
-    render_on(ctx, scene, &options(2), &|_, _| {})
+fn gpu_film(ctx: &common::ValidatedContext, scene: &Scene, size: u32) -> Film {
+    render_on(ctx, scene, &options(2, size), &|_, _| {})
         .unwrap_or_else(|e| panic!("GPU render failed: {e}"))
         .film
 }
 
-fn cpu_film(scene: &Scene) -> Film {
-    glint::cpu::render(scene, &options(1), &|_, _| {})
+fn cpu_film(scene: &Scene, size: u32) -> Film {
+    glint::cpu::render(scene, &options(1, size), &|_, _| {})
         .unwrap_or_else(|e| panic!("CPU render failed: {e}"))
         .0
 }
@@ -87,17 +87,18 @@ fn compare_scene(
     prepare: fn(&mut Scene),
     perturb: Option<&dyn Fn(&mut Scene)>,
 ) -> CompareReport {
+    let size = SIZE;
     let ctx = common::context();
     let mut scene =
         glint::cpu::loader::load(&asset(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
     prepare(&mut scene);
-    let cpu = cpu_film(&scene);
+    let cpu = cpu_film(&scene, size);
     let gpu = match perturb {
-        None => gpu_film(&ctx, &scene),
+        None => gpu_film(&ctx, &scene, size),
         Some(f) => {
             let mut changed = scene.clone();
             f(&mut changed);
-            gpu_film(&ctx, &changed)
+            gpu_film(&ctx, &changed, size)
         }
     };
     let report = compare_films(&gpu, &cpu).unwrap();
@@ -194,6 +195,8 @@ fn brighten(scene: &mut Scene, name: &str) {
     match &mut m.bsdf {
         Bsdf::Diffuse { reflectance } => *reflectance *= 1.05,
         Bsdf::Conductor(c) => c.specular_reflectance *= 1.05,
+        // A dielectric has no albedo: its one parameter, the IOR.
+        Bsdf::Dielectric { eta, .. } => *eta *= 1.05,
         other => panic!("material {name} is {other:?}"),
     }
 }
@@ -225,5 +228,37 @@ fn comparison_catches_a_5_percent_conductor_error() {
     assert!(
         !report.pass,
         "a 5% brighter conductor went unnoticed: {report}"
+    );
+}
+
+#[test]
+fn comparison_catches_a_5_percent_error_on_a_small_object() {
+    // The diffuse asset's sphere, about 17 px across at 48 px: a few 8x8
+    // blocks. (The Cornell box's spheres are one block at 48 px and its
+    // glass caustics make 64 spp too noisy there: z near 2 even at 96 px.)
+    let report = compare_scene(
+        "diffuse.gltf",
+        as_is,
+        Some(&|s: &mut Scene| brighten(s, "diffuse")),
+    );
+    eprintln!("perturbed small diffuse sphere: {report}");
+    assert!(
+        !report.pass,
+        "a 5% brighter small sphere went unnoticed: {report}"
+    );
+}
+
+#[test]
+fn comparison_catches_a_5_percent_dielectric_error() {
+    // The dielectric asset's smooth glass sphere, its IOR 5% high.
+    let report = compare_scene(
+        "dielectric.gltf",
+        as_is,
+        Some(&|s: &mut Scene| brighten(s, "dielectric")),
+    );
+    eprintln!("perturbed small glass sphere: {report}");
+    assert!(
+        !report.pass,
+        "a 5% higher IOR on the glass sphere went unnoticed: {report}"
     );
 }
