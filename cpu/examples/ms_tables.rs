@@ -45,15 +45,20 @@ fn main() -> std::io::Result<()> {
             })
             .collect();
     }
-    // Rough dielectric flux albedo over (eta', alpha, mu).
+    // Rough dielectric flux albedo over (eta', alpha, mu), per Smith form.
     let nt = MS_T_N;
-    let t: Vec<f32> = (0..nt * nt * nt)
-        .into_par_iter()
-        .map(|idx| {
-            let (k, j, i) = (idx / (nt * nt), (idx / nt) % nt, idx % nt);
-            let mu = i as f32 / (nt - 1) as f32;
-            let alpha = j as f32 / (nt - 1) as f32;
-            dielectric_albedo_reference(mu, alpha, ms_t_eta(k), 48) as f32
+    let t: Vec<Vec<f32>> = [false, true]
+        .iter()
+        .map(|&separable| {
+            (0..nt * nt * nt)
+                .into_par_iter()
+                .map(|idx| {
+                    let (k, j, i) = (idx / (nt * nt), (idx / nt) % nt, idx % nt);
+                    let mu = i as f32 / (nt - 1) as f32;
+                    let alpha = j as f32 / (nt - 1) as f32;
+                    dielectric_albedo_reference(mu, alpha, ms_t_eta(k), separable, 48) as f32
+                })
+                .collect()
         })
         .collect();
     let root = concat!(env!("CARGO_MANIFEST_DIR"), "/..");
@@ -85,14 +90,15 @@ fn main() -> std::io::Result<()> {
         rs += &format!("    [\n    {},\n    ],\n", fmt(t));
     }
     rs += "];\n\n";
-    rs += "/// MS_T[(eta * MS_T_N + alpha) * MS_T_N + mu]: rough dielectric flux albedo,\n\
-           /// eta' log-uniform over [1/3, 3] (multiscatter::ms_t_eta).\n";
+    rs += "/// MS_T[shadowing][(eta * MS_T_N + alpha) * MS_T_N + mu]: rough dielectric\n\
+           /// flux albedo, shadowing 0 correlated, 1 separable, eta' log-uniform over\n\
+           /// [1/3, 3] (multiscatter::ms_t_eta).\n";
     rs += &format!("pub const MS_T_N: usize = {MS_T_N};\n\n");
-    rs += &format!(
-        "pub const MS_T: [f32; {}] = [\n    {},\n];\n",
-        t.len(),
-        fmt(&t)
-    );
+    rs += "pub const MS_T: [[f32; MS_T_N * MS_T_N * MS_T_N]; 2] = [\n";
+    for tt in &t {
+        rs += &format!("    [\n    {},\n    ],\n", fmt(tt));
+    }
+    rs += "];\n";
     std::fs::write(format!("{root}/cpu/src/bsdf/ms_tables.rs"), rs)?;
     eprintln!(
         "wrote cpu/src/bsdf/ms_tables.rs (the GPU reads the same numbers from a storage buffer)"

@@ -17,6 +17,7 @@ pub mod integrator;
 pub mod lights;
 pub mod loader;
 pub mod metrics;
+pub mod quadrature;
 pub mod sampling;
 pub mod scene;
 pub mod sobol;

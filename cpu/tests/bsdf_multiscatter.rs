@@ -187,7 +187,7 @@ fn tables_match_glsl_and_recomputation() {
     assert_eq!(&t[..MS_N * MS_N], &MS_E[0][..]);
     assert_eq!(&t[MS_N * MS_N..MS_OFF_E_AVG], &MS_E[1][..]);
     assert_eq!(&t[MS_OFF_E_AVG..MS_OFF_E_AVG + MS_N], &MS_E_AVG[0][..]);
-    assert_eq!(&t[MS_OFF_T..], &MS_T[..]);
+    assert_eq!(&t[MS_OFF_T..], &MS_T.concat()[..]);
     for sep in [false, true] {
         for (i, j) in [(31, 31), (10, 20), (3, 31), (31, 5), (16, 16)] {
             let mu = i as f32 / (MS_N - 1) as f32;

@@ -424,6 +424,21 @@ fn constants_agree_with_the_glsl() {
         slab_pad().to_bits(),
         "BVH_SLAB_PAD {pad}"
     );
+    // conductor.rs ONE_MINUS_EPS, the largest f32 below 1.
+    let ome = define(&bsdf, "ONE_MINUS_EPS");
+    let bits = ome
+        .trim_start_matches("uintBitsToFloat(0x")
+        .trim_end_matches("u)");
+    assert_eq!(
+        u32::from_str_radix(bits, 16).unwrap(),
+        (1.0f32 - f32::EPSILON / 2.0).to_bits(),
+        "ONE_MINUS_EPS {ome}"
+    );
+    assert_eq!(
+        define_u32(&mat, "SHADOWING_MULTISCATTER"),
+        2,
+        "GpuMaterial::shadowing bit 1"
+    );
     assert_eq!(define_u32(&mat, "KIND_DIFFUSE"), GpuMaterial::KIND_DIFFUSE);
     assert_eq!(
         define_u32(&mat, "KIND_CONDUCTOR"),

@@ -240,7 +240,7 @@ float dielectric_ms_scale(float eta, Material m, vec3 wo) {
     }
     vec2 a = rough_alphas(m);
     float side_eta = wo.z >= 0.0 ? eta : 1.0 / eta;
-    float e = dielectric_ms_albedo(abs(wo.z), sqrt(a.x * a.y), side_eta);
+    float e = dielectric_ms_albedo(abs(wo.z), sqrt(a.x * a.y), side_eta, material_separable(m));
     return e > 0.0 ? 1.0 / e : 1.0;
 }
 

@@ -10,7 +10,7 @@
 
 // glint_cpu::bsdf::ms_tables::{MS_N, MS_T_N} and the offsets of
 // gpu_tables(): MS_E[0], MS_E[1] (MS_N^2 each), MS_E_AVG[0], MS_E_AVG[1]
-// (MS_N each), MS_T (MS_T_N^3).
+// (MS_N each), MS_T[0], MS_T[1] (MS_T_N^3 each; correlated, separable).
 #define MS_N 32u
 #define MS_T_N 16u
 #define MS_OFF_E 0u
@@ -81,8 +81,9 @@ float conductor_ms_prob(float mu_o, float alpha, bool separable) {
 
 // Flux albedo E(mu, alpha, eta') of the single-scattering rough
 // dielectric, trilinear in mu, alpha, ln eta'.
-float dielectric_ms_albedo(float mu, float alpha, float eta) {
+float dielectric_ms_albedo(float mu, float alpha, float eta, bool separable) {
     uint n = MS_T_N;
+    uint base = MS_OFF_T + (separable ? n * n * n : 0u);
     float x = clamp(mu, 0.0, 1.0) * float(n - 1u);
     float y = clamp(alpha, 0.0, 1.0) * float(n - 1u);
     float lo = log(MS_T_ETA_MIN);
@@ -97,10 +98,10 @@ float dielectric_ms_albedo(float mu, float alpha, float eta) {
     float p[2];
     for (uint dz = 0u; dz < 2u; dz++) {
         uint k = z0 + dz;
-        float a00 = MS_AT(MS_OFF_T + (k * n + y0) * n + x0);
-        float a10 = MS_AT(MS_OFF_T + (k * n + y0) * n + x0 + 1u);
-        float a01 = MS_AT(MS_OFF_T + (k * n + y0 + 1u) * n + x0);
-        float a11 = MS_AT(MS_OFF_T + (k * n + y0 + 1u) * n + x0 + 1u);
+        float a00 = MS_AT(base + (k * n + y0) * n + x0);
+        float a10 = MS_AT(base + (k * n + y0) * n + x0 + 1u);
+        float a01 = MS_AT(base + (k * n + y0 + 1u) * n + x0);
+        float a11 = MS_AT(base + (k * n + y0 + 1u) * n + x0 + 1u);
         float a = a00 + (a10 - a00) * fx;
         float b = a01 + (a11 - a01) * fx;
         p[dz] = a + (b - a) * fy;

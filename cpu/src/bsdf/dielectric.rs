@@ -63,7 +63,8 @@ pub fn dielectric_ms_scale(eta: f32, r: &Roughness, wo: Vec3) -> f32 {
     }
     let (ax, ay) = rough_alphas(r);
     let side_eta = if wo.z >= 0.0 { eta } else { 1.0 / eta };
-    let e = dielectric_ms_albedo(wo.z.abs(), (ax * ay).sqrt(), side_eta);
+    let separable = r.shadowing == Shadowing::Separable;
+    let e = dielectric_ms_albedo(wo.z.abs(), (ax * ay).sqrt(), side_eta, separable);
     if e > 0.0 { 1.0 / e } else { 1.0 }
 }
 

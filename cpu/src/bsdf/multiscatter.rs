@@ -116,14 +116,15 @@ pub fn ms_albedo_reference(mu: f32, alpha: f32, separable: bool, n: usize) -> f6
 /// Every table in one array, the GPU's storage buffer (binding 15 of the
 /// path tracer; `shaders/bsdf/multiscatter.glsl` reads it at the offsets
 /// [`MS_OFF_E_AVG`] and [`MS_OFF_T`]): MS_E[0], MS_E[1], MS_E_AVG[0],
-/// MS_E_AVG[1], MS_T.
+/// MS_E_AVG[1], MS_T[0], MS_T[1].
 pub fn gpu_tables() -> Vec<f32> {
-    let mut v = Vec::with_capacity(MS_OFF_T + MS_T.len());
+    let mut v = Vec::with_capacity(MS_OFF_T + 2 * MS_T[0].len());
     v.extend_from_slice(&MS_E[0]);
     v.extend_from_slice(&MS_E[1]);
     v.extend_from_slice(&MS_E_AVG[0]);
     v.extend_from_slice(&MS_E_AVG[1]);
-    v.extend_from_slice(&MS_T);
+    v.extend_from_slice(&MS_T[0]);
+    v.extend_from_slice(&MS_T[1]);
     v
 }
 
@@ -143,8 +144,9 @@ pub fn ms_t_eta(j: usize) -> f32 {
 }
 
 /// Flux albedo E(mu, alpha, eta') of the single-scattering rough
-/// dielectric (trilinear in mu, alpha, ln eta').
-pub fn dielectric_ms_albedo(mu: f32, alpha: f32, eta: f32) -> f32 {
+/// dielectric with the given Smith form (trilinear in mu, alpha, ln eta').
+pub fn dielectric_ms_albedo(mu: f32, alpha: f32, eta: f32, separable: bool) -> f32 {
+    let table = &MS_T[separable as usize];
     let n = MS_T_N;
     let x = mu.clamp(0.0, 1.0) * (n - 1) as f32;
     let y = alpha.clamp(0.0, 1.0) * (n - 1) as f32;
@@ -157,7 +159,7 @@ pub fn dielectric_ms_albedo(mu: f32, alpha: f32, eta: f32) -> f32 {
         (z as usize).min(n - 2),
     );
     let (fx, fy, fz) = (x - x0 as f32, y - y0 as f32, z - z0 as f32);
-    let at = |i: usize, j: usize, k: usize| MS_T[(k * n + j) * n + i];
+    let at = |i: usize, j: usize, k: usize| table[(k * n + j) * n + i];
     let plane = |k: usize| {
         let a = at(x0, y0, k) + (at(x0 + 1, y0, k) - at(x0, y0, k)) * fx;
         let b = at(x0, y0 + 1, k) + (at(x0 + 1, y0 + 1, k) - at(x0, y0 + 1, k)) * fx;
@@ -172,7 +174,13 @@ pub fn dielectric_ms_albedo(mu: f32, alpha: f32, eta: f32) -> f32 {
 /// 4 passes, the R/T choice by a Kronecker sequence over the cells so that
 /// it is uniform and independent of the normal): the generator's
 /// integrand.
-pub fn dielectric_albedo_reference(mu: f32, alpha: f32, eta: f32, n: usize) -> f64 {
+pub fn dielectric_albedo_reference(
+    mu: f32,
+    alpha: f32,
+    eta: f32,
+    separable: bool,
+    n: usize,
+) -> f64 {
     let mu = mu.max(1e-4);
     let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let a = alpha.max(super::SMOOTH_ALPHA_THRESHOLD * 1.001);
@@ -181,7 +189,11 @@ pub fn dielectric_albedo_reference(mu: f32, alpha: f32, eta: f32, n: usize) -> f
         roughness: super::Roughness {
             alpha_u: a,
             alpha_v: a,
-            shadowing: super::Shadowing::Correlated,
+            shadowing: if separable {
+                super::Shadowing::Separable
+            } else {
+                super::Shadowing::Correlated
+            },
             multiscatter: false,
         },
     };
