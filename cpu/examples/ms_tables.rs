@@ -94,7 +94,7 @@ fn main() -> std::io::Result<()> {
            /// flux albedo, shadowing 0 correlated, 1 separable, eta' log-uniform over\n\
            /// [1/3, 3] (multiscatter::ms_t_eta).\n";
     rs += &format!("pub const MS_T_N: usize = {MS_T_N};\n\n");
-    rs += "pub const MS_T: [[f32; MS_T_N * MS_T_N * MS_T_N]; 2] = [\n";
+    rs += "pub static MS_T: [[f32; MS_T_N * MS_T_N * MS_T_N]; 2] = [\n";
     for tt in &t {
         rs += &format!("    [\n    {},\n    ],\n", fmt(tt));
     }

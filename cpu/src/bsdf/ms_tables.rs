@@ -2137,7 +2137,7 @@ pub const MS_E_AVG: [[f32; MS_N]; 2] = [
 /// [1/3, 3] (multiscatter::ms_t_eta).
 pub const MS_T_N: usize = 16;
 
-pub const MS_T: [[f32; MS_T_N * MS_T_N * MS_T_N]; 2] = [
+pub static MS_T: [[f32; MS_T_N * MS_T_N * MS_T_N]; 2] = [
     [
         9.79849160e-1,
         9.99943674e-1,
