@@ -24,7 +24,15 @@
 //! - random numbers at 0, 0.5 and 1 - 2^-24 in every combination: finite;
 //! - `gpu_mismatch`: the fraction of queries where the GLSL BSDF differs
 //!   from the CPU beyond 1e-4 relative (as `tests/gpu_bsdf.rs`), not
-//!   counting inputs within float noise of a discontinuity;
+//!   counting inputs within float noise of a discontinuity
+//!   (`GLINT_STABILITY_DEBUG=1` prints the first three per point). What the
+//!   remaining ones are: rough glass sampled at u.y = 1 - 2^-24, where the
+//!   visible normal lies on the rim of its spherical cap (grazing to wo)
+//!   and the CPU and GPU roundings of the ill-conditioned refraction fall
+//!   on either side of a validity check (one returns a sample, the other
+//!   none); a conductor with eta 0.2 and k = 1e-3 near its Fresnel critical
+//!   angle, where the complex square root of a near-zero number puts 1e-4
+//!   relative between the two evaluations;
 //! - `continuity`: at the first point past a threshold (alpha just above
 //!   `SMOOTH_ALPHA_THRESHOLD`, eta just past `ETA_SMOOTH_THRESHOLD`), the
 //!   albedo jump from the point just before it.
@@ -709,6 +717,12 @@ pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>,
                 let c = cpu_out(&p.bsdf, q);
                 if !agrees(&c, g) && !sensitive(&p.bsdf, q, &mut rng) {
                     bad += 1;
+                    if std::env::var_os("GLINT_STABILITY_DEBUG").is_some() && bad <= 3 {
+                        eprintln!(
+                            "GPU differs: {:?}\n  wo {:?} wi {:?} u {:?}\n  cpu {c:?}\n  gpu {g:?}",
+                            p.bsdf, q.wo, q.wi, q.u
+                        );
+                    }
                 }
             }
             bad as f64 / per as f64
