@@ -362,6 +362,15 @@ fn define_u32(src: &str, name: &str) -> u32 {
     }
 }
 
+/// The bits of `#define NAME uintBitsToFloat(0x...u)`.
+fn define_float_bits(src: &str, name: &str) -> u32 {
+    let v = define(src, name);
+    let hex = v
+        .trim_start_matches("uintBitsToFloat(0x")
+        .trim_end_matches("u)");
+    u32::from_str_radix(hex, 16).unwrap_or_else(|e| panic!("#define {name} {v}: {e}"))
+}
+
 /// 1 + 2 gamma(3) (Ize 2013), the CPU traversal's `SLAB_PAD`.
 fn slab_pad() -> f32 {
     let eps = f32::EPSILON * 0.5;
@@ -415,56 +424,35 @@ fn constants_agree_with_the_glsl() {
         define_u32(&bvh, "BVH_STACK_SIZE") as usize,
         glint_cpu::bvh::STACK_SIZE
     );
-    let pad = define(&bvh, "BVH_SLAB_PAD");
-    let bits = pad
-        .trim_start_matches("uintBitsToFloat(0x")
-        .trim_end_matches("u)");
     assert_eq!(
-        u32::from_str_radix(bits, 16).unwrap(),
-        slab_pad().to_bits(),
-        "BVH_SLAB_PAD {pad}"
+        define_float_bits(&bvh, "BVH_SLAB_PAD"),
+        slab_pad().to_bits()
     );
     // conductor.rs ONE_MINUS_EPS, the largest f32 below 1.
-    let ome = define(&bsdf, "ONE_MINUS_EPS");
-    let bits = ome
-        .trim_start_matches("uintBitsToFloat(0x")
-        .trim_end_matches("u)");
     assert_eq!(
-        u32::from_str_radix(bits, 16).unwrap(),
-        (1.0f32 - f32::EPSILON / 2.0).to_bits(),
-        "ONE_MINUS_EPS {ome}"
+        define_float_bits(&bsdf, "ONE_MINUS_EPS"),
+        (1.0f32 - f32::EPSILON / 2.0).to_bits()
     );
     assert_eq!(
         define_u32(&mat, "SHADOWING_MULTISCATTER"),
         2,
         "GpuMaterial::shadowing bit 1"
     );
-    assert_eq!(define_u32(&mat, "KIND_DIFFUSE"), GpuMaterial::KIND_DIFFUSE);
-    assert_eq!(
-        define_u32(&mat, "KIND_CONDUCTOR"),
-        GpuMaterial::KIND_CONDUCTOR
-    );
-    assert_eq!(
-        define_u32(&mat, "KIND_DIELECTRIC"),
-        GpuMaterial::KIND_DIELECTRIC
-    );
-    assert_eq!(
-        define_u32(&mat, "KIND_METALLIC"),
-        GpuMaterial::KIND_METALLIC
-    );
-    assert_eq!(define_u32(&mat, "SHADOWING_CORRELATED"), 0);
-    assert_eq!(define_u32(&mat, "SHADOWING_SEPARABLE"), 1);
-    assert_eq!(define_u32(&lights, "NO_LIGHT"), NO_LIGHT);
-    assert_eq!(define_u32(&lights, "TRI_DOUBLE_SIDED"), TRI_DOUBLE_SIDED);
-    assert_eq!(define_u32(&bindings, "TRI_NORMALS"), glint_cpu::TRI_NORMALS);
-    assert_eq!(
-        define_u32(&bindings, "TRI_TANGENTS"),
-        glint_cpu::TRI_TANGENTS
-    );
-    assert_eq!(
-        define_u32(&bindings, "TRI_SHADING_SHIFT"),
-        glint_cpu::TRI_SHADING_SHIFT
-    );
+    for (src, name, want) in [
+        (&mat, "KIND_DIFFUSE", GpuMaterial::KIND_DIFFUSE),
+        (&mat, "KIND_CONDUCTOR", GpuMaterial::KIND_CONDUCTOR),
+        (&mat, "KIND_DIELECTRIC", GpuMaterial::KIND_DIELECTRIC),
+        (&mat, "KIND_METALLIC", GpuMaterial::KIND_METALLIC),
+        (&mat, "SHADOWING_CORRELATED", 0),
+        (&mat, "SHADOWING_SEPARABLE", 1),
+        (&lights, "NO_LIGHT", NO_LIGHT),
+        (&lights, "TRI_DOUBLE_SIDED", TRI_DOUBLE_SIDED),
+        (&bindings, "TRI_NORMALS", glint_cpu::TRI_NORMALS),
+        (&bindings, "TRI_TANGENTS", glint_cpu::TRI_TANGENTS),
+        (&bindings, "TRI_SHADING_SHIFT", glint_cpu::TRI_SHADING_SHIFT),
+    ] {
+        assert_eq!(define_u32(src, name), want, "{name}");
+    }
     for (name, m) in [
         ("MIS_POWER", glint_cpu::Mis::Power),
         ("MIS_BALANCE", glint_cpu::Mis::Balance),
