@@ -160,12 +160,23 @@ fn max_rel(a: &[Vec3], b: &[Vec3]) -> f64 {
 
 #[test]
 fn four_shards_merged_equal_one_render() {
-    let dir = scratch("shards");
+    // 18 spp: too few for variance batches (independent formula); 128 spp
+    // Sobol: batches of 8 samples, each shard holding four of them.
+    for (spp, ranges, batch) in [
+        (18u32, [(0, 4), (4, 9), (9, 13), (13, 18)], 1u32),
+        (128, [(0, 32), (32, 64), (64, 96), (96, 128)], 8),
+    ] {
+        shards_merged_equal_one_render(spp, ranges, batch);
+    }
+}
+
+fn shards_merged_equal_one_render(spp: u32, ranges: [(u32, u32); 4], batch: u32) {
+    let dir = scratch(&format!("shards{spp}"));
     let whole = dir.join("whole.exr");
     assert_ok(&render(
         &whole,
         24,
-        18,
+        spp,
         &["--seed", "3", "--variance", "--quiet"],
     ));
     let mut shards = Vec::new();
@@ -174,7 +185,7 @@ fn four_shards_merged_equal_one_render() {
         let out = render(
             &p,
             24,
-            18,
+            spp,
             &["--seed", "3", "--variance", "--shard", &format!("{i}/4")],
         );
         assert_ok(&out);
@@ -185,15 +196,15 @@ fn four_shards_merged_equal_one_render() {
         );
         shards.push(p);
     }
-    // 18 samples in 4 shards: 4, 5, 4, 5.
     let metas: Vec<RenderMeta> = shards
         .iter()
         .map(|p| RadianceImage::read(p).unwrap().meta.unwrap())
         .collect();
     assert_eq!(
         metas.iter().map(|m| m.samples[0]).collect::<Vec<_>>(),
-        [(0, 4), (4, 9), (9, 13), (13, 18)]
+        ranges
     );
+    assert!(metas.iter().all(|m| m.variance_batch == batch), "{metas:?}");
     assert_eq!(metas[2].shard, "2/4");
     let merged = dir.join("merged.exr");
     // Order does not matter.
@@ -210,8 +221,10 @@ fn four_shards_merged_equal_one_render() {
         RadianceImage::read(&whole).unwrap(),
     );
     let meta = m.meta.clone().unwrap();
-    assert_eq!((meta.spp, meta.shard.as_str()), (18, "0/1"));
-    assert_eq!(meta.samples, [(0, 18)]);
+    assert_eq!((meta.spp, meta.shard.as_str()), (spp, "0/1"));
+    assert_eq!(meta.samples, [(0, spp)]);
+    assert_eq!(meta.variance_batch, batch);
+    assert_eq!(w.meta.as_ref().unwrap().variance_batch, batch);
     assert_eq!(meta.scene, w.meta.as_ref().unwrap().scene);
     let mean_err = max_rel(&m.mean, &w.mean);
     // The variances: the pooled one against the single render's, both
@@ -221,7 +234,12 @@ fn four_shards_merged_equal_one_render() {
         "merged vs single: max relative difference: mean {mean_err:.2e}, variance {var_err:.2e}"
     );
     assert!(mean_err <= 1e-6, "mean {mean_err}");
-    assert!(var_err <= 1e-3, "variance {var_err}");
+    // The pooled variance is rebuilt from f32 means and variances: its
+    // relative error is about 2^-24 m^2 / (v (n - 1)) over n units, so 16
+    // batch means lose more than 128 samples (measured 3.6e-3 against
+    // 2.4e-5 at the worst pixel).
+    let var_tol = if batch == 1 { 1e-3 } else { 1e-2 };
+    assert!(var_err <= var_tol, "variance {var_err}");
     // The merged image diffs as identical to the single render.
     let out = diff(&merged, &whole, &[]);
     assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));

@@ -171,10 +171,11 @@ pub const MIN_VARIANCE_BATCHES: u32 = 16;
 
 /// The batch size for `spp` Sobol samples split into `shards`: the largest
 /// power of two L that divides `spp` and leaves at least
-/// max([`MIN_VARIANCE_BATCHES`], shards) batches (so every shard holds
-/// whole batches); 1 when none does.
+/// max([`MIN_VARIANCE_BATCHES`], 2 shards) batches, so that every shard
+/// holds at least two whole batches (its EXR's variance, from which
+/// `merge` recovers the batch sums, needs two); 1 when none does.
 pub fn variance_batch_for(spp: u32, shards: u32) -> u32 {
-    let need = MIN_VARIANCE_BATCHES.max(shards);
+    let need = MIN_VARIANCE_BATCHES.max(shards.saturating_mul(2));
     let mut l = 1u32;
     while l <= u32::MAX / 2 && spp % (2 * l) == 0 && spp / (2 * l) >= need {
         l *= 2;

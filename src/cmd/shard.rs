@@ -123,12 +123,14 @@ mod tests {
     #[test]
     fn shards_tile_the_samples() {
         for spp in [1u32, 3, 4, 7, 64, 100, 256, 4096] {
-            for n in 1..=spp.min(9) {
+            for n in (1..=spp.min(9)).chain([16, 64].into_iter().filter(|&n| n <= spp)) {
                 let mut next = 0;
                 for i in 0..n {
                     let batch = glint::cpu::film::variance_batch_for(spp, n);
                     let (a, b) = Shard { index: i, count: n }.range(spp, batch);
                     assert_eq!(a % batch, 0);
+                    // Two whole batches at least, where batches are used.
+                    assert!(batch == 1 || b - a >= 2 * batch, "{i}/{n} of {spp}");
                     assert_eq!(a, next);
                     assert!(b > a, "{i}/{n} of {spp}");
                     next = b;
