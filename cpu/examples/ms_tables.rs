@@ -14,7 +14,7 @@ use rayon::prelude::*;
 
 const N: usize = 32;
 /// Grid of the dielectric table (mu, alpha, ln eta').
-const MS_T_N: usize = 16;
+const MS_T_N: usize = 24;
 
 fn main() -> std::io::Result<()> {
     let mut e = vec![vec![0f32; N * N]; 2];

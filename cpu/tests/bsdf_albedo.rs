@@ -317,12 +317,12 @@ const SHADOWINGS: [Shadowing; 2] = [Shadowing::Correlated, Shadowing::Separable]
 ///   32 x 32 E(mu, alpha) table's bilinear interpolation (the crate's own
 ///   bsdf_multiscatter test allows 2% there too). Allowed: 2%.
 /// - SHORTFALL (glass, wo on the denser side, where the critical angle
-///   is): down to 0.9829 (correlated Smith, eta 1.33, alpha 1, normal
-///   incidence from inside), 0.9860 (eta 1.5, same), 0.9886 (eta 1.33,
-///   alpha 1, cos -0.3), 0.9891 (eta 1.5, alpha 0.1, cos -0.1): the
-///   16^3 table's trilinear interpolation. Allowed: 2%. From the rarer
-///   side 1% holds. (Separable Smith has its own table since this test
-///   found it uncompensated, 0.50 at eta 1.33, alpha 1, cos 0.1.)
+///   is): down to 0.9887 (separable Smith, eta 1.33, alpha 1, cos -0.1)
+///   and 0.9899 (correlated, normal incidence from inside), up to 1.0066
+///   (separable, eta 1.33, alpha 0.3, cos -0.1), with the 24^3 tables;
+///   the 16^3 ones reached 0.9829. Allowed: 1.2%. From the rarer side
+///   1% holds. (Separable Smith has its own table since this test found
+///   it uncompensated, 0.50 at eta 1.33, alpha 1, cos 0.1.)
 fn furnace(bsdf: &Bsdf, cos: f32) -> Furnace {
     const TARGET: Furnace = Furnace {
         below: 0.01,
@@ -347,9 +347,9 @@ fn furnace(bsdf: &Bsdf, cos: f32) -> Furnace {
             let _ = roughness;
             if denser_side {
                 Furnace {
-                    below: 0.02,
-                    above: 0.02,
-                    note: "SHORTFALL glass from the denser side: 2%",
+                    below: 0.012,
+                    above: 0.012,
+                    note: "SHORTFALL glass from the denser side: 1.2%",
                 }
             } else {
                 TARGET

@@ -12,7 +12,7 @@
 // gpu_tables(): MS_E[0], MS_E[1] (MS_N^2 each), MS_E_AVG[0], MS_E_AVG[1]
 // (MS_N each), MS_T[0], MS_T[1] (MS_T_N^3 each; correlated, separable).
 #define MS_N 32u
-#define MS_T_N 16u
+#define MS_T_N 24u
 #define MS_OFF_E 0u
 #define MS_OFF_E_AVG 2048u
 #define MS_OFF_T 2112u
