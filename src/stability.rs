@@ -338,10 +338,11 @@ pub fn points() -> Vec<Point> {
     v
 }
 
-/// PCG32, deterministic per point.
-struct Rng(u64);
+/// PCG32, deterministic per point (and the query stream of
+/// `tests/gpu_bsdf.rs`).
+pub struct Rng(pub u64);
 impl Rng {
-    fn u32(&mut self) -> u32 {
+    pub fn u32(&mut self) -> u32 {
         let old = self.0;
         self.0 = old
             .wrapping_mul(6364136223846793005)
@@ -349,10 +350,10 @@ impl Rng {
         let x = (((old >> 18) ^ old) >> 27) as u32;
         x.rotate_right((old >> 59) as u32)
     }
-    fn f32(&mut self) -> f32 {
+    pub fn f32(&mut self) -> f32 {
         (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
     }
-    fn dir(&mut self) -> Vec3 {
+    pub fn dir(&mut self) -> Vec3 {
         let z = 2.0 * self.f32() - 1.0;
         let phi = TAU * self.f32();
         let s = (1.0 - z * z).max(0.0).sqrt();

@@ -517,26 +517,24 @@ fn mean_of_exr(path: &Path) -> f32 {
     img.pixels().map(|p| p.0[1]).sum::<f32>() / (img.width() * img.height()) as f32
 }
 
+/// `glint render SCENE -o OUT` on the CPU at 12x8 and `spp`, plus `extra`.
+fn render_unlit(scene: &Path, out: &Path, spp: u32, extra: &[&str]) -> Output {
+    glint()
+        .arg("render")
+        .arg(scene)
+        .args(["--backend", "cpu", "--spp", &spp.to_string()])
+        .args(["--width", "12", "--height", "8", "-o"])
+        .arg(out)
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn warnings_strict_background_and_the_no_light_rule() {
     let dir = scratch("warnings");
     let scene = write_unlit_scene(&dir);
-    let render = |extra: &[&str], out: &str| {
-        glint()
-            .args([
-                "render",
-                scene.to_str().unwrap(),
-                "--backend",
-                "cpu",
-                "--spp",
-                "2",
-            ])
-            .args(["--width", "12", "--height", "8", "-o"])
-            .arg(dir.join(out))
-            .args(extra)
-            .output()
-            .unwrap()
-    };
+    let render = |extra: &[&str], out: &str| render_unlit(&scene, &dir.join(out), 2, extra);
     // No light: rendered under a white sky, with one warning line.
     let out = render(&[], "white.exr");
     assert!(
@@ -664,22 +662,7 @@ fn envmap_file_renders_like_the_same_constant_background() {
     image::Rgb32FImage::from_pixel(16, 8, image::Rgb([0.5f32, 0.5, 0.5]))
         .save(&env)
         .unwrap();
-    let render = |extra: &[&str], out: &str| {
-        glint()
-            .args([
-                "render",
-                scene.to_str().unwrap(),
-                "--backend",
-                "cpu",
-                "--spp",
-                "32",
-            ])
-            .args(["--width", "12", "--height", "8", "-o"])
-            .arg(dir.join(out))
-            .args(extra)
-            .output()
-            .unwrap()
-    };
+    let render = |extra: &[&str], out: &str| render_unlit(&scene, &dir.join(out), 32, extra);
     let out = render(
         &["--envmap", env.to_str().unwrap(), "--envmap-rotate", "40"],
         "env.exr",

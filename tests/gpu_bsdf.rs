@@ -19,23 +19,7 @@ use glint::gpu::groups;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::{GpuMaterial, Material};
 
-use glint::stability::{GpuResult, Query};
-
-/// Deterministic PCG32, as in the CPU crate's test helpers.
-struct Rng(u64);
-impl Rng {
-    fn u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-}
+use glint::stability::{GpuResult, Query, Rng};
 
 fn rough(au: f32, av: f32, separable: bool) -> Roughness {
     Roughness {

@@ -33,23 +33,23 @@ fn asset(name: &str) -> PathBuf {
         .join(name)
 }
 
-fn options(seed: u64, size: u32) -> RenderOptions {
+fn options(seed: u64) -> RenderOptions {
     RenderOptions {
         spp: SPP,
         max_depth: -1,
         seed,
-        ..RenderOptions::new(size, size)
+        ..RenderOptions::new(SIZE, SIZE)
     }
 }
 
-fn gpu_film(ctx: &common::ValidatedContext, scene: &Scene, size: u32) -> Film {
-    render_on(ctx, scene, &options(2, size), &|_, _| {})
+fn gpu_film(ctx: &common::ValidatedContext, scene: &Scene) -> Film {
+    render_on(ctx, scene, &options(2), &|_, _| {})
         .unwrap_or_else(|e| panic!("GPU render failed: {e}"))
         .film
 }
 
-fn cpu_film(scene: &Scene, size: u32) -> Film {
-    glint::cpu::render(scene, &options(1, size), &|_, _| {})
+fn cpu_film(scene: &Scene) -> Film {
+    glint::cpu::render(scene, &options(1), &|_, _| {})
         .unwrap_or_else(|e| panic!("CPU render failed: {e}"))
         .0
 }
@@ -87,18 +87,17 @@ fn compare_scene(
     prepare: fn(&mut Scene),
     perturb: Option<&dyn Fn(&mut Scene)>,
 ) -> CompareReport {
-    let size = SIZE;
     let ctx = common::context();
     let mut scene =
         glint::cpu::loader::load(&asset(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
     prepare(&mut scene);
-    let cpu = cpu_film(&scene, size);
+    let cpu = cpu_film(&scene);
     let gpu = match perturb {
-        None => gpu_film(&ctx, &scene, size),
+        None => gpu_film(&ctx, &scene),
         Some(f) => {
             let mut changed = scene.clone();
             f(&mut changed);
-            gpu_film(&ctx, &changed, size)
+            gpu_film(&ctx, &changed)
         }
     };
     let report = compare_films(&gpu, &cpu).unwrap();

@@ -56,7 +56,7 @@ fn main() -> std::io::Result<()> {
                     let (k, j, i) = (idx / (nt * nt), (idx / nt) % nt, idx % nt);
                     let mu = i as f32 / (nt - 1) as f32;
                     let alpha = j as f32 / (nt - 1) as f32;
-                    dielectric_albedo_reference(mu, alpha, ms_t_eta(k), separable, 48) as f32
+                    dielectric_albedo_reference(mu, alpha, ms_t_eta(k, nt), separable, 48) as f32
                 })
                 .collect()
         })

@@ -393,6 +393,18 @@ fn film_planes(f: &Film) -> (Vec<Vec3>, Vec<Vec3>) {
     )
 }
 
+/// A film as the test sees it, over its [`film_planes`]: the variance
+/// estimated from `spp / variance_batch` independent values per pixel.
+fn film_estimate<'a>(f: &Film, planes: &'a (Vec<Vec3>, Vec<Vec3>)) -> Estimate<'a> {
+    Estimate {
+        width: f.width,
+        height: f.height,
+        mean: &planes.0,
+        variance: &planes.1,
+        samples: Some(f.spp / f.variance_batch()),
+    }
+}
+
 /// Compare two renders of the same scene (see the module notes).
 pub fn compare_films(a: &Film, b: &Film) -> Result<CompareReport, CompareError> {
     compare_films_masked(a, b, &|_, _| true, ALPHA)
@@ -412,21 +424,13 @@ pub fn compare_films_masked(
         return Err(CompareError::Empty);
     }
     let (pa, pb) = (film_planes(a), film_planes(b));
-    let ea = Estimate {
-        width: a.width,
-        height: a.height,
-        mean: &pa.0,
-        variance: &pa.1,
-        samples: Some(a.spp / a.variance_batch()),
-    };
-    let eb = Estimate {
-        width: b.width,
-        height: b.height,
-        mean: &pb.0,
-        variance: &pb.1,
-        samples: Some(b.spp / b.variance_batch()),
-    };
-    compare_core(&ea, &eb, false, mask, alpha)
+    compare_core(
+        &film_estimate(a, &pa),
+        &film_estimate(b, &pb),
+        false,
+        mask,
+        alpha,
+    )
 }
 
 /// Compare two noisy images given as means and variances of the mean
@@ -579,13 +583,7 @@ pub fn compare_to_reference(
     }
     let pa = film_planes(film);
     let zero = vec![Vec3::ZERO; reference.len()];
-    let ea = Estimate {
-        width: film.width,
-        height: film.height,
-        mean: &pa.0,
-        variance: &pa.1,
-        samples: Some(film.spp / film.variance_batch()),
-    };
+    let ea = film_estimate(film, &pa);
     let eb = Estimate {
         width: film.width,
         height: film.height,

@@ -273,20 +273,6 @@ impl Film {
         }
     }
 
-    /// Add sample `s` (its global index) with radiance `l` to pixel `i`'s
-    /// sums. Samples must come in index order, the first at a multiple of
-    /// the batch size.
-    #[inline]
-    pub fn add_sample(&mut self, i: usize, s: u32, l: Vec3) {
-        let (sum, sum_sq, run, sq) = (
-            &mut self.sum[i],
-            &mut self.sum_sq[i],
-            &mut self.batch_run[i],
-            &mut self.batch_sq[i],
-        );
-        add_sample(self.batch, s, l, sum, sum_sq, run, sq);
-    }
-
     /// The batch size the variance estimate uses: [`Film::batch`] when the
     /// samples are whole batches (at least two), else 1.
     pub fn variance_batch(&self) -> u32 {

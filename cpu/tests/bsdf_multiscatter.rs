@@ -209,32 +209,31 @@ fn tables_match_glsl_and_recomputation() {
     }
 }
 
+/// The mean radiance of a 24x24, 64 spp render of a sphere of `bsdf`
+/// under a background of radiance 1 (a white furnace).
+fn rendered_furnace(bsdf: Bsdf, seed: u64) -> f64 {
+    use render_common::*;
+    let mut mats = vec![diffuse("unused", 0.5)];
+    mats[0].bsdf = bsdf;
+    let sc = scene(
+        uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
+        mats,
+        vec![],
+        look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0),
+        Vec3::ONE,
+    );
+    let film = render(&sc, &opts(24, 64, -1, seed));
+    let n = film.sum.len();
+    (0..n).map(|i| film.mean(i).x as f64).sum::<f64>() / n as f64
+}
+
 /// A rendered white furnace: a sphere of the F = 1 conductor in a uniform
 /// background of radiance 1 renders 1 everywhere with `multiscatter`
 /// (statistically, to 1%), and visibly darker without it at alpha = 1.
 #[test]
 fn rendered_furnace_is_one() {
-    use render_common::*;
     for (alpha, ms) in [(1.0f32, true), (0.5, true), (1.0, false)] {
-        let mut mats = vec![diffuse("unused", 0.5)];
-        let b = white(alpha, alpha, Shadowing::Correlated, ms);
-        mats[0].bsdf = b;
-        let sc = scene(
-            uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
-            mats,
-            vec![],
-            look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0),
-            Vec3::ONE,
-        );
-        let film = render(&sc, &opts(24, 64, -1, 9));
-        let (mut s, mut n) = (0.0f64, 0usize);
-        for y in 0..24 {
-            for x in 0..24 {
-                s += film.mean(film.index(x, y)).x as f64;
-                n += 1;
-            }
-        }
-        let mean = s / n as f64;
+        let mean = rendered_furnace(white(alpha, alpha, Shadowing::Correlated, ms), 9);
         eprintln!("furnace alpha {alpha} multiscatter {ms}: mean {mean:.4}");
         if ms {
             assert!((mean - 1.0).abs() < 0.01, "alpha {alpha}: {mean}");
@@ -327,26 +326,8 @@ fn rough_glass_sampling_matches_eval_and_pdf() {
 /// alpha = 1, up from 0.96 without compensation).
 #[test]
 fn rendered_glass_furnace_is_one() {
-    use render_common::*;
     for (alpha, ms) in [(1.0f32, true), (0.3, true), (1.0, false)] {
-        let mut mats = vec![diffuse("unused", 0.5)];
-        mats[0].bsdf = glass(1.5, alpha, ms);
-        let sc = scene(
-            uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
-            mats,
-            vec![],
-            look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0),
-            Vec3::ONE,
-        );
-        let film = render(&sc, &opts(24, 64, -1, 10));
-        let (mut s, mut n) = (0.0f64, 0usize);
-        for y in 0..24 {
-            for x in 0..24 {
-                s += film.mean(film.index(x, y)).x as f64;
-                n += 1;
-            }
-        }
-        let mean = s / n as f64;
+        let mean = rendered_furnace(glass(1.5, alpha, ms), 10);
         eprintln!("glass furnace alpha {alpha} multiscatter {ms}: mean {mean:.4}");
         if ms {
             assert!((mean - 1.0).abs() < 0.015, "alpha {alpha}: {mean}");

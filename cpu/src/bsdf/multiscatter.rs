@@ -137,9 +137,11 @@ pub const MS_OFF_T: usize = MS_OFF_E_AVG + 2 * MS_N;
 pub const MS_T_ETA_MIN: f32 = 1.0 / 3.0;
 pub const MS_T_ETA_MAX: f32 = 3.0;
 
-/// eta' of grid index j.
-pub fn ms_t_eta(j: usize) -> f32 {
-    let t = j as f32 / (MS_T_N - 1) as f32;
+/// eta' of grid index j of an `n`-point grid (the table's: `MS_T_N`; the
+/// generator passes the size it writes, which may not be the one compiled
+/// in yet).
+pub fn ms_t_eta(j: usize, n: usize) -> f32 {
+    let t = j as f32 / (n - 1) as f32;
     (MS_T_ETA_MIN.ln() + t * (MS_T_ETA_MAX.ln() - MS_T_ETA_MIN.ln())).exp()
 }
 
