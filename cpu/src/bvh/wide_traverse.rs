@@ -101,22 +101,56 @@ fn sort4(dist: &[f32; 4]) -> [usize; 4] {
     o
 }
 
+/// A leaf's triangles one at a time, in order, for the closest hit: each
+/// test's interval ends at the best hit so far. The reference the SIMD leaf
+/// test (`x86::leaf_closest`) reproduces bit for bit.
+#[inline(always)]
+fn leaf_closest_scalar(
+    r: &PreparedRay,
+    tris: &[Triangle],
+    first: usize,
+    count: usize,
+    best: &mut Hit,
+    present: impl Fn(u32, f32, f32) -> bool,
+) {
+    for (i, tri) in (first..).zip(&tris[first..first + count]) {
+        if let Some((t, u, v)) = intersect_triangle(r, tri, best.t)
+            && present(i as u32, u, v)
+        {
+            *best = Hit {
+                t,
+                tri: i as u32,
+                u,
+                v,
+            };
+        }
+    }
+}
+
+/// Whether any of a leaf's triangles is hit in (0, tmax).
+#[inline(always)]
+fn leaf_any_scalar(
+    r: &PreparedRay,
+    tris: &[Triangle],
+    first: usize,
+    count: usize,
+    tmax: f32,
+    present: impl Fn(u32, f32, f32) -> bool,
+) -> bool {
+    (first..).zip(&tris[first..first + count]).any(|(i, tri)| {
+        intersect_triangle(r, tri, tmax).is_some_and(|(_, u, v)| present(i as u32, u, v))
+    })
+}
+
 /// Closest hit, generic over the box test. Children are visited nearest
 /// first; the others wait on the stack with their entry distance and are
 /// dropped when popped if the best hit has since moved in front of them
 /// (the box test's own criterion: entry > tmax x SLAB_PAD misses).
 #[inline(always)]
-fn closest<F, P>(
-    nodes: &[Bvh4Node],
-    tris: &[Triangle],
-    r: &PreparedRay,
-    tmax: f32,
-    boxes: F,
-    present: P,
-) -> Option<Hit>
+fn closest<F, L>(nodes: &[Bvh4Node], tmax: f32, boxes: F, leaf: L) -> Option<Hit>
 where
     F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
-    P: Fn(u32, f32, f32) -> bool,
+    L: Fn(usize, usize, &mut Hit),
 {
     let mut best = Hit {
         t: tmax,
@@ -130,18 +164,7 @@ where
     loop {
         if is_leaf_ref(cur) {
             let (first, count) = leaf_range(cur);
-            for (i, tri) in (first..).zip(&tris[first..first + count]) {
-                if let Some((t, u, v)) = intersect_triangle(r, tri, best.t)
-                    && present(i as u32, u, v)
-                {
-                    best = Hit {
-                        t,
-                        tri: i as u32,
-                        u,
-                        v,
-                    };
-                }
-            }
+            leaf(first, count, &mut best);
         } else {
             let node = &nodes[cur as usize];
             let (mask, dist) = boxes(node, best.t);
@@ -192,17 +215,10 @@ where
 /// Any hit: the first triangle hit in (0, tmax) ends the search; children
 /// still nearest first (the likelier blockers).
 #[inline(always)]
-fn occluded<F, P>(
-    nodes: &[Bvh4Node],
-    tris: &[Triangle],
-    r: &PreparedRay,
-    tmax: f32,
-    boxes: F,
-    present: P,
-) -> bool
+fn occluded<F, L>(nodes: &[Bvh4Node], tmax: f32, boxes: F, leaf: L) -> bool
 where
     F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
-    P: Fn(u32, f32, f32) -> bool,
+    L: Fn(usize, usize) -> bool,
 {
     let mut stack = [0u32; WIDE_STACK_SIZE];
     let mut sp = 0;
@@ -210,9 +226,7 @@ where
     loop {
         if is_leaf_ref(cur) {
             let (first, count) = leaf_range(cur);
-            if (first..).zip(&tris[first..first + count]).any(|(i, tri)| {
-                intersect_triangle(r, tri, tmax).is_some_and(|(_, u, v)| present(i as u32, u, v))
-            }) {
+            if leaf(first, count) {
                 return true;
             }
         } else {
@@ -276,11 +290,9 @@ pub(super) fn intersect(
         Kernel::Sse2 | Kernel::Avx => x86::intersect_sse2(nodes, tris, &r, ray.tmax),
         _ => closest(
             nodes,
-            tris,
-            &r,
             ray.tmax,
             |n, t| intersect_aabb4_scalar(&r, n, t),
-            |_, _, _| true,
+            |first, count, best| leaf_closest_scalar(&r, tris, first, count, best, |_, _, _| true),
         ),
     }
 }
@@ -299,11 +311,9 @@ pub(super) fn intersect_masked(
     let r = PreparedRay::new(ray.o, ray.d);
     closest(
         nodes,
-        tris,
-        &r,
         ray.tmax,
         |n, t| intersect_aabb4_scalar(&r, n, t),
-        present,
+        |first, count, best| leaf_closest_scalar(&r, tris, first, count, best, &present),
     )
 }
 
@@ -320,11 +330,9 @@ pub(super) fn occluded_masked(
     let r = PreparedRay::new(ray.o, ray.d);
     occluded(
         nodes,
-        tris,
-        &r,
         ray.tmax,
         |n, t| intersect_aabb4_scalar(&r, n, t),
-        present,
+        |first, count| leaf_any_scalar(&r, tris, first, count, ray.tmax, &present),
     )
 }
 
@@ -343,11 +351,9 @@ pub(super) fn any_hit(nodes: &[Bvh4Node], tris: &[Triangle], ray: &Ray, kernel: 
         Kernel::Sse2 | Kernel::Avx => x86::occluded_sse2(nodes, tris, &r, ray.tmax),
         _ => occluded(
             nodes,
-            tris,
-            &r,
             ray.tmax,
             |n, t| intersect_aabb4_scalar(&r, n, t),
-            |_, _, _| true,
+            |first, count| leaf_any_scalar(&r, tris, first, count, ray.tmax, |_, _, _| true),
         ),
     }
 }
@@ -461,6 +467,154 @@ mod x86 {
         }
     }
 
+    /// The ray's constants for [`triangles4`], broadcast to all four lanes.
+    pub(super) struct TriRay4 {
+        o: [__m128; 3],
+        k: [usize; 3],
+        shear: [__m128; 3],
+    }
+
+    #[inline(always)]
+    pub(super) fn tri_ray4(r: &PreparedRay) -> TriRay4 {
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[allow(unused_unsafe)]
+        unsafe {
+            TriRay4 {
+                o: [_mm_set1_ps(r.o.x), _mm_set1_ps(r.o.y), _mm_set1_ps(r.o.z)],
+                k: [r.kx, r.ky, r.kz],
+                shear: [
+                    _mm_set1_ps(r.shear.x),
+                    _mm_set1_ps(r.shear.y),
+                    _mm_set1_ps(r.shear.z),
+                ],
+            }
+        }
+    }
+
+    /// Up to four watertight triangle tests at once: lane j computes, with
+    /// the same IEEE operations in the same order (no FMA), exactly what
+    /// [`intersect_triangle`](super::intersect_triangle) computes for
+    /// `tris[j]` against `tmax`, so the hits are the scalar test's bit for
+    /// bit. Returns the mask of hit lanes and per lane (t, u, v).
+    #[inline(always)]
+    fn triangles4(r: &TriRay4, tris: &[Triangle], tmax: f32) -> (u32, [[f32; 4]; 3]) {
+        debug_assert!((1..=4).contains(&tris.len()));
+        let last = tris.len() - 1;
+        // SAFETY: SSE2 is part of the x86_64 baseline. Each unaligned load
+        // reads 16 bytes inside one 48-byte `Triangle` (#[repr(C)]: p0 at
+        // 0, p1 at 16, p2 at 32, each followed by a u32 the tests ignore);
+        // lanes past the leaf's end repeat its last triangle and are masked.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let p: [*const f32; 4] =
+                std::array::from_fn(|j| (&tris[j.min(last)] as *const Triangle).cast::<f32>());
+            // One vertex of the four triangles, as x, y, z rows minus the
+            // ray origin.
+            let vertex = |off: usize| -> [__m128; 3] {
+                let r0 = _mm_loadu_ps(p[0].add(off));
+                let r1 = _mm_loadu_ps(p[1].add(off));
+                let r2 = _mm_loadu_ps(p[2].add(off));
+                let r3 = _mm_loadu_ps(p[3].add(off));
+                let t0 = _mm_unpacklo_ps(r0, r1);
+                let t1 = _mm_unpacklo_ps(r2, r3);
+                let t2 = _mm_unpackhi_ps(r0, r1);
+                let t3 = _mm_unpackhi_ps(r2, r3);
+                [
+                    _mm_sub_ps(_mm_movelh_ps(t0, t1), r.o[0]),
+                    _mm_sub_ps(_mm_movehl_ps(t1, t0), r.o[1]),
+                    _mm_sub_ps(_mm_movelh_ps(t2, t3), r.o[2]),
+                ]
+            };
+            let (a, b, c) = (vertex(0), vertex(4), vertex(8));
+            let [kx, ky, kz] = r.k;
+            let [sx, sy, sz] = r.shear;
+            let ax = _mm_sub_ps(a[kx], _mm_mul_ps(sx, a[kz]));
+            let ay = _mm_sub_ps(a[ky], _mm_mul_ps(sy, a[kz]));
+            let bx = _mm_sub_ps(b[kx], _mm_mul_ps(sx, b[kz]));
+            let by = _mm_sub_ps(b[ky], _mm_mul_ps(sy, b[kz]));
+            let cx = _mm_sub_ps(c[kx], _mm_mul_ps(sx, c[kz]));
+            let cy = _mm_sub_ps(c[ky], _mm_mul_ps(sy, c[kz]));
+            let u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+            let v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+            let w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+            let zero = _mm_setzero_ps();
+            let any_neg = _mm_or_ps(
+                _mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)),
+                _mm_cmplt_ps(w, zero),
+            );
+            let any_pos = _mm_or_ps(
+                _mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)),
+                _mm_cmpgt_ps(w, zero),
+            );
+            let det = _mm_add_ps(_mm_add_ps(u, v), w);
+            let az = _mm_mul_ps(sz, a[kz]);
+            let bz = _mm_mul_ps(sz, b[kz]);
+            let cz = _mm_mul_ps(sz, c[kz]);
+            let t = _mm_div_ps(
+                _mm_add_ps(
+                    _mm_add_ps(_mm_mul_ps(u, az), _mm_mul_ps(v, bz)),
+                    _mm_mul_ps(w, cz),
+                ),
+                det,
+            );
+            // Kept: not both signs, det != 0, 0 < t < tmax (false for NaN).
+            let ok = _mm_andnot_ps(
+                _mm_or_ps(_mm_and_ps(any_neg, any_pos), _mm_cmpeq_ps(det, zero)),
+                _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(tmax))),
+            );
+            let mask = _mm_movemask_ps(ok) as u32 & ((1u32 << tris.len()) - 1);
+            let mut out = [[0f32; 4]; 3];
+            if mask != 0 {
+                _mm_storeu_ps(out[0].as_mut_ptr(), t);
+                _mm_storeu_ps(out[1].as_mut_ptr(), _mm_div_ps(v, det));
+                _mm_storeu_ps(out[2].as_mut_ptr(), _mm_div_ps(w, det));
+            }
+            (mask, out)
+        }
+    }
+
+    /// `leaf_closest_scalar` four triangles per test: the lanes a group
+    /// hits are then taken in order, each only if nearer than the best so
+    /// far, which is what the one-by-one loop accepts.
+    #[inline(always)]
+    pub(super) fn leaf_closest(
+        r: &TriRay4,
+        tris: &[Triangle],
+        first: usize,
+        count: usize,
+        best: &mut Hit,
+    ) {
+        for start in (first..first + count).step_by(4) {
+            let group = &tris[start..(start + 4).min(first + count)];
+            let (mut mask, [t, u, v]) = triangles4(r, group, best.t);
+            while mask != 0 {
+                let j = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                if t[j] < best.t {
+                    *best = Hit {
+                        t: t[j],
+                        tri: (start + j) as u32,
+                        u: u[j],
+                        v: v[j],
+                    };
+                }
+            }
+        }
+    }
+
+    #[inline(always)]
+    pub(super) fn leaf_any(
+        r: &TriRay4,
+        tris: &[Triangle],
+        first: usize,
+        count: usize,
+        tmax: f32,
+    ) -> bool {
+        (first..first + count)
+            .step_by(4)
+            .any(|start| triangles4(r, &tris[start..(start + 4).min(first + count)], tmax).0 != 0)
+    }
+
     #[inline(always)]
     fn intersect_impl(
         nodes: &[Bvh4Node],
@@ -469,26 +623,24 @@ mod x86 {
         tmax: f32,
     ) -> Option<Hit> {
         let r4 = ray4(r);
+        let rt = tri_ray4(r);
         closest(
             nodes,
-            tris,
-            r,
             tmax,
             |n, t| intersect_aabb4(&r4, n, t),
-            |_, _, _| true,
+            |first, count, best| leaf_closest(&rt, tris, first, count, best),
         )
     }
 
     #[inline(always)]
     fn occluded_impl(nodes: &[Bvh4Node], tris: &[Triangle], r: &PreparedRay, tmax: f32) -> bool {
         let r4 = ray4(r);
+        let rt = tri_ray4(r);
         occluded(
             nodes,
-            tris,
-            r,
             tmax,
             |n, t| intersect_aabb4(&r4, n, t),
-            |_, _, _| true,
+            |first, count| leaf_any(&rt, tris, first, count, tmax),
         )
     }
 
@@ -538,6 +690,110 @@ mod x86 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The SIMD leaf tests against the one-by-one scalar loop, on leaves of
+    /// 1..16 triangles: random ones, ones sharing the ray's vertices and
+    /// edges (ties and the watertight edge rule), degenerate and non-finite
+    /// ones, every ray direction kind (zero components included). Same hit,
+    /// bit for bit, and the same any-hit answer.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn simd_leaf_test_is_the_scalar_one() {
+        use glam::Vec3;
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let tri = |a: Vec3, b: Vec3, c: Vec3, i: u32| Triangle {
+            p0: a.into(),
+            material: i,
+            p1: b.into(),
+            light: u32::MAX,
+            p2: c.into(),
+            flags: 0,
+        };
+        let mut checked = 0;
+        for case in 0..4000 {
+            let o = Vec3::new(rnd(), rnd(), rnd()) * 2.0;
+            let mut d = Vec3::new(rnd(), rnd(), rnd());
+            if case % 5 == 0 {
+                d.x = 0.0;
+            }
+            if case % 7 == 0 {
+                d.y = -0.0;
+            }
+            if d == Vec3::ZERO {
+                d = Vec3::Z;
+            }
+            let n = 1 + case % 16;
+            let mut tris: Vec<Triangle> = (0..n)
+                .map(|i| {
+                    let c = o + d * (1.0 + 3.0 * rnd().abs());
+                    let e = 0.5 + rnd().abs();
+                    let v = |r: f32, s: f32, t: f32| c + Vec3::new(r, s, t) * e;
+                    tri(
+                        v(rnd(), rnd(), rnd()),
+                        v(rnd(), rnd(), rnd()),
+                        v(rnd(), rnd(), rnd()),
+                        i as u32,
+                    )
+                })
+                .collect();
+            match case % 6 {
+                // Two triangles sharing an edge the ray passes through.
+                1 if n >= 2 => {
+                    let p = o + d * 2.0;
+                    let q = Vec3::new(rnd(), rnd(), rnd());
+                    tris[0] = tri(p - q, p + q, p + Vec3::new(q.y, -q.x, q.z), 0);
+                    tris[1] = tri(p + q, p - q, p - Vec3::new(q.y, -q.x, q.z), 1);
+                }
+                // The same triangle twice: a tie goes to the first.
+                2 if n >= 2 => tris[n - 1] = tris[0],
+                // Degenerate and non-finite triangles.
+                3 => {
+                    tris[0].p1 = tris[0].p0;
+                    if n >= 2 {
+                        tris[1].p2 = [f32::NAN, 0.0, f32::INFINITY];
+                    }
+                }
+                _ => {}
+            }
+            let r = PreparedRay::new(o, d);
+            let rt = x86::tri_ray4(&r);
+            for tmax in [f32::INFINITY, 3.0, 1.5] {
+                let empty = Hit {
+                    t: tmax,
+                    tri: u32::MAX,
+                    u: 0.0,
+                    v: 0.0,
+                };
+                let (mut want, mut got) = (empty, empty);
+                leaf_closest_scalar(&r, &tris, 0, n, &mut want, |_, _, _| true);
+                x86::leaf_closest(&rt, &tris, 0, n, &mut got);
+                assert_eq!(
+                    (got.t.to_bits(), got.tri, got.u.to_bits(), got.v.to_bits()),
+                    (
+                        want.t.to_bits(),
+                        want.tri,
+                        want.u.to_bits(),
+                        want.v.to_bits()
+                    ),
+                    "case {case}, tmax {tmax}"
+                );
+                assert_eq!(
+                    x86::leaf_any(&rt, &tris, 0, n, tmax),
+                    leaf_any_scalar(&r, &tris, 0, n, tmax, |_, _, _| true),
+                    "case {case}, tmax {tmax}"
+                );
+                checked += usize::from(want.tri != u32::MAX);
+            }
+        }
+        // The cases hit often enough to test something.
+        assert!(checked > 2000, "{checked} hits");
+    }
 
     #[test]
     fn sort4_orders_by_distance_then_slot() {
