@@ -3,7 +3,8 @@
 //! (`tests/bvh_test`, what renders use) and the binary one (`tests/bvh2_test`,
 //! the reference), on the bunny, degenerate soups and closed meshes; the
 //! `Bvh4Node` layout pinned by `tests/bvh4_layout`; and the throughput of
-//! both kernels in one run (printed, never asserted).
+//! both kernels in one run on the bunny and the Cornell box (printed, never
+//! asserted).
 //!
 //! Tolerance against the CPU: the GLSL mirrors the Rust step by step, and
 //! `precise` keeps the edge functions free of FMA, but Vulkan only requires
@@ -29,8 +30,8 @@ use glint::cpu::{Bvh, Bvh4, Ray, Triangle};
 use glint::gpu::groups;
 
 use geometry::{
-    Rng, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays, random_soup,
-    rays_from_surfaces,
+    Rng, asset_triangles, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays,
+    random_soup, rays_from_surfaces,
 };
 
 /// Which traversal a kernel runs.
@@ -427,49 +428,54 @@ fn gpu_empty_scene_misses() {
 #[test]
 fn gpu_bvh_throughput() {
     let ctx = common::context();
-    let b = build(&bunny());
-    let (lo, hi) = geometry::bounds_of(&b.tris);
-    let primary = primary_rays(lo, hi, 384, 384);
-    let hits: Vec<_> = primary
-        .iter()
-        .map(|r| b.wide.intersect(&b.tris, r))
-        .collect();
-    let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Rng(9));
     eprintln!("bvh kernels on {}:", ctx.info().name);
-    for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
-        for (query, mode) in [("closest", CLOSEST), ("any-hit", ANY)] {
-            // Interleaved: each round times both kernels, so a change of
-            // load on the shared machine falls on both alike.
-            for kind in KINDS {
-                run_gpu(&ctx, &b, kind, rays, mode); // compile and warm up
-            }
-            let mut best = [f64::INFINITY; 2];
-            let mut results = Vec::new();
-            for round in 0..3 {
-                for (k, kind) in KINDS.into_iter().enumerate() {
-                    let start = Instant::now();
-                    let out = run_gpu(&ctx, &b, kind, rays, mode);
-                    best[k] = best[k].min(start.elapsed().as_secs_f64());
-                    if round == 0 {
-                        results.push(out);
+    for (name, mesh) in [
+        ("bunny", bunny()),
+        ("cornell", asset_triangles("cornell.gltf")),
+    ] {
+        let b = build(&mesh);
+        let (lo, hi) = geometry::bounds_of(&b.tris);
+        let primary = primary_rays(lo, hi, 384, 384);
+        let hits: Vec<_> = primary
+            .iter()
+            .map(|r| b.wide.intersect(&b.tris, r))
+            .collect();
+        let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Rng(9));
+        for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
+            for (query, mode) in [("closest", CLOSEST), ("any-hit", ANY)] {
+                // Interleaved: each round times both kernels, so a change of
+                // load on the shared machine falls on both alike.
+                for kind in KINDS {
+                    run_gpu(&ctx, &b, kind, rays, mode); // compile and warm up
+                }
+                let mut best = [f64::INFINITY; 2];
+                let mut results = Vec::new();
+                for round in 0..3 {
+                    for (k, kind) in KINDS.into_iter().enumerate() {
+                        let start = Instant::now();
+                        let out = run_gpu(&ctx, &b, kind, rays, mode);
+                        best[k] = best[k].min(start.elapsed().as_secs_f64());
+                        if round == 0 {
+                            results.push(out);
+                        }
                     }
                 }
+                let rates = best.map(|s| rays.len() as f64 / s / 1e6);
+                compare_kernels(
+                    &format!("{name} {set} {query}"),
+                    &b,
+                    rays,
+                    &results[1],
+                    &results[0],
+                );
+                eprintln!(
+                    "  {name} {set:7} {query}: {} rays, binary {:.2} M rays/s, wide {:.2} M rays/s (x{:.2})",
+                    rays.len(),
+                    rates[0],
+                    rates[1],
+                    rates[1] / rates[0]
+                );
             }
-            let rates = best.map(|s| rays.len() as f64 / s / 1e6);
-            compare_kernels(
-                &format!("{set} {query}"),
-                &b,
-                rays,
-                &results[1],
-                &results[0],
-            );
-            eprintln!(
-                "  {set:7} {query}: {} rays, binary {:.2} M rays/s, wide {:.2} M rays/s (x{:.2})",
-                rays.len(),
-                rates[0],
-                rates[1],
-                rates[1] / rates[0]
-            );
         }
     }
     let messages = ctx.finish();

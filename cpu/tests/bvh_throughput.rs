@@ -1,7 +1,8 @@
 //! Traversal throughput, binary vs 4-wide BVH, printed with `--nocapture`
 //! (release figures: `cargo test --release -p glint-cpu --test
-//! bvh_throughput -- --nocapture --test-threads 1`). Meshes: the bunny, and
-//! `../shared/assets/nefertiti.glb` where that file exists. Rays: coherent
+//! bvh_throughput -- --nocapture --test-threads 1`). Meshes: the bunny, the
+//! bundled Cornell box, and `../shared/assets/nefertiti.glb` where that file
+//! exists. Rays: coherent
 //! primary rays from a pinhole camera, and incoherent diffuse bounces
 //! (cosine-distributed about the normal at each primary hit, origin offset
 //! off the surface). Queries: closest hit and any hit, one thread and rayon.
@@ -20,7 +21,7 @@ use glint_cpu::bvh::Kernel;
 use glint_cpu::{Bvh, Bvh4, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-use geometry::{Rng, bunny, diffuse_rays, primary_rays, tri};
+use geometry::{Rng, asset_triangles, bunny, diffuse_rays, file_triangles, primary_rays};
 
 /// A traversal under test: rays in, a checksum out.
 type Variant<'a> = &'a dyn Fn(&[Ray]) -> usize;
@@ -48,18 +49,6 @@ fn interleaved(rays: &[Ray], chunk: usize, variants: &[Variant]) -> Vec<f64> {
     }
     std::hint::black_box(sink);
     total
-}
-
-fn load(path: &Path) -> Vec<Triangle> {
-    let scene = glint_cpu::loader::parse(path).expect("mesh");
-    scene
-        .triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.vertices();
-            tri(a, b, c)
-        })
-        .collect()
 }
 
 fn measure(name: &str, input: &[Triangle]) {
@@ -194,9 +183,10 @@ fn traversal_throughput_binary_vs_wide() {
         Kernel::available()
     );
     measure("bunny", &bunny());
+    measure("cornell", &asset_triangles("cornell.gltf"));
     let nefertiti = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/assets/nefertiti.glb");
     if nefertiti.is_file() {
-        measure("nefertiti", &load(&nefertiti));
+        measure("nefertiti", &file_triangles(&nefertiti));
     } else {
         eprintln!("{} not found: skipped", nefertiti.display());
     }

@@ -272,16 +272,27 @@ pub fn diffuse_rays(
 /// The bunny's triangles in file order, positions only (repository copy,
 /// read by the loader without building its BVH).
 pub fn bunny() -> Vec<Triangle> {
+    asset_triangles("bunny.glb")
+}
+
+/// The triangles of a bundled scene (`assets/NAME`), as bare geometry.
+pub fn asset_triangles(name: &str) -> Vec<Triangle> {
     // The root package and the cpu/ crate both include this file.
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let path = [
-        root.join("assets/bunny.glb"),
-        root.join("../assets/bunny.glb"),
+        root.join("assets").join(name),
+        root.join("../assets").join(name),
     ]
     .into_iter()
     .find(|p| p.is_file())
-    .expect("assets/bunny.glb");
-    let scene = glint_cpu::loader::parse(&path).expect("bunny.glb");
+    .unwrap_or_else(|| panic!("assets/{name}"));
+    file_triangles(&path)
+}
+
+/// The triangles of a glTF file, as bare geometry.
+pub fn file_triangles(path: &Path) -> Vec<Triangle> {
+    let scene =
+        glint_cpu::loader::parse(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     scene
         .triangles
         .iter()
