@@ -38,9 +38,6 @@ fi
 (cd "$src" && CARGO_TARGET_DIR="$root/$out/target" cargo build --release --locked)
 before="$root/$out/target/release/glint"
 
-median() { sort -g | awk '{a[NR]=$1} END {if (NR%2) print a[(NR+1)/2]; else print (a[NR/2]+a[NR/2+1])/2}'; }
-field() { python3 -c 'import json,sys; print(json.load(open(sys.argv[1]))[sys.argv[2]])' "$1" "$2"; }
-
 table="$out/table.md"
 summary="$out/summary.tsv"
 : > "$summary"

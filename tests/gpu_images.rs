@@ -200,34 +200,24 @@ fn brighten(scene: &mut Scene, name: &str) {
     }
 }
 
+/// `scene` rendered as is against `scene` with `material` perturbed by
+/// `brighten`: the comparison must fail. `what` names the perturbation.
+fn assert_perturbation_caught(scene: &str, material: &str, what: &str) {
+    let report = compare_scene(scene, as_is, Some(&|s: &mut Scene| brighten(s, material)));
+    eprintln!("{what}: {report}");
+    assert!(!report.pass, "{what} went unnoticed: {report}");
+}
+
 #[test]
 fn comparison_catches_a_5_percent_diffuse_error() {
     // The Cornell box's white walls, floor and ceiling.
-    let report = compare_scene(
-        "cornell.gltf",
-        as_is,
-        Some(&|s: &mut Scene| brighten(s, "white")),
-    );
-    eprintln!("perturbed white: {report}");
-    assert!(
-        !report.pass,
-        "a 5% brighter diffuse reflectance went unnoticed: {report}"
-    );
+    assert_perturbation_caught("cornell.gltf", "white", "a 5% brighter diffuse reflectance");
 }
 
 #[test]
 fn comparison_catches_a_5_percent_conductor_error() {
     // The smooth gold sphere.
-    let report = compare_scene(
-        "conductor.gltf",
-        as_is,
-        Some(&|s: &mut Scene| brighten(s, "conductor")),
-    );
-    eprintln!("perturbed conductor: {report}");
-    assert!(
-        !report.pass,
-        "a 5% brighter conductor went unnoticed: {report}"
-    );
+    assert_perturbation_caught("conductor.gltf", "conductor", "a 5% brighter conductor");
 }
 
 #[test]
@@ -235,29 +225,15 @@ fn comparison_catches_a_5_percent_error_on_a_small_object() {
     // The diffuse asset's sphere, about 17 px across at 48 px: a few 8x8
     // blocks. (The Cornell box's spheres are one block at 48 px and its
     // glass caustics make 64 spp too noisy there: z near 2 even at 96 px.)
-    let report = compare_scene(
-        "diffuse.gltf",
-        as_is,
-        Some(&|s: &mut Scene| brighten(s, "diffuse")),
-    );
-    eprintln!("perturbed small diffuse sphere: {report}");
-    assert!(
-        !report.pass,
-        "a 5% brighter small sphere went unnoticed: {report}"
-    );
+    assert_perturbation_caught("diffuse.gltf", "diffuse", "a 5% brighter small sphere");
 }
 
 #[test]
 fn comparison_catches_a_5_percent_dielectric_error() {
     // The dielectric asset's smooth glass sphere, its IOR 5% high.
-    let report = compare_scene(
+    assert_perturbation_caught(
         "dielectric.gltf",
-        as_is,
-        Some(&|s: &mut Scene| brighten(s, "dielectric")),
-    );
-    eprintln!("perturbed small glass sphere: {report}");
-    assert!(
-        !report.pass,
-        "a 5% higher IOR on the glass sphere went unnoticed: {report}"
+        "dielectric",
+        "a 5% higher IOR on the glass sphere",
     );
 }

@@ -2,10 +2,9 @@
 //! (release figures: `cargo test --release -p glint-cpu --test
 //! bvh_throughput -- --nocapture --test-threads 1`). Meshes: the bunny, the
 //! bundled Cornell box, and `../shared/assets/nefertiti.glb` where that file
-//! exists. Rays: coherent
-//! primary rays from a pinhole camera, and incoherent diffuse bounces
-//! (cosine-distributed about the normal at each primary hit, origin offset
-//! off the surface). Queries: closest hit and any hit, one thread and rayon.
+//! exists. Rays: coherent primary rays from a pinhole camera, and incoherent
+//! diffuse bounces (cosine-distributed about the normal at each primary hit,
+//! origin offset off the surface). Queries: closest hit and any hit, one thread and rayon.
 //!
 //! Speeds are printed, never asserted (the machine is shared); what is
 //! asserted: every traversal gives the binary BVH's hits, and one thread and

@@ -366,15 +366,19 @@ mod x86 {
     use super::super::wide::Bvh4Node;
     use super::{Hit, Triangle, closest, occluded};
 
-    /// The ray's constants broadcast to all four lanes.
-    struct Ray4 {
+    /// The ray's constants broadcast to all four lanes, for the box test
+    /// and the triangle test.
+    pub(super) struct Ray4 {
         o: [__m128; 3],
         inv_d: [__m128; 3],
         zero_d: [bool; 3],
+        /// The triangle test's axis permutation (kx, ky, kz) and shear.
+        k: [usize; 3],
+        shear: [__m128; 3],
     }
 
     #[inline(always)]
-    fn ray4(r: &PreparedRay) -> Ray4 {
+    pub(super) fn ray4(r: &PreparedRay) -> Ray4 {
         // SAFETY (all intrinsics here): SSE2 is part of the x86_64 baseline.
         #[allow(unused_unsafe)]
         unsafe {
@@ -386,6 +390,12 @@ mod x86 {
                     _mm_set1_ps(r.inv_d.z),
                 ],
                 zero_d: [r.zero_d.x, r.zero_d.y, r.zero_d.z],
+                k: [r.kx, r.ky, r.kz],
+                shear: [
+                    _mm_set1_ps(r.shear.x),
+                    _mm_set1_ps(r.shear.y),
+                    _mm_set1_ps(r.shear.z),
+                ],
             }
         }
     }
@@ -467,37 +477,13 @@ mod x86 {
         }
     }
 
-    /// The ray's constants for [`triangles4`], broadcast to all four lanes.
-    pub(super) struct TriRay4 {
-        o: [__m128; 3],
-        k: [usize; 3],
-        shear: [__m128; 3],
-    }
-
-    #[inline(always)]
-    pub(super) fn tri_ray4(r: &PreparedRay) -> TriRay4 {
-        // SAFETY: SSE2 is part of the x86_64 baseline.
-        #[allow(unused_unsafe)]
-        unsafe {
-            TriRay4 {
-                o: [_mm_set1_ps(r.o.x), _mm_set1_ps(r.o.y), _mm_set1_ps(r.o.z)],
-                k: [r.kx, r.ky, r.kz],
-                shear: [
-                    _mm_set1_ps(r.shear.x),
-                    _mm_set1_ps(r.shear.y),
-                    _mm_set1_ps(r.shear.z),
-                ],
-            }
-        }
-    }
-
     /// Up to four watertight triangle tests at once: lane j computes, with
     /// the same IEEE operations in the same order (no FMA), exactly what
     /// [`intersect_triangle`](super::intersect_triangle) computes for
     /// `tris[j]` against `tmax`, so the hits are the scalar test's bit for
     /// bit. Returns the mask of hit lanes and per lane (t, u, v).
     #[inline(always)]
-    fn triangles4(r: &TriRay4, tris: &[Triangle], tmax: f32) -> (u32, [[f32; 4]; 3]) {
+    fn triangles4(r: &Ray4, tris: &[Triangle], tmax: f32) -> (u32, [[f32; 4]; 3]) {
         debug_assert!((1..=4).contains(&tris.len()));
         let last = tris.len() - 1;
         // SAFETY: SSE2 is part of the x86_64 baseline. Each unaligned load
@@ -578,14 +564,13 @@ mod x86 {
     /// far, which is what the one-by-one loop accepts.
     #[inline(always)]
     pub(super) fn leaf_closest(
-        r: &TriRay4,
+        r: &Ray4,
         tris: &[Triangle],
         first: usize,
         count: usize,
         best: &mut Hit,
     ) {
-        for start in (first..first + count).step_by(4) {
-            let group = &tris[start..(start + 4).min(first + count)];
+        for (g, group) in tris[first..first + count].chunks(4).enumerate() {
             let (mut mask, [t, u, v]) = triangles4(r, group, best.t);
             while mask != 0 {
                 let j = mask.trailing_zeros() as usize;
@@ -593,7 +578,7 @@ mod x86 {
                 if t[j] < best.t {
                     *best = Hit {
                         t: t[j],
-                        tri: (start + j) as u32,
+                        tri: (first + 4 * g + j) as u32,
                         u: u[j],
                         v: v[j],
                     };
@@ -604,15 +589,15 @@ mod x86 {
 
     #[inline(always)]
     pub(super) fn leaf_any(
-        r: &TriRay4,
+        r: &Ray4,
         tris: &[Triangle],
         first: usize,
         count: usize,
         tmax: f32,
     ) -> bool {
-        (first..first + count)
-            .step_by(4)
-            .any(|start| triangles4(r, &tris[start..(start + 4).min(first + count)], tmax).0 != 0)
+        tris[first..first + count]
+            .chunks(4)
+            .any(|group| triangles4(r, group, tmax).0 != 0)
     }
 
     #[inline(always)]
@@ -623,24 +608,22 @@ mod x86 {
         tmax: f32,
     ) -> Option<Hit> {
         let r4 = ray4(r);
-        let rt = tri_ray4(r);
         closest(
             nodes,
             tmax,
             |n, t| intersect_aabb4(&r4, n, t),
-            |first, count, best| leaf_closest(&rt, tris, first, count, best),
+            |first, count, best| leaf_closest(&r4, tris, first, count, best),
         )
     }
 
     #[inline(always)]
     fn occluded_impl(nodes: &[Bvh4Node], tris: &[Triangle], r: &PreparedRay, tmax: f32) -> bool {
         let r4 = ray4(r);
-        let rt = tri_ray4(r);
         occluded(
             nodes,
             tmax,
             |n, t| intersect_aabb4(&r4, n, t),
-            |first, count| leaf_any(&rt, tris, first, count, tmax),
+            |first, count| leaf_any(&r4, tris, first, count, tmax),
         )
     }
 
@@ -762,7 +745,7 @@ mod tests {
                 _ => {}
             }
             let r = PreparedRay::new(o, d);
-            let rt = x86::tri_ray4(&r);
+            let rt = x86::ray4(&r);
             for tmax in [f32::INFINITY, 3.0, 1.5] {
                 let empty = Hit {
                     t: tmax,
