@@ -3,7 +3,8 @@
 //! (`tests/bvh_test`, what renders use) and the binary one (`tests/bvh2_test`,
 //! the reference), on the bunny, degenerate soups and closed meshes; the
 //! `Bvh4Node` layout pinned by `tests/bvh4_layout`; and the throughput of
-//! both kernels in one run on the bunny and the Cornell box (printed, never
+//! both kernels in one run on the bunny, the Cornell box and
+//! `../shared/assets/nefertiti.glb` where that file exists (printed, never
 //! asserted).
 //!
 //! Tolerance against the CPU: the GLSL mirrors the Rust step by step, and
@@ -30,8 +31,8 @@ use glint::cpu::{Bvh, Bvh4, Ray, Triangle};
 use glint::gpu::groups;
 
 use geometry::{
-    Rng, asset_triangles, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays,
-    random_soup, rays_from_surfaces,
+    Rng, asset_triangles, bunny, diffuse_rays, file_triangles, grid_cube, nasty_soup, primary_rays,
+    random_rays, random_soup, rays_from_surfaces,
 };
 
 /// Which traversal a kernel runs.
@@ -417,8 +418,8 @@ fn gpu_empty_scene_misses() {
     }
 }
 
-/// Rays/s of the binary and the wide kernel in one run, on the bunny:
-/// coherent primary rays (384 x 384) and incoherent diffuse bounces off their
+/// Rays/s of the binary and the wide kernel in one run, on the bunny, the
+/// Cornell box and nefertiti (where `../shared/assets` has it): coherent primary rays (384 x 384) and incoherent diffuse bounces off their
 /// hits, closest and any hit apart. Each figure is the best of three warm
 /// runs, the kernels alternating, upload and readback included; only the ratios mean much on a shared
 /// machine. Figures: `cargo test --test gpu_bvh gpu_bvh_throughput --
@@ -429,10 +430,18 @@ fn gpu_empty_scene_misses() {
 fn gpu_bvh_throughput() {
     let ctx = common::context();
     eprintln!("bvh kernels on {}:", ctx.info().name);
-    for (name, mesh) in [
+    let mut meshes = vec![
         ("bunny", bunny()),
         ("cornell", asset_triangles("cornell.gltf")),
-    ] {
+    ];
+    let nefertiti =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/nefertiti.glb");
+    if nefertiti.is_file() {
+        meshes.push(("nefertiti", file_triangles(&nefertiti)));
+    } else {
+        eprintln!("{} not found: skipped", nefertiti.display());
+    }
+    for (name, mesh) in meshes {
         let b = build(&mesh);
         let (lo, hi) = geometry::bounds_of(&b.tris);
         let primary = primary_rays(lo, hi, 384, 384);
