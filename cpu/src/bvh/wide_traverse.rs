@@ -9,6 +9,8 @@
 //! order), so the SIMD, scalar and binary traversals accept the same boxes
 //! and find the same closest triangle.
 
+use std::mem::MaybeUninit;
+
 use super::traverse::{PreparedRay, SLAB_PAD, intersect_aabb, intersect_triangle};
 use super::wide::{Bvh4Node, SLOT_EMPTY, WIDE_STACK_SIZE, is_leaf_ref, leaf_range};
 use super::{Hit, Ray};
@@ -158,7 +160,9 @@ where
         u: 0.0,
         v: 0.0,
     };
-    let mut stack = [(0u32, 0f32); WIDE_STACK_SIZE];
+    // Not zeroed: only entries below `sp`, each written by a push, are read
+    // (zeroing 576 bytes per query was 2% of a render, in memset).
+    let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); WIDE_STACK_SIZE];
     let mut sp = 0;
     let mut cur = 0u32;
     loop {
@@ -184,14 +188,14 @@ where
                     } else {
                         (near, far)
                     };
-                    stack[sp] = (node.child[b], dist[b]);
+                    stack[sp] = MaybeUninit::new((node.child[b], dist[b]));
                     sp += 1;
                     cur = node.child[a];
                     continue;
                 }
                 let order = sort4(&dist);
                 for &s in order[1..mask.count_ones() as usize].iter().rev() {
-                    stack[sp] = (node.child[s], dist[s]);
+                    stack[sp] = MaybeUninit::new((node.child[s], dist[s]));
                     sp += 1;
                 }
                 cur = node.child[order[0]];
@@ -203,7 +207,8 @@ where
                 return (best.tri != u32::MAX).then_some(best);
             }
             sp -= 1;
-            let (c, d) = stack[sp];
+            // SAFETY: every entry below the stack pointer was pushed.
+            let (c, d) = unsafe { stack[sp].assume_init() };
             if d <= best.t * SLAB_PAD {
                 cur = c;
                 break;
@@ -220,7 +225,8 @@ where
     F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
     L: Fn(usize, usize) -> bool,
 {
-    let mut stack = [0u32; WIDE_STACK_SIZE];
+    // Not zeroed, as in `closest`.
+    let mut stack = [MaybeUninit::<u32>::uninit(); WIDE_STACK_SIZE];
     let mut sp = 0;
     let mut cur = 0u32;
     loop {
@@ -247,14 +253,14 @@ where
                     } else {
                         (near, far)
                     };
-                    stack[sp] = node.child[b];
+                    stack[sp] = MaybeUninit::new(node.child[b]);
                     sp += 1;
                     cur = node.child[a];
                     continue;
                 }
                 let order = sort4(&dist);
                 for &s in order[1..mask.count_ones() as usize].iter().rev() {
-                    stack[sp] = node.child[s];
+                    stack[sp] = MaybeUninit::new(node.child[s]);
                     sp += 1;
                 }
                 cur = node.child[order[0]];
@@ -265,7 +271,8 @@ where
             return false;
         }
         sp -= 1;
-        cur = stack[sp];
+        // SAFETY: every entry below the stack pointer was pushed.
+        cur = unsafe { stack[sp].assume_init() };
     }
 }
 
