@@ -3,8 +3,8 @@
 //! The crate `sobol_burley` (Burley's construction with Vegdahl's improved
 //! hash) is the source of truth; `shaders/integrator/sobol.glsl` returns
 //! the same bits for every (seed, pixel, sample, dimension), pinned by
-//! `tests/gpu_sobol.rs` and, for its direction-number table, by
-//! [`tests::glsl_direction_table_is_the_crates`].
+//! `tests/gpu_sobol.rs`; both compute the direction numbers' XOR in closed
+//! form ([`sobol_dim1`]), which a unit test checks against the crate's table.
 //!
 //! - Dimensions come in pairs: dimension `d` is coordinate `d % 2` of pair
 //!   `d / 2`, and every pair is Sobol dimensions 0 and 1 (a (0,2)-sequence)
@@ -47,90 +47,37 @@ pub fn pair_seed(key: u32, pixel: u32, sample: u32, pair: u32) -> u32 {
     pcg4d([pixel, pair, sample >> SOBOL_BLOCK_BITS, key ^ SOBOL_SALT])[0]
 }
 
-/// Sobol dimensions 0 and 1's direction numbers, bit-reversed, as
-/// `sobol_burley` stores them: `[dimension][bit]`. A copy, so that one pass
-/// over the index bits serves both dimensions; [`direction_table`] reads
-/// the crate's, and a unit test holds the two (and the GLSL's) equal.
-pub const DIRECTIONS: [[u32; 16]; 2] = [
-    [
-        0x0000_0001,
-        0x0000_0002,
-        0x0000_0004,
-        0x0000_0008,
-        0x0000_0010,
-        0x0000_0020,
-        0x0000_0040,
-        0x0000_0080,
-        0x0000_0100,
-        0x0000_0200,
-        0x0000_0400,
-        0x0000_0800,
-        0x0000_1000,
-        0x0000_2000,
-        0x0000_4000,
-        0x0000_8000,
-    ],
-    [
-        0x0000_0001,
-        0x0000_0003,
-        0x0000_0005,
-        0x0000_000f,
-        0x0000_0011,
-        0x0000_0033,
-        0x0000_0055,
-        0x0000_00ff,
-        0x0000_0101,
-        0x0000_0303,
-        0x0000_0505,
-        0x0000_0f0f,
-        0x0000_1111,
-        0x0000_3333,
-        0x0000_5555,
-        0x0000_ffff,
-    ],
-];
-
-/// Dimension 1's direction numbers XORed over each byte of the (reversed)
-/// index: `DIR1_BYTES[0][b]` for index bits 31..24 (b's bit 7 - k set:
-/// direction k), `DIR1_BYTES[1][b]` for bits 23..16 (directions 8..15).
-/// Two lookups replace sixteen masked XORs.
-const DIR1_BYTES: [[u32; 256]; 2] = {
-    let mut t = [[0u32; 256]; 2];
-    let mut half = 0;
-    while half < 2 {
-        let mut b = 0;
-        while b < 256 {
-            let mut v = 0u32;
-            let mut k = 0;
-            while k < 8 {
-                if (b >> (7 - k)) & 1 == 1 {
-                    v ^= DIRECTIONS[1][8 * half + k];
-                }
-                k += 1;
-            }
-            t[half][b] = v;
-            b += 1;
-        }
-        half += 1;
-    }
-    t
-};
+/// Sobol dimension 1 (before scrambling) of the index bits `b`, bit k of
+/// `b` taking direction k. Dimension 1's direction numbers are the rows of
+/// Pascal's triangle mod 2: direction k has bit j exactly where j's bits are
+/// a subset of k's (Lucas's theorem). So bit j of the XOR of the taken
+/// directions is the XOR of `b`'s bits at the supersets of j: the superset
+/// sum over GF(2), four shift-and-XOR steps (one per bit of j) instead of
+/// sixteen masked XORs or a table. `sobol_dim1` in GLSL.
+#[inline]
+pub fn sobol_dim1(b: u32) -> u32 {
+    let mut v = b & 0xffff;
+    v ^= (v >> 1) & 0x5555;
+    v ^= (v >> 2) & 0x3333;
+    v ^= (v >> 4) & 0x0f0f;
+    v ^= (v >> 8) & 0x00ff;
+    v
+}
 
 /// `(sobol_burley::sample(i, 0, seed), sobol_burley::sample(i, 1, seed))`,
 /// bit for bit (a unit test checks it), at a fraction of the cost: the two
-/// share the index shuffle; dimension 0 (van der Corput) is the shuffled
-/// index's top 16 bits reversed, dimension 1 two table lookups.
+/// share the index shuffle; the shuffled index's top 16 bits, reversed, are
+/// dimension 0 (van der Corput: direction k of dimension 0 is 1 << k) and,
+/// through [`sobol_dim1`], dimension 1.
 #[inline]
 pub fn sobol_pair(i: u32, seed: u32) -> Vec2 {
     use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
     let idx = owen_scramble_rev(i.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
-    // The top 16 bits: the crate's 2^16-sample tables. Direction k of
-    // dimension 0 is 1 << k, taken where index bit 31 - k is set.
-    let v0 = idx.reverse_bits() & 0xffff;
-    let v1 = DIR1_BYTES[0][(idx >> 24) as usize] ^ DIR1_BYTES[1][((idx >> 16) & 0xff) as usize];
+    // The top 16 bits: the crate's 2^16-sample tables.
+    let bits = idx.reverse_bits() & 0xffff;
     let s = seed.wrapping_mul(0x9c8f_2d3b);
-    let x = owen_scramble_rev(v0, hash(s ^ 0x912f_69ba));
-    let y = owen_scramble_rev(v1, hash(s ^ 0x174f_18ab));
+    let x = owen_scramble_rev(bits, hash(s ^ 0x912f_69ba));
+    let y = owen_scramble_rev(sobol_dim1(bits), hash(s ^ 0x174f_18ab));
     Vec2::new(
         u32_to_f32_norm(x.reverse_bits()),
         u32_to_f32_norm(y.reverse_bits()),
@@ -261,8 +208,7 @@ impl PathSampler {
 
 /// Sobol dimensions 0 and 1's direction numbers, bit-reversed, as
 /// `sobol_burley` stores them (`parts::sobol_rev` of a one-bit index):
-/// `[dimension][bit]`. `shaders/integrator/sobol.glsl` holds them as
-/// constants; [`glsl_table`] prints them in its syntax.
+/// `[dimension][bit]`. What [`sobol_pair`] computes in closed form.
 pub fn direction_table() -> [[u32; 16]; 2] {
     let mut t = [[0u32; 16]; 2];
     for (d, row) in t.iter_mut().enumerate() {
@@ -273,85 +219,42 @@ pub fn direction_table() -> [[u32; 16]; 2] {
     t
 }
 
-/// [`direction_table`] as the GLSL constants of `sobol.glsl`.
-pub fn glsl_table() -> String {
-    let t = direction_table();
-    let mut s = String::new();
-    for (d, row) in t.iter().enumerate() {
-        s.push_str(&format!("const uint SOBOL_REV_DIM{d}[16] = uint[16](\n"));
-        for (k, chunk) in row.chunks(4).enumerate() {
-            let items: Vec<String> = chunk.iter().map(|v| format!("0x{v:08x}u")).collect();
-            s.push_str("    ");
-            s.push_str(&items.join(", "));
-            s.push_str(if k == 3 { "\n" } else { ",\n" });
-        }
-        s.push_str(");\n");
-    }
-    s
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// The GLSL's table is the crate's. To regenerate it after a crate
-    /// update: `cargo test -p glint-cpu --lib sobol -- --nocapture` prints
-    /// the block to paste between the markers.
+    /// The closed forms are the crate's direction numbers: dimension 0's
+    /// direction k is 1 << k, dimension 1's is `sobol_dim1` of bit k, and
+    /// `sobol_dim1` is linear (XOR of the directions of the bits set).
     #[test]
-    fn glsl_direction_table_is_the_crates() {
-        let glsl = include_str!("../../shaders/integrator/sobol.glsl");
-        let begin = "// BEGIN TABLE (cpu/src/sobol.rs glsl_table)\n";
-        let end = "// END TABLE\n";
-        let a = glsl.find(begin).expect("table start marker") + begin.len();
-        let b = glsl.find(end).expect("table end marker");
-        let want = glsl_table();
-        if glsl[a..b] != want {
-            println!("{want}");
+    fn closed_forms_are_the_crates_directions() {
+        let t = direction_table();
+        for k in 0..16 {
+            assert_eq!(t[0][k], 1 << k, "dimension 0, direction {k}");
+            assert_eq!(t[1][k], sobol_dim1(1 << k), "dimension 1, direction {k}");
         }
-        assert_eq!(
-            glsl[a..b],
-            want,
-            "shaders/integrator/sobol.glsl's table is stale"
-        );
+        let mut seed = 7u32;
+        for _ in 0..10_000 {
+            seed = crate::sampling::pcg4d([seed, 4, 5, 6])[0];
+            let b = seed & 0xffff;
+            let xor = (0..16)
+                .filter(|k| b & (1 << k) != 0)
+                .fold(0, |v, k| v ^ t[1][k]);
+            assert_eq!(sobol_dim1(b), xor, "bits {b:#06x}");
+        }
     }
 
-    /// The copy is the crate's table, and `sobol_pair` the crate's
-    /// `sample` for dimensions 0 and 1, bit for bit.
+    /// `sobol_pair` is the crate's `sample` for dimensions 0 and 1, bit for
+    /// bit.
     #[test]
     fn sobol_pair_is_the_crates_sample() {
-        assert_eq!(DIRECTIONS, direction_table());
         let mut seed = 1u32;
         for _ in 0..64 {
             seed = crate::sampling::pcg4d([seed, 1, 2, 3])[0];
-            for i in (0..4096u32).chain([65535, 40_000, 12_345]) {
+            for i in (0..4096u32).chain((4096..65536).step_by(61)).chain([65535]) {
                 let p = sobol_pair(i, seed);
                 assert_eq!(p.x.to_bits(), sobol_burley::sample(i, 0, seed).to_bits());
                 assert_eq!(p.y.to_bits(), sobol_burley::sample(i, 1, seed).to_bits());
-            }
-        }
-    }
-
-    /// A reimplementation from the table alone (what the GLSL does) gives
-    /// the crate's bits.
-    #[test]
-    fn table_reimplementation_matches_the_crate() {
-        use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
-        let t = direction_table();
-        for seed in [0u32, 1, 0xdead_beef, 12345] {
-            for i in 0..4096u32 {
-                let idx = owen_scramble_rev(i.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
-                for d in 0..2u32 {
-                    let mut v = 0u32;
-                    for (k, dn) in t[d as usize].iter().enumerate() {
-                        if idx & (0x8000_0000 >> k) != 0 {
-                            v ^= dn;
-                        }
-                    }
-                    let sc =
-                        seed.wrapping_mul(0x9c8f_2d3b) ^ [0x912f_69ba, 0x174f_18ab][d as usize];
-                    let x = u32_to_f32_norm(owen_scramble_rev(v, hash(sc)).reverse_bits());
-                    assert_eq!(x.to_bits(), sobol_burley::sample(i, d, seed).to_bits());
-                }
             }
         }
     }
