@@ -229,9 +229,9 @@ mod tests {
     #[test]
     fn closed_forms_are_the_crates_directions() {
         let t = direction_table();
-        for k in 0..16 {
-            assert_eq!(t[0][k], 1 << k, "dimension 0, direction {k}");
-            assert_eq!(t[1][k], sobol_dim1(1 << k), "dimension 1, direction {k}");
+        for (k, (&d0, &d1)) in t[0].iter().zip(&t[1]).enumerate() {
+            assert_eq!(d0, 1 << k, "dimension 0, direction {k}");
+            assert_eq!(d1, sobol_dim1(1 << k), "dimension 1, direction {k}");
         }
         let mut seed = 7u32;
         for _ in 0..10_000 {
