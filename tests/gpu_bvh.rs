@@ -31,8 +31,8 @@ use glint::cpu::{Bvh, Bvh4, Ray, Triangle};
 use glint::gpu::groups;
 
 use geometry::{
-    Rng, asset_triangles, bunny, diffuse_rays, file_triangles, grid_cube, nasty_soup, primary_rays,
-    random_rays, random_soup, rays_from_surfaces,
+    Rng, asset_triangles, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays,
+    random_soup, rays_from_surfaces, shared_asset_triangles,
 };
 
 /// Which traversal a kernel runs.
@@ -419,74 +419,71 @@ fn gpu_empty_scene_misses() {
 }
 
 /// Rays/s of the binary and the wide kernel in one run, on the bunny, the
-/// Cornell box and nefertiti (where `../shared/assets` has it): coherent primary rays (384 x 384) and incoherent diffuse bounces off their
-/// hits, closest and any hit apart. Each figure is the best of three warm
-/// runs, the kernels alternating, upload and readback included; only the ratios mean much on a shared
-/// machine. Figures: `cargo test --test gpu_bvh gpu_bvh_throughput --
-/// --nocapture --test-threads 1` (the kernels do not depend on the Rust
-/// profile). What is asserted: both kernels give
-/// the same answers.
+/// Cornell box and nefertiti (where `../shared/assets` has it): coherent
+/// primary rays (384 x 384) and incoherent diffuse bounces off their hits,
+/// closest and any hit apart. Each figure is the best of three warm runs,
+/// the kernels alternating, upload and readback included; only the ratios
+/// mean much on a shared machine. Figures: `cargo test --test gpu_bvh
+/// gpu_bvh_throughput -- --nocapture --test-threads 1` (the kernels do not
+/// depend on the Rust profile). What is asserted: both kernels give the
+/// same answers.
 #[test]
 fn gpu_bvh_throughput() {
     let ctx = common::context();
     eprintln!("bvh kernels on {}:", ctx.info().name);
-    let mut meshes = vec![
-        ("bunny", bunny()),
-        ("cornell", asset_triangles("cornell.gltf")),
-    ];
-    let nefertiti =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/assets/nefertiti.glb");
-    if nefertiti.is_file() {
-        meshes.push(("nefertiti", file_triangles(&nefertiti)));
-    } else {
-        eprintln!("{} not found: skipped", nefertiti.display());
-    }
-    for (name, mesh) in meshes {
-        let b = build(&mesh);
-        let (lo, hi) = geometry::bounds_of(&b.tris);
-        let primary = primary_rays(lo, hi, 384, 384);
-        let hits: Vec<_> = primary
-            .iter()
-            .map(|r| b.wide.intersect(&b.tris, r))
-            .collect();
-        let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Rng(9));
-        for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
-            for (query, mode) in [("closest", CLOSEST), ("any-hit", ANY)] {
-                // Interleaved: each round times both kernels, so a change of
-                // load on the shared machine falls on both alike.
-                for kind in KINDS {
-                    run_gpu(&ctx, &b, kind, rays, mode); // compile and warm up
-                }
-                let mut best = [f64::INFINITY; 2];
-                let mut results = Vec::new();
-                for round in 0..3 {
-                    for (k, kind) in KINDS.into_iter().enumerate() {
-                        let start = Instant::now();
-                        let out = run_gpu(&ctx, &b, kind, rays, mode);
-                        best[k] = best[k].min(start.elapsed().as_secs_f64());
-                        if round == 0 {
-                            results.push(out);
-                        }
-                    }
-                }
-                let rates = best.map(|s| rays.len() as f64 / s / 1e6);
-                compare_kernels(
-                    &format!("{name} {set} {query}"),
-                    &b,
-                    rays,
-                    &results[1],
-                    &results[0],
-                );
-                eprintln!(
-                    "  {name} {set:7} {query}: {} rays, binary {:.2} M rays/s, wide {:.2} M rays/s (x{:.2})",
-                    rays.len(),
-                    rates[0],
-                    rates[1],
-                    rates[1] / rates[0]
-                );
-            }
-        }
+    measure_gpu(&ctx, "bunny", &bunny());
+    measure_gpu(&ctx, "cornell", &asset_triangles("cornell.gltf"));
+    if let Some(mesh) = shared_asset_triangles("nefertiti.glb") {
+        measure_gpu(&ctx, "nefertiti", &mesh);
     }
     let messages = ctx.finish();
     assert!(messages.is_empty(), "validation: {messages:?}");
+}
+
+/// One mesh's lines of `gpu_bvh_throughput`.
+fn measure_gpu(ctx: &common::ValidatedContext, name: &str, mesh: &[Triangle]) {
+    let b = build(mesh);
+    let (lo, hi) = geometry::bounds_of(&b.tris);
+    let primary = primary_rays(lo, hi, 384, 384);
+    let hits: Vec<_> = primary
+        .iter()
+        .map(|r| b.wide.intersect(&b.tris, r))
+        .collect();
+    let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Rng(9));
+    for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
+        for (query, mode) in [("closest", CLOSEST), ("any-hit", ANY)] {
+            // Interleaved: each round times both kernels, so a change of
+            // load on the shared machine falls on both alike.
+            for kind in KINDS {
+                run_gpu(ctx, &b, kind, rays, mode); // compile and warm up
+            }
+            let mut best = [f64::INFINITY; 2];
+            let mut results = Vec::new();
+            for round in 0..3 {
+                for (k, kind) in KINDS.into_iter().enumerate() {
+                    let start = Instant::now();
+                    let out = run_gpu(ctx, &b, kind, rays, mode);
+                    best[k] = best[k].min(start.elapsed().as_secs_f64());
+                    if round == 0 {
+                        results.push(out);
+                    }
+                }
+            }
+            let rates = best.map(|s| rays.len() as f64 / s / 1e6);
+            compare_kernels(
+                &format!("{name} {set} {query}"),
+                &b,
+                rays,
+                &results[1],
+                &results[0],
+            );
+            eprintln!(
+                "  {name} {set:7} {query}: {} rays, binary {:.2} M rays/s, wide {:.2} M rays/s (x{:.2})",
+                rays.len(),
+                rates[0],
+                rates[1],
+                rates[1] / rates[0]
+            );
+        }
+    }
 }

@@ -206,22 +206,22 @@ impl PathSampler {
     }
 }
 
-/// Sobol dimensions 0 and 1's direction numbers, bit-reversed, as
-/// `sobol_burley` stores them (`parts::sobol_rev` of a one-bit index):
-/// `[dimension][bit]`. What [`sobol_pair`] computes in closed form.
-pub fn direction_table() -> [[u32; 16]; 2] {
-    let mut t = [[0u32; 16]; 2];
-    for (d, row) in t.iter_mut().enumerate() {
-        for (k, v) in row.iter_mut().enumerate() {
-            *v = sobol_burley::parts::sobol_rev((1u32 << k).reverse_bits(), d as u32);
-        }
-    }
-    t
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Sobol dimensions 0 and 1's direction numbers, bit-reversed, as
+    /// `sobol_burley` stores them (`parts::sobol_rev` of a one-bit index):
+    /// `[dimension][bit]`. What [`sobol_pair`] computes in closed form.
+    fn direction_table() -> [[u32; 16]; 2] {
+        let mut t = [[0u32; 16]; 2];
+        for (d, row) in t.iter_mut().enumerate() {
+            for (k, v) in row.iter_mut().enumerate() {
+                *v = sobol_burley::parts::sobol_rev((1u32 << k).reverse_bits(), d as u32);
+            }
+        }
+        t
+    }
 
     /// The closed forms are the crate's direction numbers: dimension 0's
     /// direction k is 1 << k, dimension 1's is `sobol_dim1` of bit k, and

@@ -4,7 +4,8 @@
 //! bundled Cornell box, and `../shared/assets/nefertiti.glb` where that file
 //! exists. Rays: coherent primary rays from a pinhole camera, and incoherent
 //! diffuse bounces (cosine-distributed about the normal at each primary hit,
-//! origin offset off the surface). Queries: closest hit and any hit, one thread and rayon.
+//! origin offset off the surface). Queries: closest hit and any hit, one
+//! thread and rayon.
 //!
 //! Speeds are printed, never asserted (the machine is shared); what is
 //! asserted: every traversal gives the binary BVH's hits, and one thread and
@@ -13,14 +14,13 @@
 #[path = "support/geometry.rs"]
 mod geometry;
 
-use std::path::Path;
 use std::time::Instant;
 
 use glint_cpu::bvh::Kernel;
 use glint_cpu::{Bvh, Bvh4, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-use geometry::{Rng, asset_triangles, bunny, diffuse_rays, file_triangles, primary_rays};
+use geometry::{Rng, asset_triangles, bunny, diffuse_rays, primary_rays, shared_asset_triangles};
 
 /// A traversal under test: rays in, a checksum out.
 type Variant<'a> = &'a dyn Fn(&[Ray]) -> usize;
@@ -183,10 +183,7 @@ fn traversal_throughput_binary_vs_wide() {
     );
     measure("bunny", &bunny());
     measure("cornell", &asset_triangles("cornell.gltf"));
-    let nefertiti = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/assets/nefertiti.glb");
-    if nefertiti.is_file() {
-        measure("nefertiti", &file_triangles(&nefertiti));
-    } else {
-        eprintln!("{} not found: skipped", nefertiti.display());
+    if let Some(mesh) = shared_asset_triangles("nefertiti.glb") {
+        measure("nefertiti", &mesh);
     }
 }

@@ -17,7 +17,6 @@
 #define SAMPLER_INDEPENDENT 0u
 #define SAMPLER_SOBOL 1u
 
-
 // sobol_burley::parts::hash.
 uint sobol_hash(uint n) {
     n ^= 0xe6fe3bebu;

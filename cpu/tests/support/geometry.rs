@@ -289,6 +289,25 @@ pub fn asset_triangles(name: &str) -> Vec<Triangle> {
     file_triangles(&path)
 }
 
+/// The triangles of `../shared/assets/NAME` (the workplace's scanned
+/// meshes, beside the repository), or None, with a line saying so, where
+/// that file is missing (a clean clone on CI).
+pub fn shared_asset_triangles(name: &str) -> Option<Vec<Triangle>> {
+    // The root package and the cpu/ crate both include this file.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let paths = [
+        root.join("../shared/assets").join(name),
+        root.join("../../shared/assets").join(name),
+    ];
+    match paths.iter().find(|p| p.is_file()) {
+        Some(p) => Some(file_triangles(p)),
+        None => {
+            eprintln!("shared/assets/{name} not found: skipped");
+            None
+        }
+    }
+}
+
 /// The triangles of a glTF file, as bare geometry.
 pub fn file_triangles(path: &Path) -> Vec<Triangle> {
     let scene =
