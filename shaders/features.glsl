@@ -23,6 +23,7 @@ layout(constant_id = 0) const uint GLINT_FEATURES = 0xffffffffu;
 #define F_BACKGROUND 2048u
 #define F_BOUNCES 4096u
 #define F_NEE 8192u
+#define F_COATED 16384u
 
 #define HAS(f) ((GLINT_FEATURES & (f)) != 0u)
 

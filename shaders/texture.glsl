@@ -11,6 +11,7 @@
 
 #include "texture_types.glsl"
 #include "bsdf/material.glsl"
+#include "bsdf/fresnel.glsl"
 
 float srgb_to_linear(float c) {
     return c <= 0.04045 ? c / 12.92 : pow((c + 0.055) / 1.055, 2.4);
@@ -119,18 +120,24 @@ bool material_textures_used(MaterialTextures m) {
         || m.emissive.texture != NO_TEXTURE;
 }
 
-// glint_cpu::loader::conductor_from_f0 (MAX_F0 = 0.999).
-void conductor_from_f0(inout Material g, vec3 f0, float alpha) {
+// glint_cpu::loader::conductor_from_f0 (MAX_F0 = 0.999); the roughness
+// keeps the material's `multiscatter` bit, whose Kulla-Conty lobe then needs
+// the new conductor's F_avg in the .w's (conductor_f_avg).
+void conductor_from_f0(inout Material g, vec3 f0, float alpha, uint multiscatter) {
     f0 = clamp(f0, vec3(0.0), vec3(0.999));
-    g.eta = vec4(1.0, 1.0, 1.0, 0.0);
-    g.k = vec4(2.0 * sqrt(f0 / (vec3(1.0) - f0)), 0.0);
-    g.specular = vec4(1.0, 1.0, 1.0, 0.0);
+    vec3 k = 2.0 * sqrt(f0 / (vec3(1.0) - f0));
+    vec3 f_avg = multiscatter != 0u ? fresnel_conductor_avg(vec3(1.0), k) : vec3(0.0);
+    g.eta = vec4(1.0, 1.0, 1.0, f_avg.x);
+    g.k = vec4(k, f_avg.y);
+    g.specular = vec4(1.0, 1.0, 1.0, f_avg.z);
     g.alpha_u = alpha;
     g.alpha_v = alpha;
-    g.shadowing = SHADOWING_CORRELATED;
+    g.shadowing = SHADOWING_CORRELATED | multiscatter;
 }
 
-// texture::textured_bsdf, on the GPU material record.
+// texture::textured_bsdf, on the GPU material record. The glTF mapping is
+// always the metallic blend (metallic 0 and 1 its ends), so that one kernel
+// path serves every texel; the record's coat and `multiscatter` bit stay.
 Material textured_bsdf(MaterialTextures mt, Material g, uint tri, float u, float v) {
     vec3 base_tex = vec3(1.0);
     if (mt.base_color.texture != NO_TEXTURE) {
@@ -146,24 +153,22 @@ Material textured_bsdf(MaterialTextures mt, Material g, uint tri, float u, float
             metallic *= c.z;
         }
         float alpha = roughness * roughness;
+        uint ms = g.shadowing & SHADOWING_MULTISCATTER;
         Material r = g;
+        if (g.kind != KIND_METALLIC && g.kind != KIND_COATED) {
+            // A conductor's record carries no coat: glTF's default one.
+            r.coat = vec4(1.0, 1.0, 1.0, 1.5);
+        }
         if (mt.mr_factor.z > 0.0) {
             r.kind = KIND_DIELECTRIC;
             r.eta = vec4(mt.mr_factor.w, 0.0, 0.0, 0.0);
             r.alpha_u = alpha;
             r.alpha_v = alpha;
-            r.shadowing = SHADOWING_CORRELATED;
-        } else if (metallic > 0.0) {
-            conductor_from_f0(r, base, alpha);
-            if (metallic >= 1.0) {
-                r.kind = KIND_CONDUCTOR;
-            } else {
-                r.kind = KIND_METALLIC;
-                r.reflectance = vec4(base, metallic);
-            }
+            r.shadowing = SHADOWING_CORRELATED | ms;
         } else {
-            r.kind = KIND_DIFFUSE;
-            r.reflectance = vec4(base, 0.0);
+            conductor_from_f0(r, base, alpha, ms);
+            r.kind = KIND_METALLIC;
+            r.reflectance = vec4(base, metallic);
         }
         return r;
     }

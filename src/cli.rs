@@ -188,6 +188,12 @@ pub struct RenderOpts {
     #[arg(long, value_enum, default_value_t = MisArg::Power)]
     pub mis: MisArg,
 
+    /// Energy compensation (multiple scattering) for every rough model,
+    /// glTF-derived ones included; a material's own extras.bsdf
+    /// `multiscatter` wins.
+    #[arg(long, value_enum, value_name = "on|off", default_value_t = OnOff::Off)]
+    pub multiscatter: OnOff,
+
     /// Where the random numbers come from.
     #[arg(long, value_enum, default_value_t = SamplerArg::Sobol)]
     pub sampler: SamplerArg,
@@ -296,6 +302,10 @@ impl RenderOpts {
         };
         push("nee", name(&|| self.nee.to_possible_value()));
         push("mis", name(&|| self.mis.to_possible_value()));
+        push(
+            "multiscatter",
+            name(&|| self.multiscatter.to_possible_value()),
+        );
         push("sampler", name(&|| self.sampler.to_possible_value()));
         push("kernel", name(&|| self.kernel.to_possible_value()));
         if let Some(t) = self.time_limit {

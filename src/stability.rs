@@ -275,6 +275,17 @@ pub fn points() -> Vec<Point> {
         );
         add(
             "alpha",
+            "coated 0.8 ior 1.5",
+            pi,
+            p.clone(),
+            Bsdf::Coated {
+                base: Vec3::splat(0.8),
+                coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
+                roughness: r,
+            },
+        );
+        add(
+            "alpha",
             "metallic 0.5 Au",
             pi,
             p.clone(),
@@ -282,6 +293,7 @@ pub fn points() -> Vec<Point> {
                 metallic: 0.5,
                 base: Vec3::splat(0.8),
                 conductor: gold(r),
+                coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
             },
         );
     }
@@ -395,6 +407,7 @@ fn albedo_by_quadrature(b: &Bsdf, wo: Vec3) -> Option<(glam::DVec3, glam::DVec3)
         Bsdf::Conductor(c) => c.roughness,
         Bsdf::Dielectric { roughness, .. } => *roughness,
         Bsdf::Metallic { conductor, .. } => conductor.roughness,
+        Bsdf::Coated { roughness, .. } => *roughness,
     };
     if r.is_smooth() || r.multiscatter || b.is_delta() || wo.z == 0.0 {
         return None;
@@ -403,16 +416,32 @@ fn albedo_by_quadrature(b: &Bsdf, wo: Vec3) -> Option<(glam::DVec3, glam::DVec3)
         r.alpha_u.max(glint_cpu::bsdf::microfacet::MIN_ALPHA) as f64,
         r.alpha_v.max(glint_cpu::bsdf::microfacet::MIN_ALPHA) as f64,
     );
+    // The coated non-metal: its coat by quadrature (a black base leaves
+    // the coat alone), its base term exactly: base (1 - s E(mu_o)), E the
+    // tables' (coated.rs: the base term integrates to that by construction).
+    let coated = |base: Vec3, coat: &glint_cpu::bsdf::coated::CoatParams| {
+        let black = Bsdf::Coated {
+            base: Vec3::ZERO,
+            coat: *coat,
+            roughness: r,
+        };
+        let (q, e) = hv_two(&black, wo, ax, ay);
+        let e_tab = glint_cpu::bsdf::coated::coated_albedo(Vec3::ZERO, coat, &r, wo.z.abs());
+        (q.r + (base * (Vec3::ONE - e_tab)).as_dvec3(), e.r)
+    };
     match b {
         Bsdf::Metallic {
             metallic,
             base,
             conductor,
+            coat,
         } => {
             let (q, e) = hv_two(&Bsdf::Conductor(*conductor), wo, ax, ay);
+            let (qn, en) = coated(*base, coat);
             let w = *metallic as f64;
-            Some((q.r * w + base.as_dvec3() * (1.0 - w), e.r * w))
+            Some((q.r * w + qn * (1.0 - w), e.r * w + en * (1.0 - w)))
         }
+        Bsdf::Coated { base, coat, .. } => Some(coated(*base, coat)),
         _ => {
             let (q, e) = hv_two(b, wo, ax, ay);
             Some((q.r + glam::DVec3::splat(q.t), e.r + glam::DVec3::splat(e.t)))

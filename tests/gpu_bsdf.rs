@@ -17,6 +17,7 @@ mod common;
 use glam::{Vec2, Vec3};
 use glint::gpu::groups;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
+use glint_cpu::bsdf::coated::CoatParams;
 use glint_cpu::{GpuMaterial, Material};
 
 use glint::stability::{GpuResult, Query, Rng};
@@ -45,7 +46,7 @@ fn metal(name: &str, r: Roughness) -> ConductorParams {
 }
 
 /// The materials under test, by kind (0 diffuse, 1 conductor, 2 dielectric,
-/// 3 metallic).
+/// 3 metallic, 4 coated).
 fn materials() -> Vec<(u32, Bsdf)> {
     let mut v = vec![(
         0,
@@ -82,6 +83,27 @@ fn materials() -> Vec<(u32, Bsdf)> {
             for eta in [1.5, 1.0 / 1.5, 1.333, 2.419] {
                 v.push((2, Bsdf::Dielectric { eta, roughness: r }));
             }
+            // The glTF non-metal: coloured and black bases, IORs from
+            // near 1 to diamond, a KHR_materials_specular tint.
+            v.push((
+                4,
+                Bsdf::Coated {
+                    base: if i % 4 == 3 {
+                        Vec3::ZERO
+                    } else {
+                        Vec3::new(0.9, 0.6, 0.3)
+                    },
+                    coat: CoatParams {
+                        eta: [1.5, 1.02, 2.419, 1.333][i % 4],
+                        specular: if i % 2 == 0 {
+                            Vec3::ONE
+                        } else {
+                            Vec3::new(1.0, 0.7, 0.2)
+                        },
+                    },
+                    roughness: r,
+                },
+            ));
             if i % 3 != 1 {
                 v.push((
                     3,
@@ -89,6 +111,10 @@ fn materials() -> Vec<(u32, Bsdf)> {
                         metallic: 0.2 + 0.15 * i as f32 % 0.7,
                         base: Vec3::new(0.9, 0.6, 0.3),
                         conductor: metal("Au", r),
+                        coat: CoatParams {
+                            eta: 1.4 + 0.1 * (i % 3) as f32,
+                            specular: Vec3::new(1.0, 0.8, 0.9),
+                        },
                     },
                 ));
             }
@@ -223,7 +249,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
     let per_kind = 16_384;
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let mut queries = Vec::new();
-    for kind in 0..4u32 {
+    for kind in 0..5u32 {
         let ids: Vec<usize> = (0..mats.len()).filter(|&i| mats[i].0 == kind).collect();
         for _ in 0..per_kind {
             let id = ids[(rng.u32() as usize) % ids.len()];
@@ -259,7 +285,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
     )
     .unwrap();
 
-    let names = ["diffuse", "conductor", "dielectric", "metallic"];
+    let names = ["diffuse", "conductor", "dielectric", "metallic", "coated"];
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for (kind, name) in names.iter().enumerate() {

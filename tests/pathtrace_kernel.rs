@@ -67,6 +67,7 @@ fn gpu_kernel_traces_the_cpu_paths() {
                     glint::cpu::Bsdf::Conductor(c) => &mut c.roughness,
                     glint::cpu::Bsdf::Dielectric { roughness, .. } => roughness,
                     glint::cpu::Bsdf::Metallic { conductor, .. } => &mut conductor.roughness,
+                    glint::cpu::Bsdf::Coated { roughness, .. } => roughness,
                     glint::cpu::Bsdf::Diffuse { .. } => continue,
                 };
                 if !r.is_smooth() {

@@ -46,11 +46,14 @@ impl Features {
     pub const BOUNCES: u32 = 1 << 12;
     /// Next-event estimation with something to sample.
     pub const NEE: u32 = 1 << 13;
+    /// The glTF non-metal (a coat over a Lambertian base); the metallic
+    /// blend's non-metal part comes with [`Features::METALLIC`].
+    pub const COATED: u32 = 1 << 14;
 
     /// Every feature: the generic kernel.
-    pub const ALL: Features = Features((1 << 14) - 1);
+    pub const ALL: Features = Features((1 << 15) - 1);
 
-    const NAMES: [(u32, &'static str); 14] = [
+    const NAMES: [(u32, &'static str); 15] = [
         (Self::DIFFUSE, "diffuse"),
         (Self::CONDUCTOR, "conductor"),
         (Self::DIELECTRIC, "dielectric"),
@@ -65,6 +68,7 @@ impl Features {
         (Self::BACKGROUND, "background"),
         (Self::BOUNCES, "bounces"),
         (Self::NEE, "nee"),
+        (Self::COATED, "coated"),
     ];
 
     pub fn has(self, bit: u32) -> bool {
@@ -102,9 +106,28 @@ impl Features {
                 Shadowing::Separable => Self::SMITH_SEPARABLE,
             };
         };
-        for (m, _) in scene.materials.iter().zip(&used).filter(|(_, u)| **u) {
+        for (i, (m, _)) in scene
+            .materials
+            .iter()
+            .zip(&used)
+            .enumerate()
+            .filter(|(_, (_, u))| **u)
+        {
+            // A textured glTF material is recomputed per hit as the
+            // metallic blend, whatever its factors map to.
+            let per_hit_blend = scene
+                .textures
+                .material(i as u32)
+                .is_some_and(|t| t.mode == crate::texture::MAP_GLTF);
+            if per_hit_blend && !matches!(m.bsdf, Bsdf::Dielectric { .. }) {
+                f |= Self::METALLIC;
+            }
             match &m.bsdf {
                 Bsdf::Diffuse { .. } => f |= Self::DIFFUSE,
+                Bsdf::Coated { roughness, .. } => {
+                    f |= Self::COATED;
+                    rough(roughness, &mut f);
+                }
                 Bsdf::Conductor(c) => {
                     f |= Self::CONDUCTOR;
                     rough(&c.roughness, &mut f);
@@ -176,6 +199,7 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
         match &mut m.bsdf {
             Bsdf::Conductor(c) => snap(&mut c.roughness, &mut snapped),
             Bsdf::Metallic { conductor, .. } => snap(&mut conductor.roughness, &mut snapped),
+            Bsdf::Coated { roughness, .. } => snap(roughness, &mut snapped),
             Bsdf::Dielectric { eta, roughness } => {
                 if *eta == 1.0 && !(roughness.alpha_u == 0.0 && roughness.alpha_v == 0.0) {
                     roughness.alpha_u = 0.0;

@@ -117,8 +117,11 @@ pub struct GpuMaterial {
     pub specular: [f32; 4],
     /// Emitted radiance (rgb); `.w` = 1 when emission leaves both faces.
     pub emission: [f32; 4],
+    /// The non-metal's coat (coated, metallic blend): `KHR_materials_specular`
+    /// scale (rgb), `.w` = the coat's IOR.
+    pub coat: [f32; 4],
 }
-const _: () = assert!(size_of::<GpuMaterial>() == 96);
+const _: () = assert!(size_of::<GpuMaterial>() == 112);
 const _: () =
     assert!(offset_of!(GpuMaterial, reflectance) == 16 && offset_of!(GpuMaterial, emission) == 80);
 
@@ -127,6 +130,7 @@ impl GpuMaterial {
     pub const KIND_CONDUCTOR: u32 = 1;
     pub const KIND_DIELECTRIC: u32 = 2;
     pub const KIND_METALLIC: u32 = 3;
+    pub const KIND_COATED: u32 = 4;
 }
 
 /// `GpuMaterial::shadowing`: bit 0 separable, bit 1 multiscatter.
@@ -175,13 +179,27 @@ impl From<&Material> for GpuMaterial {
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);
             }
+            Bsdf::Coated {
+                base,
+                coat,
+                roughness,
+            } => {
+                g.kind = Self::KIND_COATED;
+                g.reflectance = vec4(*base, 0.0);
+                g.coat = vec4(coat.specular, coat.eta);
+                g.alpha_u = roughness.alpha_u;
+                g.alpha_v = roughness.alpha_v;
+                g.shadowing = shadowing_bits(roughness);
+            }
             Bsdf::Metallic {
                 metallic,
                 base,
                 conductor: c,
+                coat,
             } => {
                 g.kind = Self::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
+                g.coat = vec4(coat.specular, coat.eta);
                 conductor(&mut g, c);
             }
         }
@@ -324,6 +342,7 @@ impl Scene {
         let aniso = |r: &crate::bsdf::Roughness| !r.is_smooth() && r.alpha_u != r.alpha_v;
         let lobe = match &self.materials[m].bsdf {
             Bsdf::Diffuse { .. } => false,
+            Bsdf::Coated { roughness, .. } => aniso(roughness),
             Bsdf::Conductor(c) => aniso(&c.roughness),
             Bsdf::Dielectric { roughness, .. } => aniso(roughness),
             Bsdf::Metallic { conductor, .. } => aniso(&conductor.roughness),

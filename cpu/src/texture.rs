@@ -19,6 +19,7 @@ use std::mem::size_of;
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
+use crate::bsdf::coated::CoatParams;
 use crate::bsdf::{Bsdf, Roughness, Shadowing};
 use crate::frame::Frame;
 use crate::loader::conductor_from_f0;
@@ -360,8 +361,8 @@ pub fn perturb_normal(rgb: Vec3, scale: f32, n: Vec3, t: Vec3, b: Vec3) -> Vec3 
 
 /// The BSDF at a textured hit: the material's BSDF with its textured
 /// parameters. `MAP_GLTF` recomputes the glTF mapping (transmission, else
-/// metal, else diffuse, as `loader::material` maps the factors) from the
-/// textured base colour, metallic (B) and roughness (G); `MAP_EXTRAS`
+/// the metal/non-metal blend, as `loader::material` maps the factors) from
+/// the textured base colour, metallic (B) and roughness (G); `MAP_EXTRAS`
 /// multiplies a diffuse reflectance or a conductor's specular reflectance
 /// by the base colour texture.
 pub fn textured_bsdf(
@@ -388,30 +389,41 @@ pub fn textured_bsdf(
                 metallic *= c.z;
             }
             let alpha = roughness * roughness;
+            // The factors' model carries what no texture changes: the
+            // coat and `--multiscatter`.
+            let (coat, multiscatter) = match bsdf {
+                Bsdf::Coated {
+                    coat, roughness, ..
+                } => (*coat, roughness.multiscatter),
+                Bsdf::Metallic {
+                    coat, conductor, ..
+                } => (*coat, conductor.roughness.multiscatter),
+                Bsdf::Conductor(c) => (CoatParams::GLTF_DEFAULT, c.roughness.multiscatter),
+                Bsdf::Dielectric { roughness, .. } => {
+                    (CoatParams::GLTF_DEFAULT, roughness.multiscatter)
+                }
+                Bsdf::Diffuse { .. } => (CoatParams::GLTF_DEFAULT, false),
+            };
             let rough = Roughness {
                 alpha_u: alpha,
                 alpha_v: alpha,
                 shadowing: Shadowing::Correlated,
-                multiscatter: false,
+                multiscatter,
             };
             if mt.mr_factor[2] > 0.0 {
                 Bsdf::Dielectric {
                     eta: mt.mr_factor[3],
                     roughness: rough,
                 }
-            } else if metallic > 0.0 {
-                let conductor = conductor_from_f0(base, rough);
-                if metallic >= 1.0 {
-                    Bsdf::Conductor(conductor)
-                } else {
-                    Bsdf::Metallic {
-                        metallic,
-                        base,
-                        conductor,
-                    }
-                }
             } else {
-                Bsdf::Diffuse { reflectance: base }
+                // Always the blend (the GPU's KIND_METALLIC: one kernel
+                // path whatever the texel); metallic 0 and 1 are its ends.
+                Bsdf::Metallic {
+                    metallic,
+                    base,
+                    conductor: conductor_from_f0(base, rough),
+                    coat,
+                }
             }
         }
         MAP_EXTRAS => match *bsdf {

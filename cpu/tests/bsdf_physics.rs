@@ -45,11 +45,23 @@ fn property_cases() -> Vec<(String, Bsdf)> {
                 ));
             }
             v.push((
+                format!("coated {au},{av} {sh:?}"),
+                Bsdf::Coated {
+                    base: Vec3::new(0.8, 0.7, 0.6),
+                    coat: glint_cpu::bsdf::coated::CoatParams {
+                        eta: 1.5,
+                        specular: Vec3::new(1.0, 0.9, 0.8),
+                    },
+                    roughness: r,
+                },
+            ));
+            v.push((
                 format!("metallic {au},{av} {sh:?}"),
                 Bsdf::Metallic {
                     metallic: 0.3,
                     base: Vec3::new(0.8, 0.7, 0.6),
                     conductor: gold(r),
+                    coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
                 },
             ));
         }
@@ -68,11 +80,20 @@ fn property_cases() -> Vec<(String, Bsdf)> {
         ));
     }
     v.push((
+        "coated smooth".into(),
+        Bsdf::Coated {
+            base: Vec3::new(0.8, 0.7, 0.6),
+            coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
+            roughness: Roughness::SMOOTH,
+        },
+    ));
+    v.push((
         "metallic smooth".into(),
         Bsdf::Metallic {
             metallic: 0.5,
             base: Vec3::new(0.8, 0.7, 0.6),
             conductor: gold(Roughness::SMOOTH),
+            coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
         },
     ));
     v
@@ -373,6 +394,7 @@ fn min_alpha(bsdf: &Bsdf) -> f32 {
         Bsdf::Conductor(c) => c.roughness,
         Bsdf::Dielectric { roughness, .. } => *roughness,
         Bsdf::Metallic { conductor, .. } => conductor.roughness,
+        Bsdf::Coated { roughness, .. } => *roughness,
     };
     r.alpha_u.min(r.alpha_v)
 }
@@ -385,20 +407,26 @@ fn min_alpha(bsdf: &Bsdf) -> f32 {
 /// weight: the BTDF carries the radiance factor 1/eta_rel^2 (radiance is
 /// compressed into the smaller solid angle of the denser side), which is
 /// not a gain of energy; undoing it gives the physical flux ratio, which
-/// must not exceed 1. Returns (mean, standard error) of the max channel.
+/// must not exceed 1. Returns (mean, standard error) of the channel with
+/// the largest mean (each channel's albedo is bounded, not the per-sample
+/// maximum over channels: a mixture's lobes may favour different channels).
 fn albedo(bsdf: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
     let mut rng = Pcg32::new(seed, 9);
-    let (mut s1, mut s2) = (0.0f64, 0.0f64);
+    let (mut s1, mut s2) = ([0.0f64; 3], [0.0f64; 3]);
     for _ in 0..n {
-        let v = match bsdf.sample(wo, rng.f32(), rng.vec2()) {
-            Some(s) => (s.weight * s.eta * s.eta).max_element() as f64,
-            None => 0.0,
-        };
-        s1 += v;
-        s2 += v * v;
+        if let Some(s) = bsdf.sample(wo, rng.f32(), rng.vec2()) {
+            let w = s.weight * s.eta * s.eta;
+            for c in 0..3 {
+                s1[c] += w[c] as f64;
+                s2[c] += (w[c] as f64).powi(2);
+            }
+        }
     }
-    let m = s1 / n as f64;
-    (m, ((s2 / n as f64 - m * m).max(0.0) / n as f64).sqrt())
+    let c = (0..3)
+        .max_by(|&a, &b| s1[a].total_cmp(&s1[b]))
+        .unwrap_or(0);
+    let m = s1[c] / n as f64;
+    (m, ((s2[c] / n as f64 - m * m).max(0.0) / n as f64).sqrt())
 }
 
 #[test]
@@ -570,6 +598,7 @@ fn no_nan_or_inf_on_extreme_inputs() {
                 metallic: rng.f32(),
                 base: Vec3::ONE,
                 conductor: gold(r),
+                coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
             },
         };
         // cos theta from 1 down to 1e-8 and exactly 0, on both sides.

@@ -110,6 +110,7 @@ fn pbrt_v3_273_and_v4_283_zero_alpha_is_finite() {
                     metallic: 0.5,
                     base: Vec3::ONE,
                     conductor: gold(r),
+                    coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
                 },
             ];
             for b in &models {

@@ -9,6 +9,7 @@ use std::path::Path;
 
 use builder::{Doc, temp_dir};
 use glam::{Mat3, Quat, Vec2, Vec3};
+use glint_cpu::bsdf::coated::CoatParams;
 use glint_cpu::bsdf::{Bsdf, Roughness, Shadowing};
 use glint_cpu::loader::{
     self, DEFAULT_EXT_IOR, DEFAULT_INT_IOR, default_camera, parse, select_camera,
@@ -28,6 +29,15 @@ fn parse_doc(doc: &Doc, test: &str) -> Scene {
     let dir = temp_dir(test);
     let path = doc.write_gltf(&dir, "scene");
     parse(&path).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn parse_doc_err(doc: &Doc, test: &str) -> String {
+    let dir = temp_dir(test);
+    let path = doc.write_gltf(&dir, "scene");
+    match parse(&path) {
+        Ok(_) => panic!("{test}: loaded"),
+        Err(e) => e.to_string(),
+    }
 }
 
 fn tri_set(s: &Scene) -> Vec<[Vec3; 3]> {
@@ -460,10 +470,17 @@ fn gltf_core_materials_map_onto_the_bsdfs() {
     ]);
     let s = parse_doc(&d, "core");
     let b: Vec<Bsdf> = s.materials.iter().map(|m| m.bsdf).collect();
+    // A non-metal is the coated model (contract: a GGX dielectric coat of
+    // IOR 1.5 over a Lambertian base), roughness 1 by default.
     assert_eq!(
         b[0],
-        Bsdf::Diffuse {
-            reflectance: Vec3::new(0.2, 0.4, 0.6)
+        Bsdf::Coated {
+            base: Vec3::new(0.2, 0.4, 0.6),
+            coat: CoatParams {
+                eta: 1.5,
+                specular: Vec3::ONE
+            },
+            roughness: rough(1.0, 1.0, Shadowing::Correlated),
         }
     );
     let base3 = Vec3::new(0.9, 0.5, 0.1);
@@ -500,7 +517,9 @@ fn gltf_core_materials_map_onto_the_bsdfs() {
             metallic,
             base,
             conductor,
+            coat,
         } => {
+            assert_eq!(coat, CoatParams::GLTF_DEFAULT);
             assert_eq!(metallic, 0.25);
             assert_eq!(base, base3);
             assert!(close(f0(conductor.eta, conductor.k), base3));
@@ -512,6 +531,48 @@ fn gltf_core_materials_map_onto_the_bsdfs() {
     let Bsdf::Conductor(c) = b[4] else { panic!() };
     assert!(c.k.is_finite());
     assert!(close(f0(c.eta, c.k), Vec3::splat(0.999)));
+}
+
+/// KHR_materials_ior and KHR_materials_specular reach the non-metal's coat
+/// (and the blend's); a specular scale over 1 is clamped with a warning;
+/// an IOR below 1 or a negative colour is one clear error.
+#[test]
+fn ior_and_specular_shape_the_coat() {
+    let d = material_doc(vec![
+        json!({ "pbrMetallicRoughness": { "metallicFactor": 0, "roughnessFactor": 0.5 },
+                "extensions": { "KHR_materials_ior": { "ior": 1.33 },
+                                "KHR_materials_specular": { "specularFactor": 0.5,
+                                                            "specularColorFactor": [1, 0.5, 0.25] } } }),
+        json!({ "pbrMetallicRoughness": { "metallicFactor": 0.5 },
+                "extensions": { "KHR_materials_specular": { "specularColorFactor": [2, 1, 1] } } }),
+    ]);
+    let s = parse_doc(&d, "coat");
+    let Bsdf::Coated { coat, roughness, .. } = s.materials[0].bsdf else {
+        panic!("{:?}", s.materials[0].bsdf)
+    };
+    assert_eq!(coat.eta, 1.33);
+    assert_eq!(coat.specular, Vec3::new(0.5, 0.25, 0.125));
+    assert_eq!(roughness.alpha_u, 0.25);
+    let Bsdf::Metallic { coat, .. } = s.materials[1].bsdf else {
+        panic!("{:?}", s.materials[1].bsdf)
+    };
+    assert_eq!(coat.specular, Vec3::ONE, "clamped to 1");
+    assert!(
+        s.warnings.iter().any(|w| w.contains("clamped")),
+        "{:?}",
+        s.warnings
+    );
+    for (ext, want) in [
+        (json!({ "KHR_materials_ior": { "ior": 0.5 } }), "ior"),
+        (
+            json!({ "KHR_materials_specular": { "specularColorFactor": [-1, 0, 0] } }),
+            "specularColorFactor",
+        ),
+    ] {
+        let d = material_doc(vec![json!({ "extensions": ext, "pbrMetallicRoughness": { "metallicFactor": 0 } })]);
+        let e = parse_doc_err(&d, "bad coat");
+        assert!(e.contains(want), "{e}");
+    }
 }
 
 #[test]
@@ -540,7 +601,7 @@ fn transmission_and_ior_make_a_dielectric() {
             roughness: rough(0.25, 0.25, Shadowing::Correlated)
         }
     );
-    assert!(matches!(s.materials[2].bsdf, Bsdf::Diffuse { .. }));
+    assert!(matches!(s.materials[2].bsdf, Bsdf::Coated { .. }));
 }
 
 #[test]
@@ -892,6 +953,7 @@ fn bundled_assets_load() {
             Bsdf::Dielectric { roughness, .. } if roughness.is_smooth() => "dielectric",
             Bsdf::Dielectric { .. } => "roughdielectric",
             Bsdf::Metallic { .. } => "metallic",
+            Bsdf::Coated { .. } => "coated",
         })
         .collect();
     for k in [

@@ -751,6 +751,7 @@ fn uris_leaving_the_folder_are_refused() {
             &path,
             LoadOptions {
                 allow_any_path: true,
+                ..Default::default()
             },
         )
         .unwrap_or_else(|e| panic!("{name} with allow_any_path: {e}"));

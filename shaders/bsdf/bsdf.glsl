@@ -1,6 +1,6 @@
 // The BSDFs in the local shading frame (n = +z, wo toward the viewer, wi
 // toward the light): line-for-line twin of cpu/src/bsdf/{mod,diffuse,
-// conductor,dielectric,metallic}.rs, same function names and math, so a
+// conductor,dielectric,coated,metallic}.rs, same function names and math, so a
 // CPU/GPU mismatch can be pinned to one function (tests/gpu_bsdf.rs).
 //
 // API: bsdf_eval, bsdf_pdf, bsdf_sample, bsdf_is_delta on a Material
@@ -400,14 +400,20 @@ bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out Bsd
     return true;
 }
 
+// ------------------------------------------------------------------ coated
+
+#include "bsdf/coated.glsl"
+
 // ----------------------------------------------------------------- metallic
 
+// metallic.rs: the conductor with probability w, the coated non-metal of
+// base and m.coat with 1 - w (Mitsuba 3's blendbsdf).
 vec3 metallic_eval(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
-    return w * conductor_eval(m, wo, wi) + (1.0 - w) * diffuse_eval(base, wo, wi);
+    return w * conductor_eval(m, wo, wi) + (1.0 - w) * coated_eval(base, m, wo, wi);
 }
 
-float metallic_pdf(float w, Material m, vec3 wo, vec3 wi) {
-    return w * conductor_pdf(m, wo, wi) + (1.0 - w) * diffuse_pdf(wo, wi);
+float metallic_pdf(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
+    return w * conductor_pdf(m, wo, wi) + (1.0 - w) * coated_pdf(base, m, wo, wi);
 }
 
 bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
@@ -415,8 +421,8 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
     vec3 wi;
     float pdf_c;
     vec3 f_c;
-    float pdf_d;
-    vec3 f_d;
+    float pdf_n;
+    vec3 f_n;
     if (uc < w) {
         if (!conductor_sample(m, wo, u, s)) {
             return false;
@@ -428,24 +434,29 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
         wi = s.wi;
         pdf_c = s.pdf;
         f_c = s.weight * (s.pdf / abs(wi.z));
-        pdf_d = diffuse_pdf(wo, wi);
-        f_d = diffuse_eval(base, wo, wi);
+        pdf_n = coated_pdf(base, m, wo, wi);
+        f_n = coated_eval(base, m, wo, wi);
     } else {
-        if (!diffuse_sample(base, wo, u, s)) {
+        float ucn = clamp((uc - w) / (1.0 - w), 0.0, ONE_MINUS_EPS);
+        if (!coated_sample(base, m, wo, ucn, u, s)) {
             return false;
         }
+        if (s.delta) {
+            s.pdf = (1.0 - w) * s.pdf;
+            return true;
+        }
         wi = s.wi;
-        pdf_d = s.pdf;
-        f_d = diffuse_eval(base, wo, wi);
+        pdf_n = s.pdf;
+        f_n = s.weight * (s.pdf / abs(wi.z));
         pdf_c = conductor_pdf(m, wo, wi);
         f_c = conductor_eval(m, wo, wi);
     }
-    float pdf = w * pdf_c + (1.0 - w) * pdf_d;
+    float pdf = w * pdf_c + (1.0 - w) * pdf_n;
     if (!(pdf > 0.0) || isinf(pdf)) {
         s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
         return false;
     }
-    vec3 f = w * f_c + (1.0 - w) * f_d;
+    vec3 f = w * f_c + (1.0 - w) * f_n;
     s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
     return true;
 }
@@ -459,6 +470,8 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return conductor_eval(m, wo, wi);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_eval(m.eta.x, m, wo, wi);
+    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+        return coated_eval(m.reflectance.xyz, m, wo, wi);
     }
     if (HAS(F_METALLIC)) {
         return metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
@@ -473,9 +486,11 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return conductor_pdf(m, wo, wi);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_pdf(m.eta.x, m, wo, wi);
+    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+        return coated_pdf(m.reflectance.xyz, m, wo, wi);
     }
     if (HAS(F_METALLIC)) {
-        return metallic_pdf(m.reflectance.w, m, wo, wi);
+        return metallic_pdf(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
     }
     return 0.0;
 }
@@ -487,6 +502,8 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         return conductor_sample(m, wo, u, s);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_sample(m.eta.x, m, wo, uc, u, s);
+    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+        return coated_sample(m.reflectance.xyz, m, wo, uc, u, s);
     }
     if (HAS(F_METALLIC)) {
         return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
@@ -501,6 +518,8 @@ bool bsdf_is_delta(Material m) {
         return roughness_is_smooth(m.alpha_u, m.alpha_v);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_is_smooth(m.eta.x, m);
+    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+        return false;
     }
     return HAS(F_METALLIC) && m.reflectance.w >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
 }

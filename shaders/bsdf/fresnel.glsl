@@ -80,4 +80,20 @@ bool refract_dir(vec3 w, vec3 n, float eta, out vec3 wt, out float etap) {
     return true;
 }
 
+// multiscatter.rs fresnel_conductor_avg: 2 int F mu dmu by 8-point
+// Gauss-Legendre in x = mu^2.
+vec3 fresnel_conductor_avg(vec3 eta, vec3 k) {
+    const float X[4] = float[4](0.18343464, 0.5255324, 0.7966665, 0.9602899);
+    const float W[4] = float[4](0.3626838, 0.31370664, 0.22238103, 0.10122854);
+    vec3 s = vec3(0.0);
+    for (int i = 0; i < 4; i++) {
+        for (int j = 0; j < 2; j++) {
+            float sgn = j == 0 ? -1.0 : 1.0;
+            float x = 0.5 + 0.5 * sgn * X[i];
+            s += W[i] * 0.5 * fresnel_conductor(sqrt(x), eta, k);
+        }
+    }
+    return s;
+}
+
 #endif

@@ -1,5 +1,5 @@
 // The material record as the GPU reads it: std430 mirror of GpuMaterial in
-// cpu/src/scene.rs (96 bytes: 16 bytes of scalars, then five vec4s).
+// cpu/src/scene.rs (112 bytes: 16 bytes of scalars, then six vec4s).
 #ifndef GLINT_BSDF_MATERIAL_GLSL
 #define GLINT_BSDF_MATERIAL_GLSL
 
@@ -7,6 +7,7 @@
 #define KIND_CONDUCTOR 1u
 #define KIND_DIELECTRIC 2u
 #define KIND_METALLIC 3u
+#define KIND_COATED 4u
 
 // Material.shadowing: 0 height-correlated Smith G2, 1 separable G1 G1.
 #define SHADOWING_CORRELATED 0u
@@ -24,6 +25,7 @@ struct Material {
     vec4 k;           // conductor k rgb
     vec4 specular;    // conductor specular_reflectance rgb
     vec4 emission;    // emitted radiance rgb; .w = 1 when both faces emit
+    vec4 coat;        // non-metal coat: KHR_materials_specular scale rgb; .w = IOR
 };
 
 #endif

@@ -60,17 +60,42 @@ pub fn model(b: &Bsdf) -> String {
         Bsdf::Dielectric { eta, roughness: r } => {
             format!("roughdielectric eta {eta:.4} {}", roughness(r))
         }
+        Bsdf::Coated {
+            base,
+            coat,
+            roughness: r,
+        } => coated(*base, coat, r),
         Bsdf::Metallic {
             metallic,
             base,
             conductor: c,
+            coat,
         } => format!(
-            "blend {metallic:.3} x ({}) + {:.3} x diffuse reflectance {}",
+            "blend {metallic:.3} x ({}) + {:.3} x ({})",
             conductor(c),
             1.0 - metallic,
-            rgb(*base)
+            coated(*base, coat, &c.roughness)
         ),
     }
+}
+
+/// The glTF non-metal: a dielectric coat over a Lambertian base.
+fn coated(base: glam::Vec3, coat: &glint::cpu::bsdf::coated::CoatParams, r: &Roughness) -> String {
+    let coat_name = if r.is_smooth() {
+        "smooth coat".to_string()
+    } else {
+        format!("ggx coat {}", roughness(r))
+    };
+    let spec = if coat.specular == glam::Vec3::ONE {
+        String::new()
+    } else {
+        format!(" specular {}", rgb(coat.specular))
+    };
+    format!(
+        "coated non-metal ({coat_name} ior {:.4}{spec} over diffuse base {})",
+        coat.eta,
+        rgb(base)
+    )
 }
 
 fn bytes(n: usize) -> String {

@@ -184,6 +184,7 @@ pub fn load(path: &Path, o: &RenderOpts) -> Result<Scene> {
     check_scene_path(path)?;
     let options = glint::cpu::loader::LoadOptions {
         allow_any_path: o.allow_any_path,
+        multiscatter: o.multiscatter == OnOff::On,
     };
     let mut scene = glint::cpu::loader::load_with(path, options)?;
     if let Some(bg) = o.background {
@@ -232,7 +233,10 @@ pub fn load_quiet(
     background: Option<[f32; 3]>,
 ) -> Result<Scene> {
     check_scene_path(path)?;
-    let options = glint::cpu::loader::LoadOptions { allow_any_path };
+    let options = glint::cpu::loader::LoadOptions {
+        allow_any_path,
+        ..Default::default()
+    };
     let mut scene = glint::cpu::loader::load_with(path, options)?;
     if let Some(bg) = background {
         scene.background = bg.into();

@@ -1,35 +1,53 @@
-//! The glTF metallic-roughness blend: `metallic` x conductor lobe +
-//! (1 - metallic) x Lambertian lobe, the lobe picked with probability
-//! `metallic` (pbrt-v4 style one-sample mixture; eval and pdf are the
-//! mixtures, so MIS sees the combined density). Two-sided.
+//! The glTF metallic-roughness blend (Mitsuba 3's `blendbsdf` with weight
+//! `metallic`): the conductor lobe with probability `metallic`, the coated
+//! non-metal (`coated.rs`) with 1 - metallic, both with the conductor's
+//! roughness. A one-sample mixture (pbrt-v4 style): eval and pdf are the
+//! mixtures, so MIS sees the combined density. Two-sided.
 
 use glam::{Vec2, Vec3};
 
+use super::coated::{CoatParams, coated_eval, coated_pdf, coated_sample};
 use super::conductor::{conductor_eval, conductor_pdf, conductor_sample};
-use super::diffuse::{diffuse_eval, diffuse_pdf, diffuse_sample};
 use super::{BsdfSample, ConductorParams};
 
-/// The non-delta part of the blend: a smooth conductor lobe contributes
-/// nothing here (it is a Dirac delta, reached only through sampling).
-pub fn metallic_eval(m: f32, base: Vec3, c: &ConductorParams, wo: Vec3, wi: Vec3) -> Vec3 {
-    m * conductor_eval(c, wo, wi) + (1.0 - m) * diffuse_eval(base, wo, wi)
+/// The non-delta part of the blend: smooth lobes contribute nothing here
+/// (they are Dirac deltas, reached only through sampling).
+pub fn metallic_eval(
+    m: f32,
+    base: Vec3,
+    c: &ConductorParams,
+    coat: &CoatParams,
+    wo: Vec3,
+    wi: Vec3,
+) -> Vec3 {
+    m * conductor_eval(c, wo, wi) + (1.0 - m) * coated_eval(base, coat, &c.roughness, wo, wi)
 }
 
-pub fn metallic_pdf(m: f32, c: &ConductorParams, wo: Vec3, wi: Vec3) -> f32 {
-    m * conductor_pdf(c, wo, wi) + (1.0 - m) * diffuse_pdf(wo, wi)
+pub fn metallic_pdf(
+    m: f32,
+    base: Vec3,
+    c: &ConductorParams,
+    coat: &CoatParams,
+    wo: Vec3,
+    wi: Vec3,
+) -> f32 {
+    m * conductor_pdf(c, wo, wi) + (1.0 - m) * coated_pdf(base, coat, &c.roughness, wo, wi)
 }
 
+/// `uc` first picks the metal (uc < m), then, rescaled to [0, 1), the
+/// non-metal's own lobe.
 pub fn metallic_sample(
     m: f32,
     base: Vec3,
     c: &ConductorParams,
+    coat: &CoatParams,
     wo: Vec3,
     uc: f32,
     u: Vec2,
 ) -> Option<BsdfSample> {
     // The lobe that was sampled contributes its own (well-conditioned)
-    // pdf and f; the other lobe is evaluated at the sampled direction.
-    let (wi, pdf_c, f_c, pdf_d, f_d);
+    // pdf and f; the other is evaluated at the sampled direction.
+    let (wi, pdf_c, f_c, pdf_n, f_n);
     if uc < m {
         let s = conductor_sample(c, wo, u)?;
         if s.delta {
@@ -41,21 +59,30 @@ pub fn metallic_sample(
         wi = s.wi;
         pdf_c = s.pdf;
         f_c = s.weight * (s.pdf / wi.z.abs());
-        pdf_d = diffuse_pdf(wo, wi);
-        f_d = diffuse_eval(base, wo, wi);
+        pdf_n = coated_pdf(base, coat, &c.roughness, wo, wi);
+        f_n = coated_eval(base, coat, &c.roughness, wo, wi);
     } else {
-        let s = diffuse_sample(base, wo, u)?;
+        let uc = ((uc - m) / (1.0 - m)).clamp(0.0, ONE_MINUS_EPS);
+        let s = coated_sample(base, coat, &c.roughness, wo, uc, u)?;
+        if s.delta {
+            // The smooth coat's mirror, (1 - m) s F delta / |cos|, picked
+            // with probability (1 - m) P: the coat's own throughput.
+            return Some(BsdfSample {
+                pdf: (1.0 - m) * s.pdf,
+                ..s
+            });
+        }
         wi = s.wi;
-        pdf_d = s.pdf;
-        f_d = diffuse_eval(base, wo, wi);
+        pdf_n = s.pdf;
+        f_n = s.weight * (s.pdf / wi.z.abs());
         pdf_c = conductor_pdf(c, wo, wi);
         f_c = conductor_eval(c, wo, wi);
     }
-    let pdf = m * pdf_c + (1.0 - m) * pdf_d;
+    let pdf = m * pdf_c + (1.0 - m) * pdf_n;
     if !(pdf > 0.0) || !pdf.is_finite() {
         return None;
     }
-    let f = m * f_c + (1.0 - m) * f_d;
+    let f = m * f_c + (1.0 - m) * f_n;
     Some(BsdfSample {
         wi,
         weight: f * (wi.z.abs() / pdf),
@@ -64,3 +91,6 @@ pub fn metallic_sample(
         eta: 1.0,
     })
 }
+
+/// The largest f32 below 1: a rescaled random number stays in [0, 1).
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;

@@ -5,6 +5,7 @@
 use glam::Vec3;
 use serde_json::{Map, Value};
 
+use crate::bsdf::coated::CoatParams;
 use crate::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_ior, named_metal};
 use crate::scene::Material;
 
@@ -55,16 +56,26 @@ fn isotropic(alpha: f32) -> Roughness {
     }
 }
 
-/// Map one glTF material.
-pub fn convert(m: &gltf::Material) -> Result<Material, String> {
+/// Map one glTF material. `multiscatter` is `--multiscatter`: the energy
+/// compensation of every rough model whose `extras.bsdf` does not say.
+pub fn convert(
+    m: &gltf::Material,
+    multiscatter: bool,
+    warnings: &mut Vec<String>,
+) -> Result<Material, String> {
     let label = match m.name() {
         Some(n) => format!("material {} ('{n}')", m.index().unwrap_or(0)),
         None => format!("material {}", m.index().unwrap_or(0)),
     };
-    convert_inner(m).map_err(|e| format!("{label}: {e}"))
+    convert_inner(m, multiscatter, warnings, &label).map_err(|e| format!("{label}: {e}"))
 }
 
-fn convert_inner(m: &gltf::Material) -> Result<Material, String> {
+fn convert_inner(
+    m: &gltf::Material,
+    multiscatter: bool,
+    warnings: &mut Vec<String>,
+    label: &str,
+) -> Result<Material, String> {
     let extras = match m.extras() {
         Some(raw) => {
             Some(serde_json::from_str::<Value>(raw.get()).map_err(|e| format!("extras: {e}"))?)
@@ -72,8 +83,8 @@ fn convert_inner(m: &gltf::Material) -> Result<Material, String> {
         None => None,
     };
     let bsdf = match extras.as_ref().and_then(|e| e.get("bsdf")) {
-        Some(b) => bsdf_from_extras(b).map_err(|e| format!("extras.bsdf: {e}"))?,
-        None => bsdf_from_gltf(m)?,
+        Some(b) => bsdf_from_extras_with(b, multiscatter).map_err(|e| format!("extras.bsdf: {e}"))?,
+        None => bsdf_from_gltf(m, multiscatter, warnings, label)?,
     };
     let factor = Vec3::from(m.emissive_factor());
     check_range(factor, 0.0, 1.0, "emissiveFactor")?;
@@ -107,9 +118,56 @@ fn check_unit(x: f32, what: &str) -> Result<f32, String> {
     }
 }
 
-/// The contract's core-glTF mapping: transmission first, then metal, else
-/// diffuse. Textures are ignored; their factors are kept.
-fn bsdf_from_gltf(m: &gltf::Material) -> Result<Bsdf, String> {
+/// The coat of the glTF non-metal: `KHR_materials_ior` (default 1.5,
+/// against air taken as 1.0) and `KHR_materials_specular` (specularFactor
+/// x specularColorFactor scales the coat's Fresnel term; clamped to 1 per
+/// channel so the base term stays energy conserving, with a warning).
+pub fn gltf_coat(
+    m: &gltf::Material,
+    warnings: &mut Vec<String>,
+    label: &str,
+) -> Result<CoatParams, String> {
+    let eta = m.ior().unwrap_or(GLTF_DEFAULT_IOR);
+    if !(eta.is_finite() && eta >= 1.0) {
+        return Err(format!(
+            "KHR_materials_ior ior must be finite and >= 1, got {eta}"
+        ));
+    }
+    let mut specular = Vec3::ONE;
+    if let Some(s) = m.specular() {
+        let factor = check_unit(s.specular_factor(), "KHR_materials_specular specularFactor")?;
+        let color = Vec3::from(s.specular_color_factor());
+        if !(color.is_finite() && color.min_element() >= 0.0) {
+            return Err(format!(
+                "KHR_materials_specular specularColorFactor must be finite and >= 0, got {color}"
+            ));
+        }
+        specular = factor * color;
+        if specular.max_element() > 1.0 {
+            warnings.push(format!(
+                "{label}: KHR_materials_specular scale {specular} clamped to 1 (energy conservation)"
+            ));
+            specular = specular.min(Vec3::ONE);
+        }
+        if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
+            warnings.push(format!(
+                "{label}: KHR_materials_specular textures are not supported; their factors are used"
+            ));
+        }
+    }
+    Ok(CoatParams { eta, specular })
+}
+
+/// The contract's core-glTF mapping: transmission first, then the metal
+/// (metallic 1), the non-metal (metallic 0: a coat over a Lambertian base)
+/// or their blend by probability `metallic`. Textures are applied per hit
+/// (`texture::textured_bsdf`); here their factors are used.
+fn bsdf_from_gltf(
+    m: &gltf::Material,
+    multiscatter: bool,
+    warnings: &mut Vec<String>,
+    label: &str,
+) -> Result<Bsdf, String> {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _alpha] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b);
@@ -118,6 +176,10 @@ fn bsdf_from_gltf(m: &gltf::Material) -> Result<Bsdf, String> {
     let roughness = check_unit(pbr.roughness_factor(), "roughnessFactor")?;
     // Perceptual roughness to GGX alpha, as the glTF BRDF appendix defines it.
     let alpha = roughness * roughness;
+    let rough = Roughness {
+        multiscatter,
+        ..isotropic(alpha)
+    };
     let transmission = match m.transmission() {
         Some(t) => check_unit(t.transmission_factor(), "transmissionFactor")?,
         None => 0.0,
@@ -131,22 +193,38 @@ fn bsdf_from_gltf(m: &gltf::Material) -> Result<Bsdf, String> {
         }
         return Ok(Bsdf::Dielectric {
             eta: ior,
-            roughness: isotropic(alpha),
+            roughness: rough,
         });
     }
+    // A metallicRoughnessTexture can make a metallic-1 material a blend
+    // per hit: it keeps its coat.
+    let textured = pbr.metallic_roughness_texture().is_some();
+    if metallic >= 1.0 && !textured {
+        return Ok(Bsdf::Conductor(conductor_from_f0(base, rough)));
+    }
+    let coat = gltf_coat(m, warnings, label)?;
+    Ok(gltf_blend(metallic, base, rough, coat))
+}
+
+/// The glTF metal/non-metal blend for metallic < 1: the coated non-metal
+/// alone at metallic 0, else the blend (the CPU twin of the per-hit
+/// mapping's tail).
+pub fn gltf_blend(metallic: f32, base: Vec3, rough: Roughness, coat: CoatParams) -> Bsdf {
+    let metallic = metallic.clamp(0.0, 1.0);
     if metallic > 0.0 {
-        let conductor = conductor_from_f0(base, isotropic(alpha));
-        return Ok(if metallic >= 1.0 {
-            Bsdf::Conductor(conductor)
-        } else {
-            Bsdf::Metallic {
-                metallic,
-                base,
-                conductor,
-            }
-        });
+        Bsdf::Metallic {
+            metallic,
+            base,
+            conductor: conductor_from_f0(base, rough),
+            coat,
+        }
+    } else {
+        Bsdf::Coated {
+            base,
+            coat,
+            roughness: rough,
+        }
     }
-    Ok(Bsdf::Diffuse { reflectance: base })
 }
 
 const TYPES: &str = "diffuse, conductor, roughconductor, dielectric or roughdielectric";
@@ -162,6 +240,12 @@ const ROUGH_KEYS: &[&str] = &[
 /// Parse `extras.bsdf` with Mitsuba 3's plugin names and parameters. Like
 /// Mitsuba, a parameter the type does not take is an error (it catches typos).
 pub fn bsdf_from_extras(v: &Value) -> Result<Bsdf, String> {
+    bsdf_from_extras_with(v, false)
+}
+
+/// [`bsdf_from_extras`] with `multiscatter` the default of rough models
+/// that do not give it (`--multiscatter`).
+pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bsdf, String> {
     let obj = v.as_object().ok_or("must be an object with a \"type\"")?;
     let ty = match obj.get("type") {
         Some(Value::String(s)) => s.as_str(),
@@ -192,7 +276,7 @@ pub fn bsdf_from_extras(v: &Value) -> Result<Bsdf, String> {
         }
     }
     let roughness = if rough {
-        parse_roughness(obj)?
+        parse_roughness(obj, multiscatter_default)?
     } else {
         Roughness::SMOOTH
     };
@@ -256,7 +340,7 @@ fn metal(name: &str) -> Result<(Vec3, Vec3), String> {
     named_metal(name).ok_or_else(|| format!("unknown metal \"{name}\""))
 }
 
-fn parse_roughness(obj: &Map<String, Value>) -> Result<Roughness, String> {
+fn parse_roughness(obj: &Map<String, Value>, multiscatter_default: bool) -> Result<Roughness, String> {
     if let Some(d) = obj.get("distribution") {
         match d.as_str() {
             Some(s) if s.eq_ignore_ascii_case("ggx") => {}
@@ -280,7 +364,7 @@ fn parse_roughness(obj: &Map<String, Value>) -> Result<Roughness, String> {
         },
     };
     let multiscatter = match obj.get("multiscatter") {
-        None => false,
+        None => multiscatter_default,
         Some(Value::Bool(b)) => *b,
         Some(v) => return Err(format!("\"multiscatter\" must be true or false, got {v}")),
     };

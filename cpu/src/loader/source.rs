@@ -23,6 +23,7 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
+    "KHR_materials_specular",
     "KHR_mesh_quantization",
     "KHR_texture_transform",
 ];
@@ -37,6 +38,10 @@ pub struct LoadOptions {
     /// Let buffer and image URIs name files outside the scene's folder
     /// (absolute paths, `..` leaving it); refused by default.
     pub allow_any_path: bool,
+    /// `--multiscatter on`: energy compensation for every rough model,
+    /// glTF-derived ones included, unless a material's own `extras.bsdf`
+    /// says `multiscatter`.
+    pub multiscatter: bool,
 }
 
 /// A validated document with its buffers' bytes, indexed like `buffers`.

@@ -371,6 +371,7 @@ pub fn sidak(alpha: f64, tests: usize) -> f64 {
 }
 
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, fresnel};
+use glint_cpu::bsdf::coated::{CoatParams, coated_coat_probability};
 
 pub fn rough(alpha_u: f32, alpha_v: f32, shadowing: Shadowing) -> Roughness {
     Roughness {
@@ -401,13 +402,26 @@ pub fn delta_lobes(bsdf: &Bsdf, wo: Vec3) -> Vec<DeltaLobe> {
             dir: mirror,
             mass: 1.0,
         }],
+        // The metal's mirror and the smooth coat's share one direction.
         Bsdf::Metallic {
             metallic,
             conductor,
-            ..
-        } if conductor.roughness.is_smooth() => vec![DeltaLobe {
+            base,
+            coat,
+        } if conductor.roughness.is_smooth() => {
+            let p = coated_coat_probability(*base, coat, &conductor.roughness, wo.z) as f64;
+            vec![DeltaLobe {
+                dir: mirror,
+                mass: *metallic as f64 + (1.0 - *metallic as f64) * p,
+            }]
+        }
+        Bsdf::Coated {
+            base,
+            coat,
+            roughness,
+        } if roughness.is_smooth() => vec![DeltaLobe {
             dir: mirror,
-            mass: *metallic as f64,
+            mass: coated_coat_probability(*base, coat, roughness, wo.z) as f64,
         }],
         Bsdf::Dielectric { eta, .. } if bsdf.is_delta() => {
             let f = fresnel::fresnel_dielectric(wo.z, *eta) as f64;
@@ -496,6 +510,7 @@ pub fn chi2_cases() -> Vec<Case> {
                 metallic: 0.4,
                 base: Vec3::new(0.9, 0.6, 0.3),
                 conductor: gold(rough(0.3, 0.3, Shadowing::Correlated)),
+                coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
             },
             wo: dir_cos(c, PHI_O),
         });
@@ -506,9 +521,59 @@ pub fn chi2_cases() -> Vec<Case> {
             metallic: 0.6,
             base: Vec3::new(0.9, 0.6, 0.3),
             conductor: gold(Roughness::SMOOTH),
+            coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
         },
         wo: dir_cos(0.5, PHI_O),
     });
+    // The glTF non-metal: smooth and rough coats, black and coloured bases
+    // (a black base samples only the coat), eta near 1 (a faint coat),
+    // grazing and from below.
+    let coated = |base: Vec3, eta: f32, specular: Vec3, r: Roughness| Bsdf::Coated {
+        base,
+        coat: CoatParams { eta, specular },
+        roughness: r,
+    };
+    for &(a, c) in &[
+        (0.3, 0.8),
+        (0.3, -0.4),
+        (0.05, 0.2),
+        (1.0, 0.6),
+        (0.002, 0.7),
+        (0.6, 1e-3),
+    ] {
+        v.push(Case {
+            name: format!("coated a={a} cos={c}"),
+            bsdf: coated(
+                Vec3::new(0.8, 0.5, 0.2),
+                1.5,
+                Vec3::ONE,
+                rough(a, a, Shadowing::Correlated),
+            ),
+            wo: dir_cos(c, PHI_O),
+        });
+    }
+    v.push(Case {
+        name: "coated black a=0.2 cos=0.5".into(),
+        bsdf: coated(Vec3::ZERO, 1.5, Vec3::ONE, rough(0.2, 0.2, Shadowing::Correlated)),
+        wo: dir_cos(0.5, PHI_O),
+    });
+    v.push(Case {
+        name: "coated eta=1.01 specular a=0.4 cos=0.3".into(),
+        bsdf: coated(
+            Vec3::splat(0.5),
+            1.01,
+            Vec3::new(1.0, 0.5, 0.2),
+            rough(0.4, 0.4, Shadowing::Correlated),
+        ),
+        wo: dir_cos(0.3, PHI_O),
+    });
+    for &c in &[0.5, -0.7] {
+        v.push(Case {
+            name: format!("coated smooth cos={c}"),
+            bsdf: coated(Vec3::new(0.8, 0.5, 0.2), 1.5, Vec3::ONE, Roughness::SMOOTH),
+            wo: dir_cos(c, PHI_O),
+        });
+    }
     v.push(Case {
         name: "conductor smooth cos=0.5".into(),
         bsdf: Bsdf::Conductor(gold(Roughness::SMOOTH)),

@@ -1,0 +1,435 @@
+//! The glTF non-metal: a GGX dielectric coat over a Lambertian base, made
+//! energy conserving by albedo scaling (Kulla and Conty 2017, "Revisiting
+//! Physically Based Shading at Imageworks"; the layering the glTF PBR
+//! extensions and OpenPBR use). The contract fixes the model:
+//!
+//!   f(wo, wi) = s f_coat(wo, wi)
+//!             + base (1 - s E(mu_o)) (1 - s E(mu_i)) / (pi (1 - s E_avg)),
+//!
+//! f_coat the single-scattering GGX reflection (height-correlated Smith,
+//! the exact dielectric Fresnel of `eta` against air taken as 1.0), s the
+//! `KHR_materials_specular` scale (specularFactor x specularColorFactor,
+//! per channel, at most 1), E(mu) the coat's directional albedo with s = 1
+//! and E_avg = 2 int E(mu) mu dmu. Below the smooth threshold the coat is
+//! the ideal mirror weighted by s F(mu), and E(mu) = F(mu) exactly.
+//!
+//! Why it conserves energy: the base term integrates over wi to
+//! base (1 - s E(mu_o)) (the cosine-weighted integral of 1 - s E(mu_i) is
+//! 1 - s E_avg), so the albedo is s E(mu_o) + base (1 - s E(mu_o)): 1 for a
+//! white base and a white specular, E(mu_o) for a black base. Both terms
+//! are symmetric in (wo, wi): the model is reciprocal. Two-sided.
+//!
+//! E and E_avg come from glint's own coat ([`coat_albedo_reference`]),
+//! tabulated by `cargo run --release -p glint-cpu --example coat_tables`
+//! into `coat_tables.bin` (binary data beside this file, read once), on
+//! grids uniform in sqrt(mu) (E changes fastest at grazing angles), in
+//! sqrt(alpha) (glTF's perceptual roughness; E changes fastest near the
+//! smooth end) and in x = (eta - 1) / (eta + 1) (every eta >= 1 has a place
+//! on the grid, and F0 = x^2 varies smoothly along it). The
+//! GPU reads the same numbers from the tables' storage buffer
+//! (`multiscatter::gpu_tables`, `shaders/bsdf/coated.glsl`).
+//!
+//! Sampling: the coat's visible normals with probability P, the cosine
+//! lobe with 1 - P, P the coat's share of the albedo at wo (channel means
+//! of s E(mu_o) against base (1 - s E(mu_o))); eval and pdf are the
+//! mixture's, so MIS sees one density.
+
+use std::f32::consts::FRAC_1_PI;
+use std::sync::LazyLock;
+
+use glam::{Vec2, Vec3};
+
+use super::conductor::{rough_alphas, two_sided};
+use super::fresnel::fresnel_dielectric;
+use super::microfacet::{
+    MIN_ALPHA, ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility,
+    reflect_dir,
+};
+use super::warp::square_to_cosine_hemisphere;
+use super::{BsdfSample, Roughness};
+
+/// The coat of a [`super::Bsdf::Coated`] non-metal.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CoatParams {
+    /// The coat's index of refraction against air taken as 1.0
+    /// (`KHR_materials_ior`, default 1.5); at least 1.
+    pub eta: f32,
+    /// `KHR_materials_specular`'s scale on the coat's Fresnel term
+    /// (specularFactor x specularColorFactor), per channel, in [0, 1].
+    pub specular: Vec3,
+}
+
+impl CoatParams {
+    /// glTF's default coat: IOR 1.5, no specular scaling.
+    pub const GLTF_DEFAULT: Self = Self {
+        eta: 1.5,
+        specular: Vec3::ONE,
+    };
+}
+
+/// Grid sizes of the coat tables: sqrt(mu), sqrt(alpha) and
+/// x = (eta - 1) / (eta + 1), each uniform over [0, 1].
+pub const COAT_N_MU: usize = 64;
+pub const COAT_N_ALPHA: usize = 64;
+pub const COAT_N_ETA: usize = 16;
+/// Floats in the E table (`[x][alpha][mu]`) and in the E_avg table
+/// (`[x][alpha]`), which follows it.
+pub const COAT_E_LEN: usize = COAT_N_MU * COAT_N_ALPHA * COAT_N_ETA;
+pub const COAT_E_AVG_LEN: usize = COAT_N_ALPHA * COAT_N_ETA;
+
+/// The binary tables: a 16-byte header ("GLCT", then the three grid sizes
+/// as little-endian u32) and the E and E_avg floats, little-endian.
+const COAT_TABLE_BYTES: &[u8] = include_bytes!("coat_tables.bin");
+
+/// The tables as read from [`COAT_TABLE_BYTES`]: E followed by E_avg.
+pub fn coat_tables() -> &'static [f32] {
+    static TABLES: LazyLock<Vec<f32>> = LazyLock::new(|| {
+        decode_coat_tables(COAT_TABLE_BYTES).expect("cpu/src/bsdf/coat_tables.bin is corrupt")
+    });
+    &TABLES
+}
+
+/// Check the header against the compiled-in grid and decode the floats.
+pub fn decode_coat_tables(bytes: &[u8]) -> Result<Vec<f32>, String> {
+    let word = |i: usize| {
+        bytes
+            .get(4 * i..4 * i + 4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    };
+    if bytes.get(..4) != Some(b"GLCT") {
+        return Err("no GLCT header".into());
+    }
+    let dims = (word(1), word(2), word(3));
+    let want = (
+        Some(COAT_N_MU as u32),
+        Some(COAT_N_ALPHA as u32),
+        Some(COAT_N_ETA as u32),
+    );
+    if dims != want {
+        return Err(format!("grid {dims:?}, compiled for {want:?}"));
+    }
+    let body = &bytes[16..];
+    if body.len() != 4 * (COAT_E_LEN + COAT_E_AVG_LEN) {
+        return Err(format!("{} bytes of floats", body.len()));
+    }
+    Ok(body
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
+/// Encode tables the way [`decode_coat_tables`] reads them (the
+/// generator's writer).
+pub fn encode_coat_tables(e: &[f32], e_avg: &[f32]) -> Vec<u8> {
+    assert_eq!((e.len(), e_avg.len()), (COAT_E_LEN, COAT_E_AVG_LEN));
+    let mut out = b"GLCT".to_vec();
+    for n in [COAT_N_MU, COAT_N_ALPHA, COAT_N_ETA] {
+        out.extend_from_slice(&(n as u32).to_le_bytes());
+    }
+    for v in e.iter().chain(e_avg) {
+        out.extend_from_slice(&v.to_le_bytes());
+    }
+    out
+}
+
+/// The grid coordinate of eta: x = (eta - 1) / (eta + 1), sqrt of F0.
+pub fn coat_eta_coord(eta: f32) -> f32 {
+    ((eta - 1.0) / (eta + 1.0)).clamp(0.0, 1.0)
+}
+
+/// The eta of grid coordinate x (the inverse of [`coat_eta_coord`]).
+pub fn coat_eta_of(x: f32) -> f32 {
+    (1.0 + x) / (1.0 - x).max(1e-6)
+}
+
+/// Table coordinate of mu (and of alpha): its square root.
+pub fn coat_grid_coord(v: f32) -> f32 {
+    v.clamp(0.0, 1.0).sqrt()
+}
+
+/// The mu (or alpha) of grid coordinate t: t^2.
+pub fn coat_grid_value(t: f32) -> f32 {
+    t * t
+}
+
+/// Grid position of t in [0, 1] on an n-point grid: the lower index and
+/// the fraction towards the next.
+fn cell(t: f32, n: usize) -> (usize, f32) {
+    let y = t.clamp(0.0, 1.0) * (n - 1) as f32;
+    let i = (y as usize).min(n - 2);
+    (i, y - i as f32)
+}
+
+/// E(mu, alpha, eta) of the coat with s = 1: trilinear in the tables, and
+/// the exact Fresnel term below the smooth threshold (`smooth`).
+pub fn coat_albedo(mu: f32, alpha: f32, eta: f32, smooth: bool) -> f32 {
+    if smooth {
+        return fresnel_dielectric(mu.clamp(0.0, 1.0), eta);
+    }
+    let t = coat_tables();
+    let (i, fx) = cell(coat_grid_coord(mu), COAT_N_MU);
+    let (j, fy) = cell(coat_grid_coord(alpha), COAT_N_ALPHA);
+    let (k, fz) = cell(coat_eta_coord(eta), COAT_N_ETA);
+    let at = |i: usize, j: usize, k: usize| t[(k * COAT_N_ALPHA + j) * COAT_N_MU + i];
+    let plane = |k: usize| {
+        let a = at(i, j, k) + (at(i + 1, j, k) - at(i, j, k)) * fx;
+        let b = at(i, j + 1, k) + (at(i + 1, j + 1, k) - at(i, j + 1, k)) * fx;
+        a + (b - a) * fy
+    };
+    let p0 = plane(k);
+    p0 + (plane(k + 1) - p0) * fz
+}
+
+/// E_avg(alpha, eta) = 2 int E(mu) mu dmu (bilinear; the smooth coat's is
+/// the alpha = 0 row, 2 int F(mu) mu dmu).
+pub fn coat_albedo_avg(alpha: f32, eta: f32, smooth: bool) -> f32 {
+    let t = &coat_tables()[COAT_E_LEN..];
+    let alpha = if smooth { 0.0 } else { alpha };
+    let (j, fy) = cell(coat_grid_coord(alpha), COAT_N_ALPHA);
+    let (k, fz) = cell(coat_eta_coord(eta), COAT_N_ETA);
+    let at = |j: usize, k: usize| t[k * COAT_N_ALPHA + j];
+    let a = at(j, k) + (at(j + 1, k) - at(j, k)) * fy;
+    let b = at(j, k + 1) + (at(j + 1, k + 1) - at(j, k + 1)) * fy;
+    a + (b - a) * fz
+}
+
+/// E(mu) of the single-scattering coat (s = 1) by visible-normal sampling
+/// on an n x n stratified grid: the mean of F(wo . wm) G2 / G1 over the
+/// reflected directions above the surface (Heitz 2018 eq. 19). alpha = 0
+/// gives F(mu). The generator's integrand, public so that tests recompute
+/// table entries.
+pub fn coat_albedo_reference(mu: f32, alpha: f32, eta: f32, n: usize) -> f64 {
+    let mu = mu.max(1e-4);
+    if alpha <= 0.0 {
+        return fresnel_dielectric(mu, eta) as f64;
+    }
+    let wo = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let a = alpha.max(MIN_ALPHA);
+    let g1 = ggx_g1(wo, a, a);
+    let mut sum = 0.0f64;
+    for i in 0..n {
+        for j in 0..n {
+            let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
+            let wm = ggx_sample_visible(wo, a, a, u);
+            let wi = reflect_dir(wo, wm);
+            if wi.z > 0.0 && g1 > 0.0 {
+                let f = fresnel_dielectric(wo.dot(wm), eta);
+                sum += (f * ggx_g2(wo, wi, a, a, false) / g1) as f64;
+            }
+        }
+    }
+    sum / (n * n) as f64
+}
+
+/// What eval, pdf and sample share for one wo (above the surface): the
+/// tables' alpha, E(mu_o) and E_avg scaled by s, and the coat's sampling
+/// probability.
+struct CoatAtWo {
+    alpha: f32,
+    smooth: bool,
+    eo: Vec3,
+    e_avg: Vec3,
+    p_coat: f32,
+    /// 1 - p_coat, computed without the cancellation (at grazing angles
+    /// the coat takes nearly everything and 1 - p_coat would lose digits).
+    p_base: f32,
+}
+
+fn at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> CoatAtWo {
+    let smooth = r.is_smooth();
+    let (ax, ay) = rough_alphas(r);
+    let alpha = (ax * ay).sqrt();
+    let eo = coat.specular * coat_albedo(mu_o, alpha, coat.eta, smooth);
+    let e_avg = coat.specular * coat_albedo_avg(alpha, coat.eta, smooth);
+    let spec = mean(eo);
+    let diff = mean(base * (Vec3::ONE - eo));
+    let total = spec + diff;
+    let (p_coat, p_base) = if total > 0.0 {
+        ((spec / total).clamp(0.0, 1.0), (diff / total).clamp(0.0, 1.0))
+    } else {
+        (0.5, 0.5)
+    };
+    CoatAtWo {
+        alpha,
+        smooth,
+        eo,
+        e_avg,
+        p_coat,
+        p_base,
+    }
+}
+
+fn mean(v: Vec3) -> f32 {
+    (v.x + v.y + v.z) * (1.0 / 3.0)
+}
+
+/// The albedo-scaled base term for wo, wi both above the surface.
+fn base_term(base: Vec3, coat: &CoatParams, w: &CoatAtWo, mu_i: f32) -> Vec3 {
+    let ei = coat.specular * coat_albedo(mu_i, w.alpha, coat.eta, w.smooth);
+    let denom = Vec3::ONE - w.e_avg;
+    if !(denom.min_element() > 0.0) {
+        return Vec3::ZERO;
+    }
+    base * (Vec3::ONE - w.eo).max(Vec3::ZERO) * (Vec3::ONE - ei).max(Vec3::ZERO) * FRAC_1_PI
+        / denom
+}
+
+/// s f_coat for wo, wi above the surface and their half vector wm (rough).
+fn coat_lobe(coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3, wm: Vec3) -> Vec3 {
+    let (ax, ay) = rough_alphas(r);
+    let f = fresnel_dielectric(wo.dot(wm), coat.eta);
+    coat.specular * (f * ggx_d(wm, ax, ay) * ggx_visibility(wo, wi, ax, ay, false))
+}
+
+pub fn coated_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
+    let (wo, wi) = two_sided(wo, wi);
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return Vec3::ZERO;
+    }
+    let w = at_wo(base, coat, r, wo.z);
+    let mut f = base_term(base, coat, &w, wi.z);
+    if !w.smooth {
+        f += coat_lobe(coat, r, wo, wi, (wo + wi).normalize());
+    }
+    f
+}
+
+pub fn coated_pdf(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
+    let (wo, wi) = two_sided(wo, wi);
+    if wo.z <= 0.0 || wi.z <= 0.0 {
+        return 0.0;
+    }
+    let w = at_wo(base, coat, r, wo.z);
+    w.p_base * wi.z * FRAC_1_PI + w.p_coat * coat_pdf_rough(r, &w, wo, wi)
+}
+
+/// The coat lobe's solid-angle density (0 for the smooth coat's delta).
+fn coat_pdf_rough(r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
+    if w.smooth {
+        return 0.0;
+    }
+    let (ax, ay) = rough_alphas(r);
+    let wm = (wo + wi).normalize();
+    let dot = wo.dot(wm);
+    if dot <= 0.0 {
+        return 0.0;
+    }
+    ggx_pdf_visible(wo, wm, ax, ay) / (4.0 * dot)
+}
+
+/// `uc` picks the lobe (coat with probability P), `u` samples it.
+pub fn coated_sample(
+    base: Vec3,
+    coat: &CoatParams,
+    r: &Roughness,
+    wo: Vec3,
+    uc: f32,
+    u: Vec2,
+) -> Option<BsdfSample> {
+    if wo.z == 0.0 {
+        return None;
+    }
+    let flip = wo.z < 0.0;
+    let wo = Vec3::new(wo.x, wo.y, wo.z.abs());
+    let w = at_wo(base, coat, r, wo.z);
+    let (mut wi, f, pdf);
+    if uc < w.p_coat {
+        if w.smooth {
+            // The mirror lobe, s F delta / |cos|, picked with probability P:
+            // throughput s F / P, discrete probability P.
+            let f = coat.specular * fresnel_dielectric(wo.z, coat.eta);
+            return Some(BsdfSample {
+                wi: Vec3::new(-wo.x, -wo.y, if flip { -wo.z } else { wo.z }),
+                weight: f / w.p_coat,
+                pdf: w.p_coat,
+                delta: true,
+                eta: 1.0,
+            });
+        }
+        let (ax, ay) = rough_alphas(r);
+        let wm = ggx_sample_visible(wo, ax, ay, u);
+        let dot = wo.dot(wm);
+        wi = reflect_dir(wo, wm);
+        if wi.z <= 0.0 || dot <= 0.0 {
+            return None;
+        }
+        // The coat's f and pdf from the sampled normal (see conductor.rs:
+        // wo + wi is ill-conditioned for near-specular grazing pairs).
+        let pdf_c = ggx_pdf_visible(wo, wm, ax, ay) / (4.0 * dot);
+        pdf = w.p_coat * pdf_c + w.p_base * wi.z * FRAC_1_PI;
+        f = coat_lobe(coat, r, wo, wi, wm) + base_term(base, coat, &w, wi.z);
+    } else {
+        wi = square_to_cosine_hemisphere(u);
+        if wi.z <= 0.0 {
+            return None;
+        }
+        pdf = w.p_coat * coat_pdf_rough(r, &w, wo, wi) + w.p_base * wi.z * FRAC_1_PI;
+        let mut fv = base_term(base, coat, &w, wi.z);
+        if !w.smooth {
+            fv += coat_lobe(coat, r, wo, wi, (wo + wi).normalize());
+        }
+        f = fv;
+    }
+    if !(pdf > 0.0) || !pdf.is_finite() {
+        return None;
+    }
+    let weight = f * (wi.z / pdf);
+    if flip {
+        wi.z = -wi.z;
+    }
+    Some(BsdfSample {
+        wi,
+        weight,
+        pdf,
+        delta: false,
+        eta: 1.0,
+    })
+}
+
+/// The coat's selection probability at wo (for tests and the blend).
+pub fn coated_coat_probability(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> f32 {
+    at_wo(base, coat, r, mu_o.abs()).p_coat
+}
+
+/// The glTF non-metal's directional albedo at mu_o as the model promises
+/// it: s E(mu_o) + base (1 - s E(mu_o)) (the furnace tests' expectation).
+pub fn coated_albedo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> Vec3 {
+    let (ax, ay) = rough_alphas(r);
+    let e = coat.specular * coat_albedo(mu_o, (ax * ay).sqrt(), coat.eta, r.is_smooth());
+    e + base * (Vec3::ONE - e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tables_decode_and_round_trip() {
+        let t = coat_tables();
+        assert_eq!(t.len(), COAT_E_LEN + COAT_E_AVG_LEN);
+        let bytes = encode_coat_tables(&t[..COAT_E_LEN], &t[COAT_E_LEN..]);
+        assert_eq!(bytes, COAT_TABLE_BYTES);
+        assert!(decode_coat_tables(&bytes[..bytes.len() - 4]).is_err());
+        assert!(decode_coat_tables(b"GLCX").is_err());
+    }
+
+    #[test]
+    fn eta_coordinate_inverts() {
+        for eta in [1.0f32, 1.33, 1.5, 2.4, 5.0] {
+            assert!((coat_eta_of(coat_eta_coord(eta)) - eta).abs() < 1e-4 * eta);
+        }
+    }
+
+    /// Table entries recomputed independently of the generator's grid.
+    #[test]
+    fn table_entries_match_recomputation() {
+        for (i, j, k) in [(31, 31, 15), (10, 20, 3), (3, 31, 8), (31, 5, 1), (16, 16, 12)] {
+            let mu = coat_grid_value(i as f32 / (COAT_N_MU - 1) as f32);
+            let alpha = coat_grid_value(j as f32 / (COAT_N_ALPHA - 1) as f32);
+            let eta = coat_eta_of(k as f32 / (COAT_N_ETA - 1) as f32);
+            let r = coat_albedo_reference(mu, alpha, eta, 128);
+            let t = coat_albedo(mu, alpha, eta, false) as f64;
+            assert!((r - t).abs() < 2e-3, "mu {mu} alpha {alpha} eta {eta}: {t} vs {r}");
+        }
+    }
+}
