@@ -24,6 +24,8 @@ layout(constant_id = 0) const uint GLINT_FEATURES = 0xffffffffu;
 #define F_BOUNCES 4096u
 #define F_NEE 8192u
 #define F_COATED 16384u
+#define F_PLASTIC 32768u
+#define F_THIN_DIELECTRIC 65536u
 
 #define HAS(f) ((GLINT_FEATURES & (f)) != 0u)
 

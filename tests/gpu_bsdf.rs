@@ -16,8 +16,8 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use glint::gpu::groups;
-use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::bsdf::coated::CoatParams;
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::{GpuMaterial, Material};
 
 use glint::stability::{GpuResult, Query, Rng};
@@ -46,7 +46,7 @@ fn metal(name: &str, r: Roughness) -> ConductorParams {
 }
 
 /// The materials under test, by kind (0 diffuse, 1 conductor, 2 dielectric,
-/// 3 metallic, 4 coated).
+/// 3 metallic, 4 coated, 5 plastic, 6 thindielectric).
 fn materials() -> Vec<(u32, Bsdf)> {
     let mut v = vec![(
         0,
@@ -119,6 +119,27 @@ fn materials() -> Vec<(u32, Bsdf)> {
                 ));
             }
         }
+    }
+    // Mitsuba's plastic (both forms of its internal scattering) and the
+    // thin slab, at several IORs.
+    for (i, eta) in [1.49f32, 1.33, 2.0, 1.02].into_iter().enumerate() {
+        v.push((
+            5,
+            Bsdf::Plastic(glint_cpu::bsdf::plastic::PlasticParams {
+                diffuse: Vec3::new(0.8, 0.4, 0.1),
+                specular: Vec3::new(1.0, 0.9, 0.7),
+                eta,
+                nonlinear: i % 2 == 1,
+            }),
+        ));
+        v.push((
+            6,
+            Bsdf::ThinDielectric {
+                eta,
+                reflectance: Vec3::new(1.0, 0.8, 0.6),
+                transmittance: Vec3::new(0.9, 0.7, 0.5),
+            },
+        ));
     }
     v
 }
@@ -249,7 +270,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
     let per_kind = 16_384;
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let mut queries = Vec::new();
-    for kind in 0..5u32 {
+    for kind in 0..7u32 {
         let ids: Vec<usize> = (0..mats.len()).filter(|&i| mats[i].0 == kind).collect();
         for _ in 0..per_kind {
             let id = ids[(rng.u32() as usize) % ids.len()];
@@ -285,7 +306,15 @@ fn glsl_bsdfs_match_the_cpu_crate() {
     )
     .unwrap();
 
-    let names = ["diffuse", "conductor", "dielectric", "metallic", "coated"];
+    let names = [
+        "diffuse",
+        "conductor",
+        "dielectric",
+        "metallic",
+        "coated",
+        "plastic",
+        "thindielectric",
+    ];
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for (kind, name) in names.iter().enumerate() {

@@ -55,6 +55,9 @@ fn the_glsl_feature_bits_are_the_rust_ones() {
         ("F_BACKGROUND", Features::BACKGROUND),
         ("F_BOUNCES", Features::BOUNCES),
         ("F_NEE", Features::NEE),
+        ("F_COATED", Features::COATED),
+        ("F_PLASTIC", Features::PLASTIC),
+        ("F_THIN_DIELECTRIC", Features::THIN_DIELECTRIC),
     ];
     let mut defined = 0;
     for line in src.lines() {

@@ -68,7 +68,9 @@ fn gpu_kernel_traces_the_cpu_paths() {
                     glint::cpu::Bsdf::Dielectric { roughness, .. } => roughness,
                     glint::cpu::Bsdf::Metallic { conductor, .. } => &mut conductor.roughness,
                     glint::cpu::Bsdf::Coated { roughness, .. } => roughness,
-                    glint::cpu::Bsdf::Diffuse { .. } => continue,
+                    glint::cpu::Bsdf::Diffuse { .. }
+                    | glint::cpu::Bsdf::Plastic(_)
+                    | glint::cpu::Bsdf::ThinDielectric { .. } => continue,
                 };
                 if !r.is_smooth() {
                     r.multiscatter = true;

@@ -4,18 +4,18 @@
 //!     cargo run --release -p glint-cpu --example coat_tables
 //!
 //! E(mu, alpha, x): the coat's directional albedo (exact dielectric Fresnel,
-//! height-correlated Smith) on a 64 x 64 x 16 grid uniform in sqrt(mu),
-//! sqrt(alpha) and x = (eta - 1) / (eta + 1) over [0, 1], 128 x 128 stratified
+//! height-correlated Smith) on a 64 x 64 x 32 grid uniform in mu^(1/4),
+//! sqrt(alpha) and sqrt(x), x = (eta - 1) / (eta + 1), over [0, 1], 128 x 128 stratified
 //! visible-normal samples each; the alpha = 0 row is the exact F(mu).
 //! E_avg(alpha, x) = 2 int E(mu) mu dmu of the table's own piecewise-linear
-//! E in sqrt(mu) (so that the base term's cosine integral is exactly
+//! E in mu^(1/4) (so that the base term's cosine integral is exactly
 //! 1 - E_avg for what the renderer looks up), except the alpha = 0 row, which
 //! the smooth coat uses with the exact F: 2 int F mu dmu by a 4096-point
 //! midpoint rule.
 
 use glint_cpu::bsdf::coated::{
-    COAT_N_ALPHA, COAT_N_ETA, COAT_N_MU, coat_albedo_reference, coat_eta_of, coat_grid_value,
-    encode_coat_tables,
+    COAT_N_ALPHA, COAT_N_ETA, COAT_N_MU, coat_albedo_reference, coat_alpha_value, coat_eta_of,
+    coat_mu_value, encode_coat_tables,
 };
 use glint_cpu::bsdf::fresnel::fresnel_dielectric;
 use rayon::prelude::*;
@@ -26,8 +26,8 @@ fn main() -> std::io::Result<()> {
         .into_par_iter()
         .map(|idx| {
             let (k, j, i) = (idx / (nm * na), (idx / nm) % na, idx % nm);
-            let mu = coat_grid_value(i as f32 / (nm - 1) as f32);
-            let alpha = coat_grid_value(j as f32 / (na - 1) as f32);
+            let mu = coat_mu_value(i as f32 / (nm - 1) as f32);
+            let alpha = coat_alpha_value(j as f32 / (na - 1) as f32);
             let eta = coat_eta_of(k as f32 / (ne - 1) as f32);
             coat_albedo_reference(mu, alpha, eta, 128) as f32
         })
@@ -45,7 +45,7 @@ fn main() -> std::io::Result<()> {
                     let v = if j == 0 {
                         fresnel_dielectric(mu as f32, eta) as f64
                     } else {
-                        let y = mu.sqrt() * (nm - 1) as f64;
+                        let y = mu.sqrt().sqrt() * (nm - 1) as f64;
                         let i0 = (y as usize).min(nm - 2);
                         let f = y - i0 as f64;
                         row[i0] as f64 + (row[i0 + 1] as f64 - row[i0] as f64) * f

@@ -49,11 +49,15 @@ impl Features {
     /// The glTF non-metal (a coat over a Lambertian base); the metallic
     /// blend's non-metal part comes with [`Features::METALLIC`].
     pub const COATED: u32 = 1 << 14;
+    /// Mitsuba's smooth `plastic`.
+    pub const PLASTIC: u32 = 1 << 15;
+    /// Mitsuba's `thindielectric`.
+    pub const THIN_DIELECTRIC: u32 = 1 << 16;
 
     /// Every feature: the generic kernel.
-    pub const ALL: Features = Features((1 << 15) - 1);
+    pub const ALL: Features = Features((1 << 17) - 1);
 
-    const NAMES: [(u32, &'static str); 15] = [
+    const NAMES: [(u32, &'static str); 17] = [
         (Self::DIFFUSE, "diffuse"),
         (Self::CONDUCTOR, "conductor"),
         (Self::DIELECTRIC, "dielectric"),
@@ -69,6 +73,8 @@ impl Features {
         (Self::BOUNCES, "bounces"),
         (Self::NEE, "nee"),
         (Self::COATED, "coated"),
+        (Self::PLASTIC, "plastic"),
+        (Self::THIN_DIELECTRIC, "thindielectric"),
     ];
 
     pub fn has(self, bit: u32) -> bool {
@@ -124,6 +130,8 @@ impl Features {
             }
             match &m.bsdf {
                 Bsdf::Diffuse { .. } => f |= Self::DIFFUSE,
+                Bsdf::Plastic(_) => f |= Self::PLASTIC,
+                Bsdf::ThinDielectric { .. } => f |= Self::THIN_DIELECTRIC,
                 Bsdf::Coated { roughness, .. } => {
                     f |= Self::COATED;
                     rough(roughness, &mut f);
@@ -209,7 +217,7 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
                     snap(roughness, &mut snapped);
                 }
             }
-            Bsdf::Diffuse { .. } => {}
+            Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => {}
         }
     }
     if snapped > 0 {

@@ -131,6 +131,8 @@ impl GpuMaterial {
     pub const KIND_DIELECTRIC: u32 = 2;
     pub const KIND_METALLIC: u32 = 3;
     pub const KIND_COATED: u32 = 4;
+    pub const KIND_PLASTIC: u32 = 5;
+    pub const KIND_THIN_DIELECTRIC: u32 = 6;
 }
 
 /// `GpuMaterial::shadowing`: bit 0 separable, bit 1 multiscatter.
@@ -178,6 +180,24 @@ impl From<&Material> for GpuMaterial {
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);
+            }
+            Bsdf::Plastic(p) => {
+                // .w of reflectance: nonlinear. F_dr and the sampling weight
+                // are computed per hit (a texture changes the diffuse part).
+                g.kind = Self::KIND_PLASTIC;
+                g.reflectance = vec4(p.diffuse, if p.nonlinear { 1.0 } else { 0.0 });
+                g.specular = vec4(p.specular, 0.0);
+                g.eta = [p.eta, 0.0, 0.0, 0.0];
+            }
+            Bsdf::ThinDielectric {
+                eta,
+                reflectance,
+                transmittance,
+            } => {
+                g.kind = Self::KIND_THIN_DIELECTRIC;
+                g.eta = [*eta, 0.0, 0.0, 0.0];
+                g.specular = vec4(*reflectance, 0.0);
+                g.k = vec4(*transmittance, 0.0);
             }
             Bsdf::Coated {
                 base,
@@ -341,7 +361,7 @@ impl Scene {
     pub fn material_needs_tangent(&self, m: usize) -> bool {
         let aniso = |r: &crate::bsdf::Roughness| !r.is_smooth() && r.alpha_u != r.alpha_v;
         let lobe = match &self.materials[m].bsdf {
-            Bsdf::Diffuse { .. } => false,
+            Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => false,
             Bsdf::Coated { roughness, .. } => aniso(roughness),
             Bsdf::Conductor(c) => aniso(&c.roughness),
             Bsdf::Dielectric { roughness, .. } => aniso(roughness),

@@ -402,7 +402,9 @@ pub fn textured_bsdf(
                 Bsdf::Dielectric { roughness, .. } => {
                     (CoatParams::GLTF_DEFAULT, roughness.multiscatter)
                 }
-                Bsdf::Diffuse { .. } => (CoatParams::GLTF_DEFAULT, false),
+                Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => {
+                    (CoatParams::GLTF_DEFAULT, false)
+                }
             };
             let rough = Roughness {
                 alpha_u: alpha,
@@ -433,6 +435,11 @@ pub fn textured_bsdf(
             Bsdf::Conductor(mut c) => {
                 c.specular_reflectance *= base_tex;
                 Bsdf::Conductor(c)
+            }
+            // A plastic's diffuse_reflectance is a diffuse reflectance.
+            Bsdf::Plastic(mut p) => {
+                p.diffuse *= base_tex;
+                Bsdf::Plastic(p)
             }
             other => other,
         },

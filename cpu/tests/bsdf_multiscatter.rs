@@ -164,8 +164,8 @@ fn multiscatter_chi2() {
 /// a few entries recomputed from the single-scattering lobe agree.
 #[test]
 fn tables_match_glsl_and_recomputation() {
-    use glint_cpu::bsdf::ms_tables::{MS_T, MS_T_N};
     use glint_cpu::bsdf::coated::{COAT_E_LEN, COAT_N_ALPHA, COAT_N_ETA, COAT_N_MU, coat_tables};
+    use glint_cpu::bsdf::ms_tables::{MS_T, MS_T_N};
     use glint_cpu::bsdf::multiscatter::{MS_OFF_COAT, MS_OFF_E_AVG, MS_OFF_T, gpu_tables};
     let p = concat!(
         env!("CARGO_MANIFEST_DIR"),

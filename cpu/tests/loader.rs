@@ -396,6 +396,75 @@ fn extras_named_metals() {
     }
 }
 
+/// Mitsuba 3's `plastic` and `thindielectric` with their defaults
+/// (plastic: diffuse 0.5, specular 1, int_ior 1.49 polypropylene, air
+/// outside, nonlinear false; thindielectric: bk7 in air, both factors 1).
+#[test]
+fn extras_plastic_and_thindielectric() {
+    use glint_cpu::bsdf::plastic::PlasticParams;
+    let b = bsdfs(
+        "extras_plastic",
+        vec![
+            json!({ "type": "plastic" }),
+            json!({ "type": "plastic", "diffuse_reflectance": [0.1, 0.2, 0.3],
+                    "specular_reflectance": 0.5, "int_ior": "water", "nonlinear": true }),
+            json!({ "type": "thindielectric" }),
+            json!({ "type": "thindielectric", "int_ior": 1.33, "ext_ior": 1.0,
+                    "specular_reflectance": [1, 0.5, 0.25], "specular_transmittance": 0.5 }),
+        ],
+    );
+    assert_eq!(
+        b[0],
+        Bsdf::Plastic(PlasticParams {
+            diffuse: Vec3::splat(0.5),
+            specular: Vec3::ONE,
+            eta: 1.49 / DEFAULT_EXT_IOR,
+            nonlinear: false,
+        })
+    );
+    assert_eq!(
+        b[1],
+        Bsdf::Plastic(PlasticParams {
+            diffuse: Vec3::new(0.1, 0.2, 0.3),
+            specular: Vec3::splat(0.5),
+            eta: 1.333 / DEFAULT_EXT_IOR,
+            nonlinear: true,
+        })
+    );
+    assert_eq!(
+        b[2],
+        Bsdf::ThinDielectric {
+            eta: DEFAULT_INT_IOR / DEFAULT_EXT_IOR,
+            reflectance: Vec3::ONE,
+            transmittance: Vec3::ONE,
+        }
+    );
+    assert_eq!(
+        b[3],
+        Bsdf::ThinDielectric {
+            eta: 1.33,
+            reflectance: Vec3::new(1.0, 0.5, 0.25),
+            transmittance: Vec3::splat(0.5),
+        }
+    );
+    for (bad, want) in [
+        (
+            json!({ "type": "plastic", "alpha": 0.1 }),
+            "takes no parameter \"alpha\"",
+        ),
+        (json!({ "type": "plastic", "int_ior": 0 }), "int_ior"),
+        (json!({ "type": "plastic", "nonlinear": 1 }), "nonlinear"),
+        (
+            json!({ "type": "thindielectric", "specular_transmittance": 2 }),
+            "specular_transmittance",
+        ),
+    ] {
+        let d = material_doc(vec![json!({ "extras": { "bsdf": bad } })]);
+        let e = parse_doc_err(&d, "bad_plastic");
+        assert!(e.contains(want), "{e}");
+    }
+}
+
 #[test]
 fn extras_dielectrics_with_defaults_and_names() {
     let b = bsdfs(
@@ -547,7 +616,10 @@ fn ior_and_specular_shape_the_coat() {
                 "extensions": { "KHR_materials_specular": { "specularColorFactor": [2, 1, 1] } } }),
     ]);
     let s = parse_doc(&d, "coat");
-    let Bsdf::Coated { coat, roughness, .. } = s.materials[0].bsdf else {
+    let Bsdf::Coated {
+        coat, roughness, ..
+    } = s.materials[0].bsdf
+    else {
         panic!("{:?}", s.materials[0].bsdf)
     };
     assert_eq!(coat.eta, 1.33);
@@ -569,7 +641,9 @@ fn ior_and_specular_shape_the_coat() {
             "specularColorFactor",
         ),
     ] {
-        let d = material_doc(vec![json!({ "extensions": ext, "pbrMetallicRoughness": { "metallicFactor": 0 } })]);
+        let d = material_doc(vec![
+            json!({ "extensions": ext, "pbrMetallicRoughness": { "metallicFactor": 0 } }),
+        ]);
         let e = parse_doc_err(&d, "bad coat");
         assert!(e.contains(want), "{e}");
     }
@@ -954,6 +1028,8 @@ fn bundled_assets_load() {
             Bsdf::Dielectric { .. } => "roughdielectric",
             Bsdf::Metallic { .. } => "metallic",
             Bsdf::Coated { .. } => "coated",
+            Bsdf::Plastic(_) => "plastic",
+            Bsdf::ThinDielectric { .. } => "thindielectric",
         })
         .collect();
     for k in [

@@ -312,12 +312,12 @@ fn bad_attributes() {
 fn unknown_bsdf_type_and_parameters() {
     bsdf_err(
         "bsdf_type",
-        json!({ "type": "plastic" }),
-        "unknown BSDF type \"plastic\"",
+        json!({ "type": "velvet" }),
+        "unknown BSDF type \"velvet\"",
     );
     let e = bsdf_err(
         "bsdf_type_name",
-        json!({ "type": "plastic" }),
+        json!({ "type": "velvet" }),
         "material 0 ('broken')",
     );
     assert!(e.contains("extras.bsdf"), "{e}");

@@ -242,8 +242,10 @@ fn two_by_two_texture_seen_head_on() {
 fn normal_map_radiance(test: &str, rgb: [u8; 3], scale: f32, from: Vec3) -> f32 {
     let mut d = Doc::new();
     let t = d.png_texture(1, 1, &[rgb[0], rgb[1], rgb[2], 255], Value::Null);
+    // A Lambertian (the normal map applies to every model; a glTF
+    // non-metal's coat would add its Fresnel reflection).
     let m = d.material(json!({
-        "pbrMetallicRoughness": { "metallicFactor": 0 },
+        "extras": { "bsdf": { "type": "diffuse", "reflectance": 1 } },
         "normalTexture": { "index": t, "scale": scale }
     }));
     let q = d.uv_quad(1.0, 0.0, Some(m));
@@ -271,7 +273,7 @@ fn decoded(rgb: [u8; 3], scale: f32) -> Vec3 {
 
 #[test]
 fn normal_map_tilt_changes_radiance_by_the_cosine() {
-    // Default reflectance: glTF baseColor 1 -> rho = 1, E = pi -> L = cos.
+    // Reflectance 1, E = pi -> L = cos.
     let tilt = 30f32.to_radians();
     let n = Vec3::new(0.0, tilt.sin(), tilt.cos());
     let rgb = ((n + Vec3::ONE) * 0.5 * 255.0)

@@ -403,6 +403,7 @@ bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out Bsd
 // ------------------------------------------------------------------ coated
 
 #include "bsdf/coated.glsl"
+#include "bsdf/plastic.glsl"
 
 // ----------------------------------------------------------------- metallic
 
@@ -472,6 +473,10 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return dielectric_eval(m.eta.x, m, wo, wi);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return coated_eval(m.reflectance.xyz, m, wo, wi);
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
+        return plastic_eval(m, wo, wi);
+    } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
+        return vec3(0.0);
     }
     if (HAS(F_METALLIC)) {
         return metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
@@ -488,6 +493,10 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return dielectric_pdf(m.eta.x, m, wo, wi);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return coated_pdf(m.reflectance.xyz, m, wo, wi);
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
+        return plastic_pdf(m, wo, wi);
+    } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
+        return 0.0;
     }
     if (HAS(F_METALLIC)) {
         return metallic_pdf(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
@@ -504,6 +513,10 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         return dielectric_sample(m.eta.x, m, wo, uc, u, s);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return coated_sample(m.reflectance.xyz, m, wo, uc, u, s);
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
+        return plastic_sample(m, wo, uc, u, s);
+    } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
+        return thin_sample(m, wo, uc, s);
     }
     if (HAS(F_METALLIC)) {
         return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
@@ -520,12 +533,17 @@ bool bsdf_is_delta(Material m) {
         return dielectric_is_smooth(m.eta.x, m);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return false;
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
+        return false;
+    } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
+        return true;
     }
     return HAS(F_METALLIC) && m.reflectance.w >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
 }
 
 bool bsdf_has_transmission(Material m) {
-    return HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC;
+    return (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC)
+        || (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC);
 }
 
 #endif

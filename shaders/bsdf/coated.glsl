@@ -7,7 +7,7 @@
 #define GLINT_BSDF_COATED_GLSL
 
 float coat_eta_coord(float eta) {
-    return clamp((eta - 1.0) / (eta + 1.0), 0.0, 1.0);
+    return sqrt(clamp((eta - 1.0) / (eta + 1.0), 0.0, 1.0));
 }
 
 // coated.rs cell: the lower grid index of t on an n-point grid over [0, 1]
@@ -29,7 +29,7 @@ float coat_albedo(float mu, float alpha, float eta, bool is_smooth) {
         return fresnel_dielectric(clamp(mu, 0.0, 1.0), eta);
     }
     float fx, fy, fz;
-    uint i = coat_cell(sqrt(clamp(mu, 0.0, 1.0)), COAT_N_MU, fx);
+    uint i = coat_cell(sqrt(sqrt(clamp(mu, 0.0, 1.0))), COAT_N_MU, fx);
     uint j = coat_cell(sqrt(clamp(alpha, 0.0, 1.0)), COAT_N_ALPHA, fy);
     uint k = coat_cell(coat_eta_coord(eta), COAT_N_ETA, fz);
     float p[2];

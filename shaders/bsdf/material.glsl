@@ -8,6 +8,8 @@
 #define KIND_DIELECTRIC 2u
 #define KIND_METALLIC 3u
 #define KIND_COATED 4u
+#define KIND_PLASTIC 5u
+#define KIND_THIN_DIELECTRIC 6u
 
 // Material.shadowing: 0 height-correlated Smith G2, 1 separable G1 G1.
 #define SHADOWING_CORRELATED 0u

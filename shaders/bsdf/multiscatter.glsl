@@ -17,12 +17,12 @@
 #define MS_OFF_E_AVG 2048u
 #define MS_OFF_T 2112u
 // glint_cpu::bsdf::coated: the glTF non-metal's coat tables at MS_OFF_COAT:
-// E[x][sqrt alpha][sqrt mu] (COAT_E_LEN floats), then E_avg[x][sqrt alpha].
+// E[sqrt x][sqrt alpha][mu^(1/4)], x = (eta - 1) / (eta + 1) (COAT_E_LEN floats), then E_avg[x][sqrt alpha].
 #define MS_OFF_COAT 29760u
 #define COAT_N_MU 64u
 #define COAT_N_ALPHA 64u
-#define COAT_N_ETA 16u
-#define COAT_E_LEN 65536u
+#define COAT_N_ETA 32u
+#define COAT_E_LEN 131072u
 #define MS_T_ETA_MIN (1.0 / 3.0)
 #define MS_T_ETA_MAX 3.0
 

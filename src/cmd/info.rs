@@ -60,6 +60,22 @@ pub fn model(b: &Bsdf) -> String {
         Bsdf::Dielectric { eta, roughness: r } => {
             format!("roughdielectric eta {eta:.4} {}", roughness(r))
         }
+        Bsdf::Plastic(p) => format!(
+            "plastic diffuse_reflectance {} specular_reflectance {} eta {:.4}{}",
+            rgb(p.diffuse),
+            rgb(p.specular),
+            p.eta,
+            if p.nonlinear { " nonlinear" } else { "" }
+        ),
+        Bsdf::ThinDielectric {
+            eta,
+            reflectance,
+            transmittance,
+        } => format!(
+            "thindielectric eta {eta:.4} specular_reflectance {} specular_transmittance {}",
+            rgb(*reflectance),
+            rgb(*transmittance)
+        ),
         Bsdf::Coated {
             base,
             coat,

@@ -22,10 +22,12 @@
 //! E and E_avg come from glint's own coat ([`coat_albedo_reference`]),
 //! tabulated by `cargo run --release -p glint-cpu --example coat_tables`
 //! into `coat_tables.bin` (binary data beside this file, read once), on
-//! grids uniform in sqrt(mu) (E changes fastest at grazing angles), in
-//! sqrt(alpha) (glTF's perceptual roughness; E changes fastest near the
-//! smooth end) and in x = (eta - 1) / (eta + 1) (every eta >= 1 has a place
-//! on the grid, and F0 = x^2 varies smoothly along it). The
+//! grids uniform in mu^(1/4) (E changes fastest at grazing angles, where
+//! it depends on alpha / mu: for alpha = 1e-3 it still moves between
+//! mu = 1e-6 and 1e-4), in sqrt(alpha) (glTF's perceptual roughness; E
+//! changes fastest near the smooth end) and in x = (eta - 1) / (eta + 1) (every eta >= 1 has a place
+//! on the grid, and F0 = x^2 varies smoothly along it; nodes uniform in
+//! sqrt(x), crowded towards eta = 1). The
 //! GPU reads the same numbers from the tables' storage buffer
 //! (`multiscatter::gpu_tables`, `shaders/bsdf/coated.glsl`).
 //!
@@ -67,11 +69,11 @@ impl CoatParams {
     };
 }
 
-/// Grid sizes of the coat tables: sqrt(mu), sqrt(alpha) and
+/// Grid sizes of the coat tables: mu^(1/4), sqrt(alpha) and
 /// x = (eta - 1) / (eta + 1), each uniform over [0, 1].
 pub const COAT_N_MU: usize = 64;
 pub const COAT_N_ALPHA: usize = 64;
-pub const COAT_N_ETA: usize = 16;
+pub const COAT_N_ETA: usize = 32;
 /// Floats in the E table (`[x][alpha][mu]`) and in the E_avg table
 /// (`[x][alpha]`), which follows it.
 pub const COAT_E_LEN: usize = COAT_N_MU * COAT_N_ALPHA * COAT_N_ETA;
@@ -132,23 +134,37 @@ pub fn encode_coat_tables(e: &[f32], e_avg: &[f32]) -> Vec<u8> {
     out
 }
 
-/// The grid coordinate of eta: x = (eta - 1) / (eta + 1), sqrt of F0.
+/// The grid coordinate of eta: sqrt(x), x = (eta - 1) / (eta + 1) = sqrt(F0).
+/// The square root crowds the nodes towards eta = 1, where the Fresnel
+/// term's rise at grazing angles narrows to nothing (E is discontinuous at
+/// eta = 1: F = 0 there, F -> 1 at grazing for any eta > 1).
 pub fn coat_eta_coord(eta: f32) -> f32 {
-    ((eta - 1.0) / (eta + 1.0)).clamp(0.0, 1.0)
+    ((eta - 1.0) / (eta + 1.0)).clamp(0.0, 1.0).sqrt()
 }
 
-/// The eta of grid coordinate x (the inverse of [`coat_eta_coord`]).
-pub fn coat_eta_of(x: f32) -> f32 {
+/// The eta of grid coordinate t (the inverse of [`coat_eta_coord`]).
+pub fn coat_eta_of(t: f32) -> f32 {
+    let x = t * t;
     (1.0 + x) / (1.0 - x).max(1e-6)
 }
 
-/// Table coordinate of mu (and of alpha): its square root.
-pub fn coat_grid_coord(v: f32) -> f32 {
-    v.clamp(0.0, 1.0).sqrt()
+/// Table coordinate of mu: mu^(1/4).
+pub fn coat_mu_coord(mu: f32) -> f32 {
+    mu.clamp(0.0, 1.0).sqrt().sqrt()
 }
 
-/// The mu (or alpha) of grid coordinate t: t^2.
-pub fn coat_grid_value(t: f32) -> f32 {
+/// The mu of grid coordinate t: t^4.
+pub fn coat_mu_value(t: f32) -> f32 {
+    (t * t) * (t * t)
+}
+
+/// Table coordinate of alpha: its square root (glTF's roughness).
+pub fn coat_alpha_coord(alpha: f32) -> f32 {
+    alpha.clamp(0.0, 1.0).sqrt()
+}
+
+/// The alpha of grid coordinate t: t^2.
+pub fn coat_alpha_value(t: f32) -> f32 {
     t * t
 }
 
@@ -167,8 +183,8 @@ pub fn coat_albedo(mu: f32, alpha: f32, eta: f32, smooth: bool) -> f32 {
         return fresnel_dielectric(mu.clamp(0.0, 1.0), eta);
     }
     let t = coat_tables();
-    let (i, fx) = cell(coat_grid_coord(mu), COAT_N_MU);
-    let (j, fy) = cell(coat_grid_coord(alpha), COAT_N_ALPHA);
+    let (i, fx) = cell(coat_mu_coord(mu), COAT_N_MU);
+    let (j, fy) = cell(coat_alpha_coord(alpha), COAT_N_ALPHA);
     let (k, fz) = cell(coat_eta_coord(eta), COAT_N_ETA);
     let at = |i: usize, j: usize, k: usize| t[(k * COAT_N_ALPHA + j) * COAT_N_MU + i];
     let plane = |k: usize| {
@@ -185,7 +201,7 @@ pub fn coat_albedo(mu: f32, alpha: f32, eta: f32, smooth: bool) -> f32 {
 pub fn coat_albedo_avg(alpha: f32, eta: f32, smooth: bool) -> f32 {
     let t = &coat_tables()[COAT_E_LEN..];
     let alpha = if smooth { 0.0 } else { alpha };
-    let (j, fy) = cell(coat_grid_coord(alpha), COAT_N_ALPHA);
+    let (j, fy) = cell(coat_alpha_coord(alpha), COAT_N_ALPHA);
     let (k, fz) = cell(coat_eta_coord(eta), COAT_N_ETA);
     let at = |j: usize, k: usize| t[k * COAT_N_ALPHA + j];
     let a = at(j, k) + (at(j + 1, k) - at(j, k)) * fy;
@@ -199,7 +215,7 @@ pub fn coat_albedo_avg(alpha: f32, eta: f32, smooth: bool) -> f32 {
 /// gives F(mu). The generator's integrand, public so that tests recompute
 /// table entries.
 pub fn coat_albedo_reference(mu: f32, alpha: f32, eta: f32, n: usize) -> f64 {
-    let mu = mu.max(1e-4);
+    let mu = mu.max(1e-7);
     if alpha <= 0.0 {
         return fresnel_dielectric(mu, eta) as f64;
     }
@@ -245,7 +261,10 @@ fn at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> CoatAtWo {
     let diff = mean(base * (Vec3::ONE - eo));
     let total = spec + diff;
     let (p_coat, p_base) = if total > 0.0 {
-        ((spec / total).clamp(0.0, 1.0), (diff / total).clamp(0.0, 1.0))
+        (
+            (spec / total).clamp(0.0, 1.0),
+            (diff / total).clamp(0.0, 1.0),
+        )
     } else {
         (0.5, 0.5)
     };
@@ -270,8 +289,7 @@ fn base_term(base: Vec3, coat: &CoatParams, w: &CoatAtWo, mu_i: f32) -> Vec3 {
     if !(denom.min_element() > 0.0) {
         return Vec3::ZERO;
     }
-    base * (Vec3::ONE - w.eo).max(Vec3::ZERO) * (Vec3::ONE - ei).max(Vec3::ZERO) * FRAC_1_PI
-        / denom
+    base * (Vec3::ONE - w.eo).max(Vec3::ZERO) * (Vec3::ONE - ei).max(Vec3::ZERO) * FRAC_1_PI / denom
 }
 
 /// s f_coat for wo, wi above the surface and their half vector wm (rough).
@@ -423,13 +441,22 @@ mod tests {
     /// Table entries recomputed independently of the generator's grid.
     #[test]
     fn table_entries_match_recomputation() {
-        for (i, j, k) in [(31, 31, 15), (10, 20, 3), (3, 31, 8), (31, 5, 1), (16, 16, 12)] {
-            let mu = coat_grid_value(i as f32 / (COAT_N_MU - 1) as f32);
-            let alpha = coat_grid_value(j as f32 / (COAT_N_ALPHA - 1) as f32);
+        for (i, j, k) in [
+            (31, 31, 15),
+            (10, 20, 3),
+            (3, 31, 8),
+            (31, 5, 1),
+            (16, 16, 12),
+        ] {
+            let mu = coat_mu_value(i as f32 / (COAT_N_MU - 1) as f32);
+            let alpha = coat_alpha_value(j as f32 / (COAT_N_ALPHA - 1) as f32);
             let eta = coat_eta_of(k as f32 / (COAT_N_ETA - 1) as f32);
             let r = coat_albedo_reference(mu, alpha, eta, 128);
             let t = coat_albedo(mu, alpha, eta, false) as f64;
-            assert!((r - t).abs() < 2e-3, "mu {mu} alpha {alpha} eta {eta}: {t} vs {r}");
+            assert!(
+                (r - t).abs() < 2e-3,
+                "mu {mu} alpha {alpha} eta {eta}: {t} vs {r}"
+            );
         }
     }
 }

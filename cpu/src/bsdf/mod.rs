@@ -23,7 +23,9 @@ pub mod microfacet;
 #[allow(clippy::excessive_precision)]
 pub mod ms_tables;
 pub mod multiscatter;
+pub mod plastic;
 mod tables;
+pub mod thin;
 pub mod warp;
 
 use coated::{CoatParams, coated_eval, coated_pdf, coated_sample};
@@ -31,6 +33,8 @@ use conductor::{conductor_eval, conductor_pdf, conductor_sample};
 use dielectric::{dielectric_eval, dielectric_is_smooth, dielectric_pdf, dielectric_sample};
 use diffuse::{diffuse_eval, diffuse_pdf, diffuse_sample};
 use metallic::{metallic_eval, metallic_pdf, metallic_sample};
+use plastic::{PlasticParams, plastic_eval, plastic_pdf, plastic_sample};
+use thin::thin_sample;
 
 /// Smith shadowing-masking form for rough models.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -104,6 +108,16 @@ pub enum Bsdf {
     /// Smooth or GGX rough dielectric; `eta` = int_ior / ext_ior, the
     /// outside being the side the geometric normal points to.
     Dielectric { eta: f32, roughness: Roughness },
+    /// Mitsuba 3's smooth `plastic` (`plastic.rs`). Two-sided.
+    Plastic(PlasticParams),
+    /// Mitsuba 3's `thindielectric`: reflection or straight-through
+    /// transmission of a thin slab, both Dirac deltas (`thin.rs`).
+    ThinDielectric {
+        /// int_ior / ext_ior.
+        eta: f32,
+        reflectance: Vec3,
+        transmittance: Vec3,
+    },
     /// The glTF non-metal: a GGX dielectric coat over a Lambertian `base`,
     /// energy conserving by albedo scaling (`coated.rs`). Two-sided.
     Coated {
@@ -146,6 +160,8 @@ impl Bsdf {
             Bsdf::Diffuse { reflectance } => diffuse_eval(*reflectance, wo, wi),
             Bsdf::Conductor(c) => conductor_eval(c, wo, wi),
             Bsdf::Dielectric { eta, roughness } => dielectric_eval(*eta, roughness, wo, wi),
+            Bsdf::Plastic(p) => plastic_eval(p, wo, wi),
+            Bsdf::ThinDielectric { .. } => Vec3::ZERO,
             Bsdf::Coated {
                 base,
                 coat,
@@ -166,6 +182,8 @@ impl Bsdf {
             Bsdf::Diffuse { .. } => diffuse_pdf(wo, wi),
             Bsdf::Conductor(c) => conductor_pdf(c, wo, wi),
             Bsdf::Dielectric { eta, roughness } => dielectric_pdf(*eta, roughness, wo, wi),
+            Bsdf::Plastic(p) => plastic_pdf(p, wo, wi),
+            Bsdf::ThinDielectric { .. } => 0.0,
             Bsdf::Coated {
                 base,
                 coat,
@@ -187,6 +205,12 @@ impl Bsdf {
             Bsdf::Diffuse { reflectance } => diffuse_sample(*reflectance, wo, u),
             Bsdf::Conductor(c) => conductor_sample(c, wo, u),
             Bsdf::Dielectric { eta, roughness } => dielectric_sample(*eta, roughness, wo, uc, u),
+            Bsdf::Plastic(p) => plastic_sample(p, wo, uc, u),
+            Bsdf::ThinDielectric {
+                eta,
+                reflectance,
+                transmittance,
+            } => thin_sample(*eta, *reflectance, *transmittance, wo, uc, u),
             Bsdf::Coated {
                 base,
                 coat,
@@ -208,7 +232,8 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.roughness.is_smooth(),
             Bsdf::Dielectric { eta, roughness } => dielectric_is_smooth(*eta, roughness),
             // The Lambertian base is never a delta.
-            Bsdf::Coated { .. } => false,
+            Bsdf::Coated { .. } | Bsdf::Plastic(_) => false,
+            Bsdf::ThinDielectric { .. } => true,
             Bsdf::Metallic {
                 metallic,
                 conductor,
@@ -219,7 +244,7 @@ impl Bsdf {
 
     /// Whether some direction pair with wo.z and wi.z of opposite signs has f > 0.
     pub fn has_transmission(&self) -> bool {
-        matches!(self, Bsdf::Dielectric { .. })
+        matches!(self, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
     }
 }
 

@@ -6,6 +6,7 @@ use glam::Vec3;
 use serde_json::{Map, Value};
 
 use crate::bsdf::coated::CoatParams;
+use crate::bsdf::plastic::PlasticParams;
 use crate::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_ior, named_metal};
 use crate::scene::Material;
 
@@ -83,7 +84,9 @@ fn convert_inner(
         None => None,
     };
     let bsdf = match extras.as_ref().and_then(|e| e.get("bsdf")) {
-        Some(b) => bsdf_from_extras_with(b, multiscatter).map_err(|e| format!("extras.bsdf: {e}"))?,
+        Some(b) => {
+            bsdf_from_extras_with(b, multiscatter).map_err(|e| format!("extras.bsdf: {e}"))?
+        }
         None => bsdf_from_gltf(m, multiscatter, warnings, label)?,
     };
     let factor = Vec3::from(m.emissive_factor());
@@ -227,7 +230,10 @@ pub fn gltf_blend(metallic: f32, base: Vec3, rough: Roughness, coat: CoatParams)
     }
 }
 
-const TYPES: &str = "diffuse, conductor, roughconductor, dielectric or roughdielectric";
+const TYPES: &str =
+    "diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric or plastic";
+/// Mitsuba 3's `plastic` default int_ior ("polypropylene").
+pub const DEFAULT_PLASTIC_INT_IOR: f32 = 1.49;
 const ROUGH_KEYS: &[&str] = &[
     "alpha",
     "alpha_u",
@@ -258,6 +264,31 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
         "roughconductor" => (&["eta", "k", "material", "specular_reflectance"], true),
         "dielectric" => (&["int_ior", "ext_ior"], false),
         "roughdielectric" => (&["int_ior", "ext_ior"], true),
+        "thindielectric" => (
+            &[
+                "int_ior",
+                "ext_ior",
+                "specular_reflectance",
+                "specular_transmittance",
+            ],
+            false,
+        ),
+        "plastic" => (
+            &[
+                "diffuse_reflectance",
+                "specular_reflectance",
+                "int_ior",
+                "ext_ior",
+                "nonlinear",
+            ],
+            false,
+        ),
+        "roughplastic" => {
+            return Err(
+                "\"roughplastic\" is not supported yet (use \"plastic\", or the glTF non-metal without extras.bsdf)"
+                    .into(),
+            );
+        }
         _ => return Err(format!("unknown BSDF type \"{ty}\" (expected {TYPES})")),
     };
     for key in obj.keys() {
@@ -286,6 +317,22 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
                 .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
         }),
         "conductor" | "roughconductor" => Ok(Bsdf::Conductor(parse_conductor(obj, roughness)?)),
+        "thindielectric" => Ok(Bsdf::ThinDielectric {
+            eta: relative_ior(obj, DEFAULT_INT_IOR)?,
+            reflectance: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+            transmittance: rgb(obj, "specular_transmittance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+        }),
+        "plastic" => Ok(Bsdf::Plastic(PlasticParams {
+            diffuse: rgb(obj, "diffuse_reflectance", 0.0, 1.0)?
+                .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
+            specular: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+            eta: relative_ior(obj, DEFAULT_PLASTIC_INT_IOR)?,
+            nonlinear: match obj.get("nonlinear") {
+                None => false,
+                Some(Value::Bool(b)) => *b,
+                Some(v) => return Err(format!("\"nonlinear\" must be true or false, got {v}")),
+            },
+        })),
         _ => {
             let int_ior = ior(obj, "int_ior")?.unwrap_or(DEFAULT_INT_IOR);
             let ext_ior = ior(obj, "ext_ior")?.unwrap_or(DEFAULT_EXT_IOR);
@@ -295,6 +342,14 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             })
         }
     }
+}
+
+/// int_ior / ext_ior, with Mitsuba's defaults (`int_default` inside, air
+/// outside).
+fn relative_ior(obj: &Map<String, Value>, int_default: f32) -> Result<f32, String> {
+    let int_ior = ior(obj, "int_ior")?.unwrap_or(int_default);
+    let ext_ior = ior(obj, "ext_ior")?.unwrap_or(DEFAULT_EXT_IOR);
+    Ok(int_ior / ext_ior)
 }
 
 fn parse_conductor(
@@ -340,7 +395,10 @@ fn metal(name: &str) -> Result<(Vec3, Vec3), String> {
     named_metal(name).ok_or_else(|| format!("unknown metal \"{name}\""))
 }
 
-fn parse_roughness(obj: &Map<String, Value>, multiscatter_default: bool) -> Result<Roughness, String> {
+fn parse_roughness(
+    obj: &Map<String, Value>,
+    multiscatter_default: bool,
+) -> Result<Roughness, String> {
     if let Some(d) = obj.get("distribution") {
         match d.as_str() {
             Some(s) if s.eq_ignore_ascii_case("ggx") => {}

@@ -370,8 +370,8 @@ pub fn sidak(alpha: f64, tests: usize) -> f64 {
     1.0 - (1.0 - alpha).powf(1.0 / tests as f64)
 }
 
-use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, fresnel};
 use glint_cpu::bsdf::coated::{CoatParams, coated_coat_probability};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, fresnel};
 
 pub fn rough(alpha_u: f32, alpha_v: f32, shadowing: Shadowing) -> Roughness {
     Roughness {
@@ -414,6 +414,27 @@ pub fn delta_lobes(bsdf: &Bsdf, wo: Vec3) -> Vec<DeltaLobe> {
                 dir: mirror,
                 mass: *metallic as f64 + (1.0 - *metallic as f64) * p,
             }]
+        }
+        Bsdf::Plastic(p) => {
+            let f = fresnel::fresnel_dielectric(wo.z.abs(), p.eta) as f64;
+            let w = p.specular_sampling_weight() as f64;
+            vec![DeltaLobe {
+                dir: mirror,
+                mass: f * w / (f * w + (1.0 - f) * (1.0 - w)),
+            }]
+        }
+        Bsdf::ThinDielectric { eta, .. } => {
+            let r = glint_cpu::bsdf::thin::thin_reflectance(wo.z, *eta) as f64;
+            vec![
+                DeltaLobe {
+                    dir: mirror,
+                    mass: r,
+                },
+                DeltaLobe {
+                    dir: -wo,
+                    mass: 1.0 - r,
+                },
+            ]
         }
         Bsdf::Coated {
             base,
@@ -554,7 +575,12 @@ pub fn chi2_cases() -> Vec<Case> {
     }
     v.push(Case {
         name: "coated black a=0.2 cos=0.5".into(),
-        bsdf: coated(Vec3::ZERO, 1.5, Vec3::ONE, rough(0.2, 0.2, Shadowing::Correlated)),
+        bsdf: coated(
+            Vec3::ZERO,
+            1.5,
+            Vec3::ONE,
+            rough(0.2, 0.2, Shadowing::Correlated),
+        ),
         wo: dir_cos(0.5, PHI_O),
     });
     v.push(Case {
@@ -571,6 +597,28 @@ pub fn chi2_cases() -> Vec<Case> {
         v.push(Case {
             name: format!("coated smooth cos={c}"),
             bsdf: coated(Vec3::new(0.8, 0.5, 0.2), 1.5, Vec3::ONE, Roughness::SMOOTH),
+            wo: dir_cos(c, PHI_O),
+        });
+    }
+    // Mitsuba's plastic and thindielectric.
+    for &c in &[0.9, 0.2, -0.5] {
+        v.push(Case {
+            name: format!("plastic cos={c}"),
+            bsdf: Bsdf::Plastic(glint_cpu::bsdf::plastic::PlasticParams {
+                diffuse: Vec3::new(0.8, 0.4, 0.1),
+                specular: Vec3::ONE,
+                eta: 1.49,
+                nonlinear: c < 0.0,
+            }),
+            wo: dir_cos(c, PHI_O),
+        });
+        v.push(Case {
+            name: format!("thindielectric cos={c}"),
+            bsdf: Bsdf::ThinDielectric {
+                eta: 1.5,
+                reflectance: Vec3::ONE,
+                transmittance: Vec3::ONE,
+            },
             wo: dir_cos(c, PHI_O),
         });
     }
