@@ -173,7 +173,7 @@ Material textured_bsdf(MaterialTextures mt, Material g, uint tri, float u, float
         return r;
     }
     if (mt.mode == MAP_EXTRAS) {
-        if (g.kind == KIND_DIFFUSE || g.kind == KIND_PLASTIC) {
+        if (g.kind == KIND_DIFFUSE || g.kind == KIND_PLASTIC || g.kind == KIND_ROUGH_PLASTIC) {
             g.reflectance.xyz *= base_tex;
         } else if (g.kind == KIND_CONDUCTOR) {
             g.specular.xyz *= base_tex;

@@ -403,7 +403,10 @@ fn medium(b: &Bsdf, w: Vec3) -> f32 {
 fn albedo_by_quadrature(b: &Bsdf, wo: Vec3) -> Option<(glam::DVec3, glam::DVec3)> {
     use glint_cpu::quadrature::hv_two;
     let r = match b {
-        Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => return None,
+        Bsdf::Diffuse { .. }
+        | Bsdf::Plastic(_)
+        | Bsdf::RoughPlastic(_)
+        | Bsdf::ThinDielectric { .. } => return None,
         Bsdf::Conductor(c) => c.roughness,
         Bsdf::Dielectric { roughness, .. } => *roughness,
         Bsdf::Metallic { conductor, .. } => conductor.roughness,

@@ -46,7 +46,7 @@ fn metal(name: &str, r: Roughness) -> ConductorParams {
 }
 
 /// The materials under test, by kind (0 diffuse, 1 conductor, 2 dielectric,
-/// 3 metallic, 4 coated, 5 plastic, 6 thindielectric).
+/// 3 metallic, 4 coated, 5 plastic, 6 thindielectric, 7 roughplastic).
 fn materials() -> Vec<(u32, Bsdf)> {
     let mut v = vec![(
         0,
@@ -132,6 +132,20 @@ fn materials() -> Vec<(u32, Bsdf)> {
                 nonlinear: i % 2 == 1,
             }),
         ));
+        for (j, a) in [0.00101f32, 0.05, 0.3, 1.0].into_iter().enumerate() {
+            v.push((
+                7,
+                Bsdf::RoughPlastic(glint_cpu::bsdf::roughplastic::RoughPlasticParams {
+                    plastic: glint_cpu::bsdf::plastic::PlasticParams {
+                        diffuse: Vec3::new(0.8, 0.4, 0.1),
+                        specular: Vec3::new(1.0, 0.9, 0.7),
+                        eta,
+                        nonlinear: j % 2 == 1,
+                    },
+                    roughness: rough(a, a, (i + j) % 2 == 0),
+                }),
+            ));
+        }
         v.push((
             6,
             Bsdf::ThinDielectric {
@@ -270,7 +284,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
     let per_kind = 16_384;
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let mut queries = Vec::new();
-    for kind in 0..7u32 {
+    for kind in 0..8u32 {
         let ids: Vec<usize> = (0..mats.len()).filter(|&i| mats[i].0 == kind).collect();
         for _ in 0..per_kind {
             let id = ids[(rng.u32() as usize) % ids.len()];
@@ -314,6 +328,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
         "coated",
         "plastic",
         "thindielectric",
+        "roughplastic",
     ];
     let mut report = Vec::new();
     let mut failures = Vec::new();

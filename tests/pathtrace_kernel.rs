@@ -70,6 +70,7 @@ fn gpu_kernel_traces_the_cpu_paths() {
                     glint::cpu::Bsdf::Coated { roughness, .. } => roughness,
                     glint::cpu::Bsdf::Diffuse { .. }
                     | glint::cpu::Bsdf::Plastic(_)
+                    | glint::cpu::Bsdf::RoughPlastic(_)
                     | glint::cpu::Bsdf::ThinDielectric { .. } => continue,
                 };
                 if !r.is_smooth() {

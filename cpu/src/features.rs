@@ -49,7 +49,7 @@ impl Features {
     /// The glTF non-metal (a coat over a Lambertian base); the metallic
     /// blend's non-metal part comes with [`Features::METALLIC`].
     pub const COATED: u32 = 1 << 14;
-    /// Mitsuba's smooth `plastic`.
+    /// Mitsuba's `plastic` and `roughplastic`.
     pub const PLASTIC: u32 = 1 << 15;
     /// Mitsuba's `thindielectric`.
     pub const THIN_DIELECTRIC: u32 = 1 << 16;
@@ -131,6 +131,10 @@ impl Features {
             match &m.bsdf {
                 Bsdf::Diffuse { .. } => f |= Self::DIFFUSE,
                 Bsdf::Plastic(_) => f |= Self::PLASTIC,
+                Bsdf::RoughPlastic(p) => {
+                    f |= Self::PLASTIC;
+                    rough(&p.roughness, &mut f);
+                }
                 Bsdf::ThinDielectric { .. } => f |= Self::THIN_DIELECTRIC,
                 Bsdf::Coated { roughness, .. } => {
                     f |= Self::COATED;
@@ -204,6 +208,13 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
         }
     };
     for m in &mut scene.materials {
+        // roughplastic under the threshold is Mitsuba's smooth plastic.
+        if let Bsdf::RoughPlastic(p) = m.bsdf
+            && p.roughness.is_smooth()
+        {
+            m.bsdf = Bsdf::Plastic(p.plastic);
+            snapped += 1;
+        }
         match &mut m.bsdf {
             Bsdf::Conductor(c) => snap(&mut c.roughness, &mut snapped),
             Bsdf::Metallic { conductor, .. } => snap(&mut conductor.roughness, &mut snapped),
@@ -217,6 +228,7 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
                     snap(roughness, &mut snapped);
                 }
             }
+            Bsdf::RoughPlastic(p) => snap(&mut p.roughness, &mut snapped),
             Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => {}
         }
     }

@@ -133,6 +133,7 @@ impl GpuMaterial {
     pub const KIND_COATED: u32 = 4;
     pub const KIND_PLASTIC: u32 = 5;
     pub const KIND_THIN_DIELECTRIC: u32 = 6;
+    pub const KIND_ROUGH_PLASTIC: u32 = 7;
 }
 
 /// `GpuMaterial::shadowing`: bit 0 separable, bit 1 multiscatter.
@@ -188,6 +189,16 @@ impl From<&Material> for GpuMaterial {
                 g.reflectance = vec4(p.diffuse, if p.nonlinear { 1.0 } else { 0.0 });
                 g.specular = vec4(p.specular, 0.0);
                 g.eta = [p.eta, 0.0, 0.0, 0.0];
+            }
+            Bsdf::RoughPlastic(rp) => {
+                let p = &rp.plastic;
+                g.kind = Self::KIND_ROUGH_PLASTIC;
+                g.reflectance = vec4(p.diffuse, if p.nonlinear { 1.0 } else { 0.0 });
+                g.specular = vec4(p.specular, 0.0);
+                g.eta = [p.eta, 0.0, 0.0, 0.0];
+                g.alpha_u = rp.roughness.alpha_u;
+                g.alpha_v = rp.roughness.alpha_v;
+                g.shadowing = shadowing_bits(&rp.roughness);
             }
             Bsdf::ThinDielectric {
                 eta,
@@ -361,7 +372,10 @@ impl Scene {
     pub fn material_needs_tangent(&self, m: usize) -> bool {
         let aniso = |r: &crate::bsdf::Roughness| !r.is_smooth() && r.alpha_u != r.alpha_v;
         let lobe = match &self.materials[m].bsdf {
-            Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => false,
+            Bsdf::Diffuse { .. }
+            | Bsdf::Plastic(_)
+            | Bsdf::RoughPlastic(_)
+            | Bsdf::ThinDielectric { .. } => false,
             Bsdf::Coated { roughness, .. } => aniso(roughness),
             Bsdf::Conductor(c) => aniso(&c.roughness),
             Bsdf::Dielectric { roughness, .. } => aniso(roughness),

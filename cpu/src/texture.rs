@@ -402,9 +402,10 @@ pub fn textured_bsdf(
                 Bsdf::Dielectric { roughness, .. } => {
                     (CoatParams::GLTF_DEFAULT, roughness.multiscatter)
                 }
-                Bsdf::Diffuse { .. } | Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => {
-                    (CoatParams::GLTF_DEFAULT, false)
-                }
+                Bsdf::Diffuse { .. }
+                | Bsdf::Plastic(_)
+                | Bsdf::RoughPlastic(_)
+                | Bsdf::ThinDielectric { .. } => (CoatParams::GLTF_DEFAULT, false),
             };
             let rough = Roughness {
                 alpha_u: alpha,
@@ -440,6 +441,10 @@ pub fn textured_bsdf(
             Bsdf::Plastic(mut p) => {
                 p.diffuse *= base_tex;
                 Bsdf::Plastic(p)
+            }
+            Bsdf::RoughPlastic(mut p) => {
+                p.plastic.diffuse *= base_tex;
+                Bsdf::RoughPlastic(p)
             }
             other => other,
         },

@@ -166,7 +166,12 @@ fn multiscatter_chi2() {
 fn tables_match_glsl_and_recomputation() {
     use glint_cpu::bsdf::coated::{COAT_E_LEN, COAT_N_ALPHA, COAT_N_ETA, COAT_N_MU, coat_tables};
     use glint_cpu::bsdf::ms_tables::{MS_T, MS_T_N};
-    use glint_cpu::bsdf::multiscatter::{MS_OFF_COAT, MS_OFF_E_AVG, MS_OFF_T, gpu_tables};
+    use glint_cpu::bsdf::multiscatter::{
+        MS_OFF_COAT, MS_OFF_E_AVG, MS_OFF_RP, MS_OFF_T, gpu_tables,
+    };
+    use glint_cpu::bsdf::roughplastic::{
+        RP_N_ALPHA, RP_N_ETA, RP_N_MU, RP_R_LEN, RP_T_LEN, roughplastic_tables,
+    };
     let p = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../shaders/bsdf/multiscatter.glsl"
@@ -183,6 +188,12 @@ fn tables_match_glsl_and_recomputation() {
         ("COAT_N_ALPHA", COAT_N_ALPHA),
         ("COAT_N_ETA", COAT_N_ETA),
         ("COAT_E_LEN", COAT_E_LEN),
+        ("MS_OFF_RP", MS_OFF_RP),
+        ("RP_N_MU", RP_N_MU),
+        ("RP_N_ALPHA", RP_N_ALPHA),
+        ("RP_N_ETA", RP_N_ETA),
+        ("RP_T_LEN", RP_T_LEN),
+        ("RP_R_LEN", RP_R_LEN),
     ] {
         assert!(
             src.contains(&format!("#define {name} {v}u\n")),
@@ -194,7 +205,8 @@ fn tables_match_glsl_and_recomputation() {
     assert_eq!(&t[MS_N * MS_N..MS_OFF_E_AVG], &MS_E[1][..]);
     assert_eq!(&t[MS_OFF_E_AVG..MS_OFF_E_AVG + MS_N], &MS_E_AVG[0][..]);
     assert_eq!(&t[MS_OFF_T..MS_OFF_COAT], &MS_T.concat()[..]);
-    assert_eq!(&t[MS_OFF_COAT..], coat_tables());
+    assert_eq!(&t[MS_OFF_COAT..MS_OFF_RP], coat_tables());
+    assert_eq!(&t[MS_OFF_RP..], roughplastic_tables());
     for sep in [false, true] {
         for (i, j) in [(31, 31), (10, 20), (3, 31), (31, 5), (16, 16)] {
             let mu = i as f32 / (MS_N - 1) as f32;

@@ -44,6 +44,20 @@ fn property_cases() -> Vec<(String, Bsdf)> {
                     Bsdf::Dielectric { eta, roughness: r },
                 ));
             }
+            if au == av {
+                v.push((
+                    format!("roughplastic {au} {sh:?}"),
+                    Bsdf::RoughPlastic(glint_cpu::bsdf::roughplastic::RoughPlasticParams {
+                        plastic: glint_cpu::bsdf::plastic::PlasticParams {
+                            diffuse: Vec3::new(0.8, 0.5, 0.2),
+                            specular: Vec3::ONE,
+                            eta: 1.49,
+                            nonlinear: sh == Shadowing::Separable,
+                        },
+                        roughness: r,
+                    }),
+                ));
+            }
             v.push((
                 format!("coated {au},{av} {sh:?}"),
                 Bsdf::Coated {
@@ -417,6 +431,7 @@ fn min_alpha(bsdf: &Bsdf) -> f32 {
         Bsdf::Dielectric { roughness, .. } => *roughness,
         Bsdf::Metallic { conductor, .. } => conductor.roughness,
         Bsdf::Coated { roughness, .. } => *roughness,
+        Bsdf::RoughPlastic(p) => p.roughness,
         Bsdf::Plastic(_) | Bsdf::ThinDielectric { .. } => return 0.0,
     };
     r.alpha_u.min(r.alpha_v)

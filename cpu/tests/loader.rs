@@ -447,7 +447,45 @@ fn extras_plastic_and_thindielectric() {
             transmittance: Vec3::splat(0.5),
         }
     );
+    use glint_cpu::bsdf::roughplastic::RoughPlasticParams;
+    let r = bsdfs(
+        "extras_roughplastic",
+        vec![
+            json!({ "type": "roughplastic" }),
+            json!({ "type": "roughplastic", "alpha": 0.3, "shadowing": "separable",
+                    "distribution": "ggx", "diffuse_reflectance": 0.2 }),
+        ],
+    );
+    assert_eq!(
+        r[0],
+        Bsdf::RoughPlastic(RoughPlasticParams {
+            plastic: PlasticParams {
+                diffuse: Vec3::splat(0.5),
+                specular: Vec3::ONE,
+                eta: 1.49 / DEFAULT_EXT_IOR,
+                nonlinear: false,
+            },
+            roughness: rough(
+                glint_cpu::loader::DEFAULT_ALPHA,
+                glint_cpu::loader::DEFAULT_ALPHA,
+                Shadowing::Correlated
+            ),
+        })
+    );
+    let Bsdf::RoughPlastic(p) = r[1] else {
+        panic!("{:?}", r[1])
+    };
+    assert_eq!(p.roughness, rough(0.3, 0.3, Shadowing::Separable));
+    assert_eq!(p.plastic.diffuse, Vec3::splat(0.2));
     for (bad, want) in [
+        (
+            json!({ "type": "roughplastic", "alpha_u": 0.1, "alpha_v": 0.2 }),
+            "isotropic",
+        ),
+        (
+            json!({ "type": "roughplastic", "multiscatter": true }),
+            "multiscatter",
+        ),
         (
             json!({ "type": "plastic", "alpha": 0.1 }),
             "takes no parameter \"alpha\"",
@@ -1029,6 +1067,7 @@ fn bundled_assets_load() {
             Bsdf::Metallic { .. } => "metallic",
             Bsdf::Coated { .. } => "coated",
             Bsdf::Plastic(_) => "plastic",
+            Bsdf::RoughPlastic(_) => "roughplastic",
             Bsdf::ThinDielectric { .. } => "thindielectric",
         })
         .collect();

@@ -475,6 +475,8 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return coated_eval(m.reflectance.xyz, m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_eval(m, wo, wi);
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_ROUGH_PLASTIC) {
+        return roughplastic_eval(m, wo, wi);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return vec3(0.0);
     }
@@ -495,6 +497,8 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return coated_pdf(m.reflectance.xyz, m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_pdf(m, wo, wi);
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_ROUGH_PLASTIC) {
+        return roughplastic_pdf(m, wo, wi);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return 0.0;
     }
@@ -515,6 +519,8 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         return coated_sample(m.reflectance.xyz, m, wo, uc, u, s);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_sample(m, wo, uc, u, s);
+    } else if (HAS(F_PLASTIC) && m.kind == KIND_ROUGH_PLASTIC) {
+        return roughplastic_sample(m, wo, uc, u, s);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return thin_sample(m, wo, uc, s);
     }
@@ -533,7 +539,7 @@ bool bsdf_is_delta(Material m) {
         return dielectric_is_smooth(m.eta.x, m);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return false;
-    } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
+    } else if (HAS(F_PLASTIC) && (m.kind == KIND_PLASTIC || m.kind == KIND_ROUGH_PLASTIC)) {
         return false;
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return true;

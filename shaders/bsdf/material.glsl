@@ -10,6 +10,7 @@
 #define KIND_COATED 4u
 #define KIND_PLASTIC 5u
 #define KIND_THIN_DIELECTRIC 6u
+#define KIND_ROUGH_PLASTIC 7u
 
 // Material.shadowing: 0 height-correlated Smith G2, 1 separable G1 G1.
 #define SHADOWING_CORRELATED 0u

@@ -23,6 +23,14 @@
 #define COAT_N_ALPHA 64u
 #define COAT_N_ETA 32u
 #define COAT_E_LEN 131072u
+// glint_cpu::bsdf::roughplastic: T[form][sqrt x][sqrt alpha][mu] (RP_T_LEN
+// floats per Smith form, correlated first), then R_int[form][sqrt x][sqrt alpha].
+#define MS_OFF_RP 162880u
+#define RP_N_MU 64u
+#define RP_N_ALPHA 32u
+#define RP_N_ETA 32u
+#define RP_T_LEN 65536u
+#define RP_R_LEN 1024u
 #define MS_T_ETA_MIN (1.0 / 3.0)
 #define MS_T_ETA_MAX 3.0
 

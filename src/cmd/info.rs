@@ -67,6 +67,18 @@ pub fn model(b: &Bsdf) -> String {
             p.eta,
             if p.nonlinear { " nonlinear" } else { "" }
         ),
+        Bsdf::RoughPlastic(rp) => format!(
+            "roughplastic {} diffuse_reflectance {} specular_reflectance {} eta {:.4}{}",
+            roughness(&rp.roughness),
+            rgb(rp.plastic.diffuse),
+            rgb(rp.plastic.specular),
+            rp.plastic.eta,
+            if rp.plastic.nonlinear {
+                " nonlinear"
+            } else {
+                ""
+            }
+        ),
         Bsdf::ThinDielectric {
             eta,
             reflectance,

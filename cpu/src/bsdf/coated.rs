@@ -79,8 +79,7 @@ pub const COAT_N_ETA: usize = 32;
 pub const COAT_E_LEN: usize = COAT_N_MU * COAT_N_ALPHA * COAT_N_ETA;
 pub const COAT_E_AVG_LEN: usize = COAT_N_ALPHA * COAT_N_ETA;
 
-/// The binary tables: a 16-byte header ("GLCT", then the three grid sizes
-/// as little-endian u32) and the E and E_avg floats, little-endian.
+/// The binary tables ([`decode_table`]'s format, tag "GLCT"): E, then E_avg.
 const COAT_TABLE_BYTES: &[u8] = include_bytes!("coat_tables.bin");
 
 /// The tables as read from [`COAT_TABLE_BYTES`]: E followed by E_avg.
@@ -93,26 +92,46 @@ pub fn coat_tables() -> &'static [f32] {
 
 /// Check the header against the compiled-in grid and decode the floats.
 pub fn decode_coat_tables(bytes: &[u8]) -> Result<Vec<f32>, String> {
+    decode_table(
+        bytes,
+        b"GLCT",
+        [COAT_N_MU, COAT_N_ALPHA, COAT_N_ETA],
+        COAT_E_LEN + COAT_E_AVG_LEN,
+    )
+}
+
+/// Encode tables the way [`decode_coat_tables`] reads them (the
+/// generator's writer).
+pub fn encode_coat_tables(e: &[f32], e_avg: &[f32]) -> Vec<u8> {
+    assert_eq!((e.len(), e_avg.len()), (COAT_E_LEN, COAT_E_AVG_LEN));
+    let v: Vec<f32> = e.iter().chain(e_avg).copied().collect();
+    encode_table(b"GLCT", [COAT_N_MU, COAT_N_ALPHA, COAT_N_ETA], &v)
+}
+
+/// A generated table as binary data: a 4-byte tag, three grid sizes
+/// (little-endian u32), then `len` little-endian f32s. Checked against the
+/// tag and grid compiled in, so a stale file is an error, not wrong numbers.
+pub fn decode_table(
+    bytes: &[u8],
+    tag: &[u8; 4],
+    dims: [usize; 3],
+    len: usize,
+) -> Result<Vec<f32>, String> {
     let word = |i: usize| {
         bytes
             .get(4 * i..4 * i + 4)
-            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as usize)
     };
-    if bytes.get(..4) != Some(b"GLCT") {
-        return Err("no GLCT header".into());
+    if bytes.get(..4) != Some(&tag[..]) {
+        return Err("wrong or missing header tag".into());
     }
-    let dims = (word(1), word(2), word(3));
-    let want = (
-        Some(COAT_N_MU as u32),
-        Some(COAT_N_ALPHA as u32),
-        Some(COAT_N_ETA as u32),
-    );
-    if dims != want {
-        return Err(format!("grid {dims:?}, compiled for {want:?}"));
+    let got = [word(1), word(2), word(3)];
+    if got != dims.map(Some) {
+        return Err(format!("grid {got:?}, compiled for {dims:?}"));
     }
     let body = &bytes[16..];
-    if body.len() != 4 * (COAT_E_LEN + COAT_E_AVG_LEN) {
-        return Err(format!("{} bytes of floats", body.len()));
+    if body.len() != 4 * len {
+        return Err(format!("{} bytes of floats, want {}", body.len(), 4 * len));
     }
     Ok(body
         .chunks_exact(4)
@@ -120,16 +139,14 @@ pub fn decode_coat_tables(bytes: &[u8]) -> Result<Vec<f32>, String> {
         .collect())
 }
 
-/// Encode tables the way [`decode_coat_tables`] reads them (the
-/// generator's writer).
-pub fn encode_coat_tables(e: &[f32], e_avg: &[f32]) -> Vec<u8> {
-    assert_eq!((e.len(), e_avg.len()), (COAT_E_LEN, COAT_E_AVG_LEN));
-    let mut out = b"GLCT".to_vec();
-    for n in [COAT_N_MU, COAT_N_ALPHA, COAT_N_ETA] {
+/// The writer of [`decode_table`]'s format.
+pub fn encode_table(tag: &[u8; 4], dims: [usize; 3], v: &[f32]) -> Vec<u8> {
+    let mut out = tag.to_vec();
+    for n in dims {
         out.extend_from_slice(&(n as u32).to_le_bytes());
     }
-    for v in e.iter().chain(e_avg) {
-        out.extend_from_slice(&v.to_le_bytes());
+    for x in v {
+        out.extend_from_slice(&x.to_le_bytes());
     }
     out
 }

@@ -24,6 +24,7 @@ pub mod microfacet;
 pub mod ms_tables;
 pub mod multiscatter;
 pub mod plastic;
+pub mod roughplastic;
 mod tables;
 pub mod thin;
 pub mod warp;
@@ -34,6 +35,7 @@ use dielectric::{dielectric_eval, dielectric_is_smooth, dielectric_pdf, dielectr
 use diffuse::{diffuse_eval, diffuse_pdf, diffuse_sample};
 use metallic::{metallic_eval, metallic_pdf, metallic_sample};
 use plastic::{PlasticParams, plastic_eval, plastic_pdf, plastic_sample};
+use roughplastic::{RoughPlasticParams, roughplastic_eval, roughplastic_pdf, roughplastic_sample};
 use thin::thin_sample;
 
 /// Smith shadowing-masking form for rough models.
@@ -110,6 +112,8 @@ pub enum Bsdf {
     Dielectric { eta: f32, roughness: Roughness },
     /// Mitsuba 3's smooth `plastic` (`plastic.rs`). Two-sided.
     Plastic(PlasticParams),
+    /// Mitsuba 3's `roughplastic` (`roughplastic.rs`). Two-sided.
+    RoughPlastic(RoughPlasticParams),
     /// Mitsuba 3's `thindielectric`: reflection or straight-through
     /// transmission of a thin slab, both Dirac deltas (`thin.rs`).
     ThinDielectric {
@@ -161,6 +165,7 @@ impl Bsdf {
             Bsdf::Conductor(c) => conductor_eval(c, wo, wi),
             Bsdf::Dielectric { eta, roughness } => dielectric_eval(*eta, roughness, wo, wi),
             Bsdf::Plastic(p) => plastic_eval(p, wo, wi),
+            Bsdf::RoughPlastic(p) => roughplastic_eval(p, wo, wi),
             Bsdf::ThinDielectric { .. } => Vec3::ZERO,
             Bsdf::Coated {
                 base,
@@ -183,6 +188,7 @@ impl Bsdf {
             Bsdf::Conductor(c) => conductor_pdf(c, wo, wi),
             Bsdf::Dielectric { eta, roughness } => dielectric_pdf(*eta, roughness, wo, wi),
             Bsdf::Plastic(p) => plastic_pdf(p, wo, wi),
+            Bsdf::RoughPlastic(p) => roughplastic_pdf(p, wo, wi),
             Bsdf::ThinDielectric { .. } => 0.0,
             Bsdf::Coated {
                 base,
@@ -206,6 +212,7 @@ impl Bsdf {
             Bsdf::Conductor(c) => conductor_sample(c, wo, u),
             Bsdf::Dielectric { eta, roughness } => dielectric_sample(*eta, roughness, wo, uc, u),
             Bsdf::Plastic(p) => plastic_sample(p, wo, uc, u),
+            Bsdf::RoughPlastic(p) => roughplastic_sample(p, wo, uc, u),
             Bsdf::ThinDielectric {
                 eta,
                 reflectance,
@@ -232,7 +239,7 @@ impl Bsdf {
             Bsdf::Conductor(c) => c.roughness.is_smooth(),
             Bsdf::Dielectric { eta, roughness } => dielectric_is_smooth(*eta, roughness),
             // The Lambertian base is never a delta.
-            Bsdf::Coated { .. } | Bsdf::Plastic(_) => false,
+            Bsdf::Coated { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) => false,
             Bsdf::ThinDielectric { .. } => true,
             Bsdf::Metallic {
                 metallic,

@@ -117,10 +117,11 @@ pub fn ms_albedo_reference(mu: f32, alpha: f32, separable: bool, n: usize) -> f6
 /// path tracer; `shaders/bsdf/multiscatter.glsl` reads it at the offsets
 /// [`MS_OFF_E_AVG`] and [`MS_OFF_T`], `shaders/bsdf/coated.glsl` at
 /// [`MS_OFF_COAT`]): MS_E[0], MS_E[1], MS_E_AVG[0], MS_E_AVG[1], MS_T[0],
-/// MS_T[1], then the glTF non-metal's coat tables (`coated::coat_tables`).
+/// MS_T[1], then the glTF non-metal's coat tables (`coated::coat_tables`)
+/// and `roughplastic`'s ([`MS_OFF_RP`]).
 pub fn gpu_tables() -> Vec<f32> {
     let coat = super::coated::coat_tables();
-    let mut v = Vec::with_capacity(MS_OFF_COAT + coat.len());
+    let mut v = Vec::with_capacity(MS_OFF_RP + super::roughplastic::RP_LEN);
     v.extend_from_slice(&MS_E[0]);
     v.extend_from_slice(&MS_E[1]);
     v.extend_from_slice(&MS_E_AVG[0]);
@@ -128,6 +129,7 @@ pub fn gpu_tables() -> Vec<f32> {
     v.extend_from_slice(&MS_T[0]);
     v.extend_from_slice(&MS_T[1]);
     v.extend_from_slice(coat);
+    v.extend_from_slice(super::roughplastic::roughplastic_tables());
     v
 }
 
@@ -137,6 +139,9 @@ pub const MS_OFF_E_AVG: usize = 2 * MS_N * MS_N;
 pub const MS_OFF_T: usize = MS_OFF_E_AVG + 2 * MS_N;
 /// Offset of the coat tables (E, then E_avg) in [`gpu_tables`].
 pub const MS_OFF_COAT: usize = MS_OFF_T + 2 * MS_T_N * MS_T_N * MS_T_N;
+/// Offset of `roughplastic`'s tables (`roughplastic::roughplastic_tables`).
+pub const MS_OFF_RP: usize =
+    MS_OFF_COAT + super::coated::COAT_E_LEN + super::coated::COAT_E_AVG_LEN;
 
 /// The dielectric table's eta' grid: log-uniform over [1/3, 3].
 pub const MS_T_ETA_MIN: f32 = 1.0 / 3.0;

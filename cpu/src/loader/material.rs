@@ -7,6 +7,7 @@ use serde_json::{Map, Value};
 
 use crate::bsdf::coated::CoatParams;
 use crate::bsdf::plastic::PlasticParams;
+use crate::bsdf::roughplastic::RoughPlasticParams;
 use crate::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_ior, named_metal};
 use crate::scene::Material;
 
@@ -230,8 +231,8 @@ pub fn gltf_blend(metallic: f32, base: Vec3, rough: Roughness, coat: CoatParams)
     }
 }
 
-const TYPES: &str =
-    "diffuse, conductor, roughconductor, dielectric, roughdielectric, thindielectric or plastic";
+const TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, \
+                     thindielectric, plastic or roughplastic";
 /// Mitsuba 3's `plastic` default int_ior ("polypropylene").
 pub const DEFAULT_PLASTIC_INT_IOR: f32 = 1.49;
 const ROUGH_KEYS: &[&str] = &[
@@ -283,12 +284,16 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             ],
             false,
         ),
-        "roughplastic" => {
-            return Err(
-                "\"roughplastic\" is not supported yet (use \"plastic\", or the glTF non-metal without extras.bsdf)"
-                    .into(),
-            );
-        }
+        "roughplastic" => (
+            &[
+                "diffuse_reflectance",
+                "specular_reflectance",
+                "int_ior",
+                "ext_ior",
+                "nonlinear",
+            ],
+            true,
+        ),
         _ => return Err(format!("unknown BSDF type \"{ty}\" (expected {TYPES})")),
     };
     for key in obj.keys() {
@@ -322,17 +327,23 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             reflectance: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
             transmittance: rgb(obj, "specular_transmittance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
         }),
-        "plastic" => Ok(Bsdf::Plastic(PlasticParams {
-            diffuse: rgb(obj, "diffuse_reflectance", 0.0, 1.0)?
-                .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
-            specular: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
-            eta: relative_ior(obj, DEFAULT_PLASTIC_INT_IOR)?,
-            nonlinear: match obj.get("nonlinear") {
-                None => false,
-                Some(Value::Bool(b)) => *b,
-                Some(v) => return Err(format!("\"nonlinear\" must be true or false, got {v}")),
-            },
-        })),
+        "plastic" => Ok(Bsdf::Plastic(parse_plastic(obj)?)),
+        "roughplastic" => {
+            if roughness.alpha_u != roughness.alpha_v {
+                return Err("\"roughplastic\" is isotropic (as Mitsuba's): give \"alpha\"".into());
+            }
+            if obj.contains_key("multiscatter") {
+                return Err("\"roughplastic\" is Mitsuba's single-scattering model and takes no \"multiscatter\"".into());
+            }
+            Ok(Bsdf::RoughPlastic(RoughPlasticParams {
+                plastic: parse_plastic(obj)?,
+                roughness: Roughness {
+                    multiscatter: false,
+                    ..roughness
+                },
+            }))
+        }
+
         _ => {
             let int_ior = ior(obj, "int_ior")?.unwrap_or(DEFAULT_INT_IOR);
             let ext_ior = ior(obj, "ext_ior")?.unwrap_or(DEFAULT_EXT_IOR);
@@ -342,6 +353,21 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             })
         }
     }
+}
+
+/// `plastic`'s parameters (also `roughplastic`'s), Mitsuba 3's defaults.
+fn parse_plastic(obj: &Map<String, Value>) -> Result<PlasticParams, String> {
+    Ok(PlasticParams {
+        diffuse: rgb(obj, "diffuse_reflectance", 0.0, 1.0)?
+            .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
+        specular: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+        eta: relative_ior(obj, DEFAULT_PLASTIC_INT_IOR)?,
+        nonlinear: match obj.get("nonlinear") {
+            None => false,
+            Some(Value::Bool(b)) => *b,
+            Some(v) => return Err(format!("\"nonlinear\" must be true or false, got {v}")),
+        },
+    })
 }
 
 /// int_ior / ext_ior, with Mitsuba's defaults (`int_default` inside, air

@@ -622,6 +622,25 @@ pub fn chi2_cases() -> Vec<Case> {
             wo: dir_cos(c, PHI_O),
         });
     }
+    for &(a, c, sh) in &[
+        (0.1, 0.8, Shadowing::Separable),
+        (0.4, 0.3, Shadowing::Correlated),
+        (0.02, -0.6, Shadowing::Separable),
+    ] {
+        v.push(Case {
+            name: format!("roughplastic a={a} cos={c} {sh:?}"),
+            bsdf: Bsdf::RoughPlastic(glint_cpu::bsdf::roughplastic::RoughPlasticParams {
+                plastic: glint_cpu::bsdf::plastic::PlasticParams {
+                    diffuse: Vec3::new(0.8, 0.4, 0.1),
+                    specular: Vec3::ONE,
+                    eta: 1.49,
+                    nonlinear: false,
+                },
+                roughness: rough(a, a, sh),
+            }),
+            wo: dir_cos(c, PHI_O),
+        });
+    }
     v.push(Case {
         name: "conductor smooth cos=0.5".into(),
         bsdf: Bsdf::Conductor(gold(Roughness::SMOOTH)),
