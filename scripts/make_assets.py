@@ -26,6 +26,12 @@ Scenes:
                         panel with a normal map of 4x4 hemispherical bumps, and
                         an alpha-masked leaf (MASK, cutoff 0.5); a sun and a
                         background.
+  materials.gltf        core glTF materials without extras.bsdf, one sphere
+                        each: rows of metals (metallic 1), the metal/non-metal
+                        blend (metallic 0.5), black and red non-metals (the
+                        coat over a Lambertian base) and thin-walled
+                        transmission (KHR_materials_transmission), over
+                        roughness 0, 0.25, 0.5, 0.75, 1; a sun and a sky.
   bunny.glb             (not generated: the shared Stanford Bunny) gets a
                         directional light and a background added to its JSON.
 
@@ -477,6 +483,34 @@ def light_bunny(path):
     print(f"{path}: {len(out)} bytes")
 
 
+def materials(path):
+    b = Builder()
+    rows = [
+        ("metal", dict(base=(1.0, 0.78, 0.34), metallic=1.0)),
+        ("blend", dict(base=(0.9, 0.55, 0.3), metallic=0.5)),
+        ("black", dict(base=(0.0, 0.0, 0.0), metallic=0.0)),
+        ("red", dict(base=(0.7, 0.08, 0.05), metallic=0.0)),
+        ("thin glass", dict(base=(0.9, 0.95, 1.0), metallic=0.0, transmission=1.0)),
+    ]
+    rough = [0.0, 0.25, 0.5, 0.75, 1.0]
+    for r, (name, pbr) in enumerate(rows):
+        y = 0.3 + 0.5 * (len(rows) - 1 - r)
+        for c, roughness in enumerate(rough):
+            label = f"{name} {roughness}"
+            mat = b.material(label, None, roughness=roughness, **pbr)
+            geo = sphere(0.2, [-1.0 + 0.5 * c, y, 0.0])
+            b.node(name=label, mesh=b.mesh(label, b.geometry(*geo), mat))
+    light_grey = b.material("tile light", None, base=(0.7,) * 3)
+    dark_grey = b.material("tile dark", None, base=(0.2,) * 3)
+    tiles_a, tiles_b = checker(3.0, 12)
+    b.node(name="tiles light", mesh=b.mesh("tiles light", b.geometry(*tiles_a), light_grey))
+    b.node(name="tiles dark", mesh=b.mesh("tiles dark", b.geometry(*tiles_b), dark_grey))
+    b.camera("main", [0, 1.3, 4.2], [0, 1.3, 0], 0.75, aspect=1.0)
+    b.light("sun", "directional", (1.0, 0.97, 0.9), 2.0,
+            rotation=look_rotation([0, 0, 0], [-0.4, -0.8, -0.6]))
+    b.write(path, background=(0.55, 0.6, 0.7))
+
+
 def main():
     root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "assets")
     out = sys.argv[1] if len(sys.argv) > 1 else root
@@ -488,6 +522,7 @@ def main():
     single(os.path.join(out, "dielectric.gltf"), "dielectric", ["directional"], background=(0.4, 0.45, 0.55))
     single(os.path.join(out, "roughdielectric.gltf"), "roughdielectric", ["area", "point"])
     textured(os.path.join(out, "textured.gltf"))
+    materials(os.path.join(out, "materials.gltf"))
     bunny = os.path.join(out, "bunny.glb")
     if os.path.exists(bunny):
         light_bunny(bunny)

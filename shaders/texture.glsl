@@ -158,8 +158,11 @@ Material textured_bsdf(MaterialTextures mt, Material g, uint tri, float u, float
         if (g.kind != KIND_METALLIC && g.kind != KIND_COATED) {
             // A conductor's record carries no coat: glTF's default one.
             r.coat = vec4(1.0, 1.0, 1.0, 1.5);
+            r.extra = vec4(0.0);
         }
-        if (mt.mr_factor.z > 0.0) {
+        // A solid (KHR_materials_volume) transmissive material stays the
+        // dielectric; thin-walled transmission rides in the coat (extra.x).
+        if (g.kind == KIND_DIELECTRIC) {
             r.kind = KIND_DIELECTRIC;
             r.eta = vec4(mt.mr_factor.w, 0.0, 0.0, 0.0);
             r.alpha_u = alpha;

@@ -100,6 +100,8 @@ fn materials() -> Vec<(u32, Bsdf)> {
                         } else {
                             Vec3::new(1.0, 0.7, 0.2)
                         },
+                        // Thin-walled transmission on some (KHR_materials_transmission).
+                        transmission: [0.0, 0.6, 0.0, 1.0][(i + sep as usize) % 4],
                     },
                     roughness: r,
                 },
@@ -114,6 +116,7 @@ fn materials() -> Vec<(u32, Bsdf)> {
                         coat: CoatParams {
                             eta: 1.4 + 0.1 * (i % 3) as f32,
                             specular: Vec3::new(1.0, 0.8, 0.9),
+                            transmission: if ms { 0.3 } else { 0.0 },
                         },
                     },
                 ));

@@ -158,6 +158,7 @@ scene_tests! {
     bunny => "bunny.glb", as_is;
     bunny_white_sky => "bunny.glb", lit_by_background;
     textured => "textured.gltf", as_is;
+    materials => "materials.gltf", as_is;
     textured_envmap => "textured.gltf", with_envmap;
 }
 

@@ -120,8 +120,11 @@ pub struct GpuMaterial {
     /// The non-metal's coat (coated, metallic blend): `KHR_materials_specular`
     /// scale (rgb), `.w` = the coat's IOR.
     pub coat: [f32; 4],
+    /// The non-metal's `.x` = thin-walled transmission probability
+    /// (`KHR_materials_transmission`); `.yzw` reserved.
+    pub extra: [f32; 4],
 }
-const _: () = assert!(size_of::<GpuMaterial>() == 112);
+const _: () = assert!(size_of::<GpuMaterial>() == 128);
 const _: () =
     assert!(offset_of!(GpuMaterial, reflectance) == 16 && offset_of!(GpuMaterial, emission) == 80);
 
@@ -218,6 +221,7 @@ impl From<&Material> for GpuMaterial {
                 g.kind = Self::KIND_COATED;
                 g.reflectance = vec4(*base, 0.0);
                 g.coat = vec4(coat.specular, coat.eta);
+                g.extra = [coat.transmission, 0.0, 0.0, 0.0];
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);
@@ -231,6 +235,7 @@ impl From<&Material> for GpuMaterial {
                 g.kind = Self::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
                 g.coat = vec4(coat.specular, coat.eta);
+                g.extra = [coat.transmission, 0.0, 0.0, 0.0];
                 conductor(&mut g, c);
             }
         }

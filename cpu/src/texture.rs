@@ -413,7 +413,9 @@ pub fn textured_bsdf(
                 shadowing: Shadowing::Correlated,
                 multiscatter,
             };
-            if mt.mr_factor[2] > 0.0 {
+            // A solid (KHR_materials_volume) transmissive material stays
+            // the dielectric; thin-walled transmission rides in the coat.
+            if matches!(bsdf, Bsdf::Dielectric { .. }) {
                 Bsdf::Dielectric {
                     eta: mt.mr_factor[3],
                     roughness: rough,

@@ -33,7 +33,11 @@ const ETAS: [f32; 3] = [1.33, 1.5, 2.4];
 fn coated(base: Vec3, eta: f32, specular: Vec3, alpha: f32) -> Bsdf {
     Bsdf::Coated {
         base,
-        coat: CoatParams { eta, specular },
+        coat: CoatParams {
+            eta,
+            specular,
+            transmission: 0.0,
+        },
         roughness: rough(alpha, alpha, Shadowing::Correlated),
     }
 }

@@ -65,6 +65,7 @@ fn property_cases() -> Vec<(String, Bsdf)> {
                     coat: glint_cpu::bsdf::coated::CoatParams {
                         eta: 1.5,
                         specular: Vec3::new(1.0, 0.9, 0.8),
+                        transmission: if sh == Shadowing::Separable { 0.4 } else { 0.0 },
                     },
                     roughness: r,
                 },

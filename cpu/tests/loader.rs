@@ -583,10 +583,7 @@ fn gltf_core_materials_map_onto_the_bsdfs() {
         b[0],
         Bsdf::Coated {
             base: Vec3::new(0.2, 0.4, 0.6),
-            coat: CoatParams {
-                eta: 1.5,
-                specular: Vec3::ONE
-            },
+            coat: CoatParams::GLTF_DEFAULT,
             roughness: rough(1.0, 1.0, Shadowing::Correlated),
         }
     );
@@ -688,32 +685,66 @@ fn ior_and_specular_shape_the_coat() {
 }
 
 #[test]
-fn transmission_and_ior_make_a_dielectric() {
+fn transmission_is_thin_walled_unless_the_volume_has_a_thickness() {
     let d = material_doc(vec![
-        json!({ "pbrMetallicRoughness": { "roughnessFactor": 0 },
+        json!({ "pbrMetallicRoughness": { "roughnessFactor": 0, "baseColorFactor": [1, 0.5, 0.25, 1] },
                 "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 } } }),
+        // metallic 1: the metal ignores transmission (glTF: it is the
+        // dielectric part's).
         json!({ "pbrMetallicRoughness": { "roughnessFactor": 0.5, "metallicFactor": 1 },
                 "extensions": { "KHR_materials_transmission": { "transmissionFactor": 0.5 },
                                 "KHR_materials_ior": { "ior": 1.33 } } }),
         json!({ "pbrMetallicRoughness": { "metallicFactor": 0 },
                 "extensions": { "KHR_materials_transmission": { "transmissionFactor": 0 } } }),
+        // A thickness: the mesh bounds a solid dielectric.
+        json!({ "pbrMetallicRoughness": { "roughnessFactor": 0.5, "metallicFactor": 0 },
+                "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 },
+                                "KHR_materials_volume": { "thicknessFactor": 0.1 },
+                                "KHR_materials_ior": { "ior": 1.33 } } }),
+        json!({ "pbrMetallicRoughness": { "metallicFactor": 0.25 },
+                "extensions": { "KHR_materials_transmission": { "transmissionFactor": 0.4 },
+                                "KHR_materials_volume": { "thicknessFactor": 0 } } }),
     ]);
     let s = parse_doc(&d, "transmission");
     assert_eq!(
         s.materials[0].bsdf,
-        Bsdf::Dielectric {
-            eta: 1.5,
+        Bsdf::Coated {
+            base: Vec3::new(1.0, 0.5, 0.25),
+            coat: CoatParams {
+                transmission: 1.0,
+                ..CoatParams::GLTF_DEFAULT
+            },
             roughness: rough(0.0, 0.0, Shadowing::Correlated)
         }
     );
+    assert!(s.materials[0].bsdf.is_delta() && s.materials[0].bsdf.has_transmission());
+    assert!(matches!(s.materials[1].bsdf, Bsdf::Conductor(_)));
+    assert!(matches!(s.materials[2].bsdf, Bsdf::Coated { coat, .. } if coat.transmission == 0.0));
     assert_eq!(
-        s.materials[1].bsdf,
+        s.materials[3].bsdf,
         Bsdf::Dielectric {
             eta: 1.33,
             roughness: rough(0.25, 0.25, Shadowing::Correlated)
         }
     );
-    assert!(matches!(s.materials[2].bsdf, Bsdf::Coated { .. }));
+    let Bsdf::Metallic { metallic, coat, .. } = s.materials[4].bsdf else {
+        panic!("{:?}", s.materials[4].bsdf)
+    };
+    assert_eq!((metallic, coat.transmission), (0.25, 0.4));
+    for (ext, want) in [
+        (
+            json!({ "KHR_materials_volume": { "thicknessFactor": -1 } }),
+            "thicknessFactor",
+        ),
+        (
+            json!({ "KHR_materials_volume": { "thicknessFactor": 1, "attenuationDistance": -2 } }),
+            "attenuationDistance",
+        ),
+    ] {
+        let d = material_doc(vec![json!({ "extensions": ext })]);
+        let e = parse_doc_err(&d, "bad_volume");
+        assert!(e.contains(want), "{e}");
+    }
 }
 
 #[test]

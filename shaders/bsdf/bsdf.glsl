@@ -538,18 +538,20 @@ bool bsdf_is_delta(Material m) {
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_is_smooth(m.eta.x, m);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
-        return false;
+        return m.extra.x >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
     } else if (HAS(F_PLASTIC) && (m.kind == KIND_PLASTIC || m.kind == KIND_ROUGH_PLASTIC)) {
         return false;
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return true;
     }
-    return HAS(F_METALLIC) && m.reflectance.w >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
+    return HAS(F_METALLIC) && (m.reflectance.w >= 1.0 || m.extra.x >= 1.0)
+        && roughness_is_smooth(m.alpha_u, m.alpha_v);
 }
 
 bool bsdf_has_transmission(Material m) {
     return (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC)
-        || (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC);
+        || (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC)
+        || ((m.kind == KIND_COATED || m.kind == KIND_METALLIC) && m.extra.x > 0.0);
 }
 
 #endif

@@ -100,7 +100,7 @@ vec3 coat_lobe(Material m, vec3 wo, vec3 wi, vec3 wm) {
     return m.coat.xyz * (f * ggx_d(wm, a.x, a.y) * ggx_visibility(wo, wi, a.x, a.y, false));
 }
 
-vec3 coated_eval(vec3 base, Material m, vec3 wo, vec3 wi) {
+vec3 opaque_eval(vec3 base, Material m, vec3 wo, vec3 wi) {
     two_sided(wo, wi);
     if (wo.z <= 0.0 || wi.z <= 0.0) {
         return vec3(0.0);
@@ -126,7 +126,7 @@ float coat_pdf_rough(Material m, CoatAtWo w, vec3 wo, vec3 wi) {
     return ggx_pdf_visible(wo, wm, a.x, a.y) / (4.0 * d);
 }
 
-float coated_pdf(vec3 base, Material m, vec3 wo, vec3 wi) {
+float opaque_pdf(vec3 base, Material m, vec3 wo, vec3 wi) {
     two_sided(wo, wi);
     if (wo.z <= 0.0 || wi.z <= 0.0) {
         return 0.0;
@@ -135,7 +135,7 @@ float coated_pdf(vec3 base, Material m, vec3 wo, vec3 wi) {
     return w.p_base * wi.z * GLINT_INV_PI + w.p_coat * coat_pdf_rough(m, w, wo, wi);
 }
 
-bool coated_sample(vec3 base, Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+bool opaque_sample(vec3 base, Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
     s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
     if (wo.z == 0.0) {
         return false;
@@ -182,6 +182,149 @@ bool coated_sample(vec3 base, Material m, vec3 wo, float uc, vec2 u, out BsdfSam
         wi.z = -wi.z;
     }
     s = BsdfSample(wi, pdf, weight, 1.0, false);
+    return true;
+}
+
+// ---------------------------------------------------- thin-walled transmission
+// thinwall.rs: KHR_materials_transmission without a volume.
+
+vec3 slab_r(Material m, float mu) {
+    float r = fresnel_dielectric(min(abs(mu), 1.0), m.coat.w);
+    return min(m.coat.xyz * (2.0 * r / (1.0 + r)), vec3(1.0));
+}
+
+vec3 thinwall_eval(vec3 tint, Material m, vec3 wo, vec3 wi) {
+    if (roughness_is_smooth(m.alpha_u, m.alpha_v) || wo.z == 0.0 || wi.z == 0.0) {
+        return vec3(0.0);
+    }
+    bool transmitted = wo.z * wi.z < 0.0;
+    wo.z = abs(wo.z);
+    wi.z = abs(wi.z);
+    vec2 a = rough_alphas(m);
+    vec3 h = normalize(wo + wi);
+    float d = dot(wo, h);
+    if (d <= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 rr = slab_r(m, d);
+    float lobe = ggx_d(h, a.x, a.y) * ggx_visibility(wo, wi, a.x, a.y, false);
+    return transmitted ? tint * (vec3(1.0) - rr) * lobe : rr * lobe;
+}
+
+float thinwall_pdf(Material m, vec3 wo, vec3 wi) {
+    if (roughness_is_smooth(m.alpha_u, m.alpha_v) || wo.z == 0.0 || wi.z == 0.0) {
+        return 0.0;
+    }
+    bool transmitted = wo.z * wi.z < 0.0;
+    wo.z = abs(wo.z);
+    wi.z = abs(wi.z);
+    vec2 a = rough_alphas(m);
+    vec3 h = normalize(wo + wi);
+    float d = dot(wo, h);
+    if (d <= 0.0) {
+        return 0.0;
+    }
+    float p_r = coat_mean(slab_r(m, d));
+    float p = transmitted ? 1.0 - p_r : p_r;
+    return p * ggx_pdf_visible(wo, h, a.x, a.y) / (4.0 * d);
+}
+
+bool thinwall_sample(vec3 tint, Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+    if (wo.z == 0.0) {
+        return false;
+    }
+    bool flip = wo.z < 0.0;
+    vec3 wo_up = vec3(wo.x, wo.y, abs(wo.z));
+    if (roughness_is_smooth(m.alpha_u, m.alpha_v)) {
+        vec3 rr = slab_r(m, wo_up.z);
+        float p_r = coat_mean(rr);
+        if (uc < p_r) {
+            s = BsdfSample(vec3(-wo.x, -wo.y, wo.z), p_r, rr / p_r, 1.0, true);
+        } else {
+            s = BsdfSample(-wo, 1.0 - p_r, tint * (vec3(1.0) - rr) / (1.0 - p_r), 1.0, true);
+        }
+        return true;
+    }
+    vec2 a = rough_alphas(m);
+    vec3 wm = ggx_sample_visible(wo_up, a.x, a.y, u);
+    float d = dot(wo_up, wm);
+    vec3 wi = reflect_dir(wo_up, wm);
+    float g1 = ggx_g1(wo_up, a.x, a.y);
+    if (wi.z <= 0.0 || d <= 0.0 || !(g1 > 0.0)) {
+        return false;
+    }
+    vec3 rr = slab_r(m, d);
+    float p_r = coat_mean(rr);
+    bool transmit = uc >= p_r;
+    float p = transmit ? 1.0 - p_r : p_r;
+    float pdf = p * ggx_pdf_visible(wo_up, wm, a.x, a.y) / (4.0 * d);
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        return false;
+    }
+    float g = ggx_g2(wo_up, wi, a.x, a.y, false) / g1;
+    vec3 weight = transmit ? tint * (vec3(1.0) - rr) * (g / p) : rr * (g / p);
+    if (flip != transmit) {
+        wi.z = -wi.z;
+    }
+    s = BsdfSample(wi, pdf, weight, 1.0, false);
+    return true;
+}
+
+// coated.rs: the opaque non-metal with probability 1 - t, the thin-walled
+// transmission with t = m.extra.x.
+vec3 coated_eval(vec3 base, Material m, vec3 wo, vec3 wi) {
+    float t = m.extra.x;
+    if (t <= 0.0) {
+        return opaque_eval(base, m, wo, wi);
+    }
+    return (1.0 - t) * opaque_eval(base, m, wo, wi) + t * thinwall_eval(base, m, wo, wi);
+}
+
+float coated_pdf(vec3 base, Material m, vec3 wo, vec3 wi) {
+    float t = m.extra.x;
+    if (t <= 0.0) {
+        return opaque_pdf(base, m, wo, wi);
+    }
+    return (1.0 - t) * opaque_pdf(base, m, wo, wi) + t * thinwall_pdf(m, wo, wi);
+}
+
+bool coated_sample(vec3 base, Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    float t = m.extra.x;
+    if (t <= 0.0) {
+        return opaque_sample(base, m, wo, uc, u, s);
+    }
+    bool thin = uc < t;
+    bool ok;
+    if (thin) {
+        ok = thinwall_sample(base, m, wo, min(uc / t, ONE_MINUS_EPS), u, s);
+    } else {
+        ok = opaque_sample(base, m, wo, clamp((uc - t) / (1.0 - t), 0.0, ONE_MINUS_EPS), u, s);
+    }
+    if (!ok) {
+        return false;
+    }
+    if (s.delta) {
+        s.pdf *= thin ? t : 1.0 - t;
+        return true;
+    }
+    // The sampled part's own pdf and f, the other part evaluated (coated.rs).
+    vec3 f_s = s.weight * (s.pdf / abs(s.wi.z));
+    float pdf;
+    vec3 f;
+    if (thin) {
+        pdf = t * s.pdf + (1.0 - t) * opaque_pdf(base, m, wo, s.wi);
+        f = t * f_s + (1.0 - t) * opaque_eval(base, m, wo, s.wi);
+    } else {
+        pdf = (1.0 - t) * s.pdf + t * thinwall_pdf(m, wo, s.wi);
+        f = (1.0 - t) * f_s + t * thinwall_eval(base, m, wo, s.wi);
+    }
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+        return false;
+    }
+    s.weight = f * (abs(s.wi.z) / pdf);
+    s.pdf = pdf;
     return true;
 }
 

@@ -1,5 +1,5 @@
 // The material record as the GPU reads it: std430 mirror of GpuMaterial in
-// cpu/src/scene.rs (112 bytes: 16 bytes of scalars, then six vec4s).
+// cpu/src/scene.rs (128 bytes: 16 bytes of scalars, then seven vec4s).
 #ifndef GLINT_BSDF_MATERIAL_GLSL
 #define GLINT_BSDF_MATERIAL_GLSL
 
@@ -29,6 +29,7 @@ struct Material {
     vec4 specular;    // conductor specular_reflectance rgb
     vec4 emission;    // emitted radiance rgb; .w = 1 when both faces emit
     vec4 coat;        // non-metal coat: KHR_materials_specular scale rgb; .w = IOR
+    vec4 extra;       // non-metal: .x = thin-walled transmission probability
 };
 
 #endif

@@ -47,6 +47,7 @@ use super::microfacet::{
     MIN_ALPHA, ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility,
     reflect_dir,
 };
+use super::thinwall::{thinwall_eval, thinwall_pdf, thinwall_sample};
 use super::warp::square_to_cosine_hemisphere;
 use super::{BsdfSample, Roughness};
 
@@ -59,13 +60,18 @@ pub struct CoatParams {
     /// `KHR_materials_specular`'s scale on the coat's Fresnel term
     /// (specularFactor x specularColorFactor), per channel, in [0, 1].
     pub specular: Vec3,
+    /// `KHR_materials_transmission` (factor): the probability of the
+    /// thin-walled transmission lobe (`thinwall.rs`, tinted by the base
+    /// colour) in place of the coat over the base.
+    pub transmission: f32,
 }
 
 impl CoatParams {
-    /// glTF's default coat: IOR 1.5, no specular scaling.
+    /// glTF's default coat: IOR 1.5, no specular scaling, opaque.
     pub const GLTF_DEFAULT: Self = Self {
         eta: 1.5,
         specular: Vec3::ONE,
+        transmission: 0.0,
     };
 }
 
@@ -316,7 +322,7 @@ fn coat_lobe(coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3, wm: Vec3) -> 
     coat.specular * (f * ggx_d(wm, ax, ay) * ggx_visibility(wo, wi, ax, ay, false))
 }
 
-pub fn coated_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
+fn opaque_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     let (wo, wi) = two_sided(wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
@@ -329,7 +335,7 @@ pub fn coated_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: V
     f
 }
 
-pub fn coated_pdf(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
+fn opaque_pdf(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
     let (wo, wi) = two_sided(wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return 0.0;
@@ -353,7 +359,7 @@ fn coat_pdf_rough(r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
 }
 
 /// `uc` picks the lobe (coat with probability P), `u` samples it.
-pub fn coated_sample(
+fn opaque_sample(
     base: Vec3,
     coat: &CoatParams,
     r: &Roughness,
@@ -420,6 +426,79 @@ pub fn coated_sample(
         eta: 1.0,
     })
 }
+
+/// The non-metal: the opaque coat over the base with probability 1 - t,
+/// the thin-walled transmission with t (`CoatParams::transmission`).
+pub fn coated_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
+    let t = coat.transmission;
+    if t <= 0.0 {
+        return opaque_eval(base, coat, r, wo, wi);
+    }
+    (1.0 - t) * opaque_eval(base, coat, r, wo, wi) + t * thinwall_eval(base, coat, r, wo, wi)
+}
+
+pub fn coated_pdf(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
+    let t = coat.transmission;
+    if t <= 0.0 {
+        return opaque_pdf(base, coat, r, wo, wi);
+    }
+    (1.0 - t) * opaque_pdf(base, coat, r, wo, wi) + t * thinwall_pdf(coat, r, wo, wi)
+}
+
+/// `uc` first picks transmission (uc < t), then, rescaled, the lobe within.
+pub fn coated_sample(
+    base: Vec3,
+    coat: &CoatParams,
+    r: &Roughness,
+    wo: Vec3,
+    uc: f32,
+    u: Vec2,
+) -> Option<BsdfSample> {
+    let t = coat.transmission;
+    if t <= 0.0 {
+        return opaque_sample(base, coat, r, wo, uc, u);
+    }
+    let thin = uc < t;
+    let s = if thin {
+        thinwall_sample(base, coat, r, wo, (uc / t).min(ONE_MINUS_EPS), u)?
+    } else {
+        let uc = ((uc - t) / (1.0 - t)).clamp(0.0, ONE_MINUS_EPS);
+        opaque_sample(base, coat, r, wo, uc, u)?
+    };
+    if s.delta {
+        // A delta lobe of one part: its throughput, its probability scaled.
+        let p = if thin { t } else { 1.0 - t };
+        return Some(BsdfSample {
+            pdf: p * s.pdf,
+            ..s
+        });
+    }
+    // The sampled part's own (well-conditioned) pdf and f, the other part
+    // evaluated at the sampled direction (as metallic.rs).
+    let f_s = s.weight * (s.pdf / s.wi.z.abs());
+    let (pdf, f) = if thin {
+        (
+            t * s.pdf + (1.0 - t) * opaque_pdf(base, coat, r, wo, s.wi),
+            t * f_s + (1.0 - t) * opaque_eval(base, coat, r, wo, s.wi),
+        )
+    } else {
+        (
+            (1.0 - t) * s.pdf + t * thinwall_pdf(coat, r, wo, s.wi),
+            (1.0 - t) * f_s + t * thinwall_eval(base, coat, r, wo, s.wi),
+        )
+    };
+    if !(pdf > 0.0) || !pdf.is_finite() {
+        return None;
+    }
+    Some(BsdfSample {
+        weight: f * (s.wi.z.abs() / pdf),
+        pdf,
+        ..s
+    })
+}
+
+/// The largest f32 below 1: a rescaled random number stays in [0, 1).
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// The coat's selection probability at wo (for tests and the blend).
 pub fn coated_coat_probability(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> f32 {

@@ -27,6 +27,7 @@ pub mod plastic;
 pub mod roughplastic;
 mod tables;
 pub mod thin;
+pub mod thinwall;
 pub mod warp;
 
 use coated::{CoatParams, coated_eval, coated_pdf, coated_sample};
@@ -238,20 +239,29 @@ impl Bsdf {
             Bsdf::Diffuse { .. } => false,
             Bsdf::Conductor(c) => c.roughness.is_smooth(),
             Bsdf::Dielectric { eta, roughness } => dielectric_is_smooth(*eta, roughness),
-            // The Lambertian base is never a delta.
-            Bsdf::Coated { .. } | Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) => false,
+            // The Lambertian base is never a delta: only a smooth, fully
+            // transmissive (thin-walled) non-metal is.
+            Bsdf::Coated {
+                coat, roughness, ..
+            } => roughness.is_smooth() && coat.transmission >= 1.0,
+            Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) => false,
             Bsdf::ThinDielectric { .. } => true,
             Bsdf::Metallic {
                 metallic,
                 conductor,
+                coat,
                 ..
-            } => *metallic >= 1.0 && conductor.roughness.is_smooth(),
+            } => conductor.roughness.is_smooth() && (*metallic >= 1.0 || coat.transmission >= 1.0),
         }
     }
 
     /// Whether some direction pair with wo.z and wi.z of opposite signs has f > 0.
     pub fn has_transmission(&self) -> bool {
-        matches!(self, Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. })
+        match self {
+            Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => true,
+            Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } => coat.transmission > 0.0,
+            _ => false,
+        }
     }
 }
 

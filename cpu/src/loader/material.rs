@@ -159,7 +159,22 @@ pub fn gltf_coat(
             ));
         }
     }
-    Ok(CoatParams { eta, specular })
+    let transmission = match m.transmission() {
+        Some(t) => check_unit(t.transmission_factor(), "transmissionFactor")?,
+        None => 0.0,
+    };
+    if m.transmission()
+        .is_some_and(|t| t.transmission_texture().is_some())
+    {
+        warnings.push(format!(
+            "{label}: transmissionTexture is not supported yet; transmissionFactor is used"
+        ));
+    }
+    Ok(CoatParams {
+        eta,
+        specular,
+        transmission,
+    })
 }
 
 /// The contract's core-glTF mapping: transmission first, then the metal
@@ -184,11 +199,39 @@ fn bsdf_from_gltf(
         multiscatter,
         ..isotropic(alpha)
     };
+    // KHR_materials_transmission with a thickness (KHR_materials_volume):
+    // the mesh bounds a solid dielectric; without one the surface is
+    // thin-walled, the non-metal's transmission lobe (`gltf_coat`).
     let transmission = match m.transmission() {
         Some(t) => check_unit(t.transmission_factor(), "transmissionFactor")?,
         None => 0.0,
     };
-    if transmission > 0.0 {
+    let thickness = match m.volume() {
+        Some(v) => {
+            let d = v.thickness_factor();
+            if !(d.is_finite() && d >= 0.0) {
+                return Err(format!(
+                    "KHR_materials_volume thicknessFactor must be finite and >= 0, got {d}"
+                ));
+            }
+            let a = v.attenuation_distance();
+            if a.is_nan() || a <= 0.0 {
+                return Err(format!(
+                    "KHR_materials_volume attenuationDistance must be > 0, got {a}"
+                ));
+            }
+            let c = Vec3::from(v.attenuation_color());
+            check_range(c, 0.0, 1.0, "KHR_materials_volume attenuationColor")?;
+            if a.is_finite() && c != Vec3::ONE {
+                warnings.push(format!(
+                    "{label}: KHR_materials_volume attenuation is not supported yet; the interior is clear"
+                ));
+            }
+            d
+        }
+        None => 0.0,
+    };
+    if transmission > 0.0 && thickness > 0.0 {
         let ior = m.ior().unwrap_or(GLTF_DEFAULT_IOR);
         if !(ior.is_finite() && ior >= 1.0) {
             return Err(format!(

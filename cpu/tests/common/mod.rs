@@ -436,14 +436,29 @@ pub fn delta_lobes(bsdf: &Bsdf, wo: Vec3) -> Vec<DeltaLobe> {
                 },
             ]
         }
+        // The opaque part's mirror (1 - t) P and the thin wall's mirror and
+        // straight-through lobes t p_r, t (1 - p_r).
         Bsdf::Coated {
             base,
             coat,
             roughness,
-        } if roughness.is_smooth() => vec![DeltaLobe {
-            dir: mirror,
-            mass: coated_coat_probability(*base, coat, roughness, wo.z) as f64,
-        }],
+        } if roughness.is_smooth() => {
+            let t = coat.transmission as f64;
+            let p = coated_coat_probability(*base, coat, roughness, wo.z) as f64;
+            let r = glint_cpu::bsdf::thin::thin_reflectance(wo.z, coat.eta);
+            let p_r = ((coat.specular * r).min(Vec3::ONE).element_sum() / 3.0) as f64;
+            let mut v = vec![DeltaLobe {
+                dir: mirror,
+                mass: (1.0 - t) * p + t * p_r,
+            }];
+            if t > 0.0 {
+                v.push(DeltaLobe {
+                    dir: -wo,
+                    mass: t * (1.0 - p_r),
+                });
+            }
+            v
+        }
         Bsdf::Dielectric { eta, .. } if bsdf.is_delta() => {
             let f = fresnel::fresnel_dielectric(wo.z, *eta) as f64;
             let mut v = vec![DeltaLobe {
@@ -551,7 +566,11 @@ pub fn chi2_cases() -> Vec<Case> {
     // grazing and from below.
     let coated = |base: Vec3, eta: f32, specular: Vec3, r: Roughness| Bsdf::Coated {
         base,
-        coat: CoatParams { eta, specular },
+        coat: CoatParams {
+            eta,
+            specular,
+            transmission: 0.0,
+        },
         roughness: r,
     };
     for &(a, c) in &[
@@ -593,6 +612,28 @@ pub fn chi2_cases() -> Vec<Case> {
         ),
         wo: dir_cos(0.3, PHI_O),
     });
+    // Thin-walled glTF transmission (KHR_materials_transmission), rough
+    // and smooth, partial and full.
+    for &(a, t, c) in &[
+        (0.3, 0.5, 0.7),
+        (0.05, 1.0, -0.3),
+        (0.0, 0.6, 0.4),
+        (0.0, 1.0, 0.8),
+    ] {
+        v.push(Case {
+            name: format!("coated thin-walled a={a} t={t} cos={c}"),
+            bsdf: Bsdf::Coated {
+                base: Vec3::new(0.8, 0.5, 0.2),
+                coat: CoatParams {
+                    eta: 1.5,
+                    specular: Vec3::ONE,
+                    transmission: t,
+                },
+                roughness: rough(a, a, Shadowing::Correlated),
+            },
+            wo: dir_cos(c, PHI_O),
+        });
+    }
     for &c in &[0.5, -0.7] {
         v.push(Case {
             name: format!("coated smooth cos={c}"),
