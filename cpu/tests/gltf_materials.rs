@@ -1,0 +1,152 @@
+//! The glTF material mapping pinned through the whole pipeline (file,
+//! loader, per-hit textures, integrator): a plate facing the camera under a
+//! constant white sky, seen head-on, shows its directional albedo at normal
+//! incidence, which the contract fixes per extension:
+//! - a white non-metal reflects 1 at every roughness (the coat's energy is
+//!   taken from the base);
+//! - a black non-metal shows only its coat: F0 = ((ior - 1)/(ior + 1))^2,
+//!   scaled by `KHR_materials_specular`;
+//! - a smooth metal shows baseColor (its F0); `metallicFactor` blends by
+//!   probability, also when a metallicRoughness texture sets it;
+//! - thin-walled `KHR_materials_transmission` shows R' + (1 - R') baseColor
+//!   (the sky through the slab, tinted), R' = 2 F0 / (1 + F0).
+
+#[path = "fixtures/gltf_builder.rs"]
+mod builder;
+
+use builder::{Doc, temp_dir};
+use glam::Vec3;
+use glint_cpu::RenderOptions;
+use glint_cpu::loader::load;
+use serde_json::{Value, json};
+
+/// The plate's mean radiance, `material` its glTF material (a 1x1
+/// metallicRoughness texture of (_, G, B) when `mr_texel` is given).
+fn plate(test: &str, material: Value, mr_texel: Option<[u8; 3]>) -> Vec3 {
+    let mut d = Doc::new();
+    let mut material = material;
+    if let Some(t) = mr_texel {
+        let tex = d.png_texture(1, 1, &[t[0], t[1], t[2], 255], Value::Null);
+        material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({ "index": tex });
+    }
+    let m = d.material(material);
+    let q = d.uv_quad(1.0, 0.0, Some(m));
+    d.node(json!({ "mesh": q }));
+    // The plate fills a narrow view head-on: every pixel sees it at
+    // mu_o ~ 1 (within 0.2 degrees).
+    d.json["cameras"] =
+        json!([{ "type": "perspective", "perspective": { "yfov": 0.01, "znear": 0.01 } }]);
+    d.node(json!({ "camera": 0, "translation": [0, 0, 2] }));
+    d.json["scenes"][0]["extras"] = json!({ "background": [1, 1, 1] });
+    let s = load(&d.write_gltf(&temp_dir(test), "scene")).unwrap();
+    let o = RenderOptions {
+        spp: 1024,
+        max_depth: 3,
+        ..RenderOptions::new(4, 4)
+    };
+    let f = glint_cpu::render(&s, &o, &|_, _| {}).unwrap().0;
+    let mut sum = Vec3::ZERO;
+    for y in 0..4 {
+        for x in 0..4 {
+            sum += f.mean(f.index(x, y));
+        }
+    }
+    sum / 16.0
+}
+
+fn assert_near(got: Vec3, want: Vec3, tol: f32, what: &str) {
+    assert!(
+        (got - want).abs().max_element() <= tol,
+        "{what}: {got} vs {want}"
+    );
+}
+
+fn pbr(base: [f32; 3], metallic: f32, roughness: f32) -> Value {
+    json!({ "pbrMetallicRoughness": {
+        "baseColorFactor": [base[0], base[1], base[2], 1], "metallicFactor": metallic,
+        "roughnessFactor": roughness } })
+}
+
+fn f0(ior: f32) -> f32 {
+    ((ior - 1.0) / (ior + 1.0)).powi(2)
+}
+
+#[test]
+fn white_non_metal_reflects_one_black_shows_its_coat() {
+    for r in [0.0f32, 0.5, 1.0] {
+        let got = plate(&format!("white_{r}"), pbr([1.0; 3], 0.0, r), None);
+        assert_near(
+            got,
+            Vec3::ONE,
+            0.01,
+            &format!("white non-metal roughness {r}"),
+        );
+    }
+    let got = plate("black", pbr([0.0; 3], 0.0, 0.0), None);
+    assert_near(got, Vec3::splat(f0(1.5)), 1e-4, "black non-metal, ior 1.5");
+    // The "black disc" of the old mapping: a black non-metal is never 0.
+    let rough = plate("black_rough", pbr([0.0; 3], 0.0, 0.6), None);
+    assert!(rough.min_element() > 0.02, "{rough}");
+}
+
+#[test]
+fn ior_and_specular_scale_the_coat() {
+    let mut m = pbr([0.0; 3], 0.0, 0.0);
+    m["extensions"] = json!({ "KHR_materials_ior": { "ior": 2.0 } });
+    assert_near(plate("ior2", m, None), Vec3::splat(f0(2.0)), 1e-4, "ior 2");
+    let mut m = pbr([0.0; 3], 0.0, 0.0);
+    m["extensions"] = json!({ "KHR_materials_specular": {
+        "specularFactor": 0.5, "specularColorFactor": [1, 0.5, 0] } });
+    let want = Vec3::new(0.5, 0.25, 0.0) * f0(1.5);
+    assert_near(plate("specular", m, None), want, 1e-4, "specular");
+    // A white base under a reduced coat still reflects 1 (the base takes
+    // what the coat gives up).
+    let mut m = pbr([1.0; 3], 0.0, 0.4);
+    m["extensions"] = json!({ "KHR_materials_specular": { "specularFactor": 0.3 } });
+    assert_near(
+        plate("specular_white", m, None),
+        Vec3::ONE,
+        0.01,
+        "white, specular 0.3",
+    );
+}
+
+#[test]
+fn metals_and_the_blend_by_probability() {
+    let base = [0.9f32, 0.5, 0.1];
+    let metal = plate("metal", pbr(base, 1.0, 0.0), None);
+    assert_near(metal, Vec3::from(base), 2e-3, "smooth metal = baseColor");
+    let non = plate("non", pbr(base, 0.0, 0.0), None);
+    let blend = plate("blend", pbr(base, 0.3, 0.0), None);
+    assert_near(blend, 0.3 * metal + 0.7 * non, 0.01, "metallic 0.3");
+    // metallicRoughness B = 0 makes the metal factor's surface a non-metal
+    // per hit; B = 255 keeps it metal.
+    let tex_non = plate("tex_non", pbr(base, 1.0, 1.0), Some([0, 0, 0]));
+    assert_near(tex_non, non, 0.01, "texture metallic 0");
+    let tex_metal = plate("tex_metal", pbr(base, 1.0, 1.0), Some([0, 0, 255]));
+    assert_near(tex_metal, metal, 2e-3, "texture metallic 1, roughness 0");
+}
+
+#[test]
+fn thin_walled_transmission_is_tinted_by_base_colour() {
+    let tint = Vec3::new(1.0, 0.5, 0.25);
+    let mut m = pbr(tint.to_array(), 0.0, 0.0);
+    m["extensions"] = json!({ "KHR_materials_transmission": { "transmissionFactor": 1 } });
+    let r = 2.0 * f0(1.5) / (1.0 + f0(1.5));
+    let want = Vec3::splat(r) + (1.0 - r) * tint;
+    assert_near(
+        plate("thin", m.clone(), None),
+        want,
+        2e-3,
+        "thin-walled, smooth",
+    );
+    // Half transmission: half the thin slab, half the opaque non-metal.
+    m["extensions"]["KHR_materials_transmission"]["transmissionFactor"] = json!(0.5);
+    let opaque = plate("thin_opaque", pbr(tint.to_array(), 0.0, 0.0), None);
+    assert_near(
+        plate("thin_half", m, None),
+        0.5 * want + 0.5 * opaque,
+        0.01,
+        "transmission 0.5",
+    );
+}
