@@ -73,6 +73,7 @@ fn materials() -> Vec<(u32, Bsdf)> {
         } else {
             &[(false, false), (true, false)]
         };
+        let cc_ok = au == 0.0 || f32::min(au, av) >= 0.01;
         for &(sep, ms) in forms {
             let r = Roughness {
                 multiscatter: ms,
@@ -102,6 +103,16 @@ fn materials() -> Vec<(u32, Bsdf)> {
                         },
                         // Thin-walled transmission on some (KHR_materials_transmission).
                         transmission: [0.0, 0.6, 0.0, 1.0][(i + sep as usize) % 4],
+                        // A clear coat on some (KHR_materials_clearcoat), away
+                        // from the smooth threshold: there, at grazing angles,
+                        // the near-delta inner lobes under the coat's weights
+                        // differ by f32 rounding beyond the 1e-4 asked.
+                        clearcoat: if cc_ok {
+                            [0.0, 0.0, 1.0, 0.5][(i + ms as usize) % 4]
+                        } else {
+                            0.0
+                        },
+                        clearcoat_alpha: [0.0, 0.09, 0.0004][i % 3],
                     },
                     roughness: r,
                 },
@@ -117,6 +128,8 @@ fn materials() -> Vec<(u32, Bsdf)> {
                             eta: 1.4 + 0.1 * (i % 3) as f32,
                             specular: Vec3::new(1.0, 0.8, 0.9),
                             transmission: if ms { 0.3 } else { 0.0 },
+                            clearcoat: if sep && cc_ok { 0.8 } else { 0.0 },
+                            clearcoat_alpha: 0.04,
                         },
                     },
                 ));

@@ -121,7 +121,9 @@ pub struct GpuMaterial {
     /// scale (rgb), `.w` = the coat's IOR.
     pub coat: [f32; 4],
     /// The non-metal's `.x` = thin-walled transmission probability
-    /// (`KHR_materials_transmission`); `.yzw` reserved.
+    /// (`KHR_materials_transmission`); `.y` clear coat weight, `.z` its
+    /// alpha (`KHR_materials_clearcoat`, over the coated and metallic
+    /// kinds); `.w` reserved.
     pub extra: [f32; 4],
 }
 const _: () = assert!(size_of::<GpuMaterial>() == 128);
@@ -221,7 +223,7 @@ impl From<&Material> for GpuMaterial {
                 g.kind = Self::KIND_COATED;
                 g.reflectance = vec4(*base, 0.0);
                 g.coat = vec4(coat.specular, coat.eta);
-                g.extra = [coat.transmission, 0.0, 0.0, 0.0];
+                g.extra = [coat.transmission, coat.clearcoat, coat.clearcoat_alpha, 0.0];
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);
@@ -235,7 +237,7 @@ impl From<&Material> for GpuMaterial {
                 g.kind = Self::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
                 g.coat = vec4(coat.specular, coat.eta);
-                g.extra = [coat.transmission, 0.0, 0.0, 0.0];
+                g.extra = [coat.transmission, coat.clearcoat, coat.clearcoat_alpha, 0.0];
                 conductor(&mut g, c);
             }
         }

@@ -37,6 +37,8 @@ fn coated(base: Vec3, eta: f32, specular: Vec3, alpha: f32) -> Bsdf {
             eta,
             specular,
             transmission: 0.0,
+            clearcoat: 0.0,
+            clearcoat_alpha: 0.0,
         },
         roughness: rough(alpha, alpha, Shadowing::Correlated),
     }

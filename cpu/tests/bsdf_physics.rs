@@ -66,6 +66,8 @@ fn property_cases() -> Vec<(String, Bsdf)> {
                         eta: 1.5,
                         specular: Vec3::new(1.0, 0.9, 0.8),
                         transmission: if sh == Shadowing::Separable { 0.4 } else { 0.0 },
+                        clearcoat: 0.0,
+                        clearcoat_alpha: 0.0,
                     },
                     roughness: r,
                 },

@@ -9,7 +9,9 @@
 //! - a smooth metal shows baseColor (its F0); `metallicFactor` blends by
 //!   probability, also when a metallicRoughness texture sets it;
 //! - thin-walled `KHR_materials_transmission` shows R' + (1 - R') baseColor
-//!   (the sky through the slab, tinted), R' = 2 F0 / (1 + F0).
+//!   (the sky through the slab, tinted), R' = 2 F0 / (1 + F0);
+//! - a smooth clear coat of weight c adds c F0 and dims what is under it by
+//!   (1 - c F0)^2 (glint's layering, `bsdf/clearcoat.rs`).
 
 #[path = "fixtures/gltf_builder.rs"]
 mod builder;
@@ -148,5 +150,31 @@ fn thin_walled_transmission_is_tinted_by_base_colour() {
         0.5 * want + 0.5 * opaque,
         0.01,
         "transmission 0.5",
+    );
+}
+
+#[test]
+fn clearcoat_adds_its_reflection_and_dims_the_rest() {
+    let c = 0.8f32;
+    let ext = json!({ "KHR_materials_clearcoat": { "clearcoatFactor": c, "clearcoatRoughnessFactor": 0 } });
+    let w = 1.0 - c * f0(1.5);
+    let mut black = pbr([0.0; 3], 0.0, 0.0);
+    black["extensions"] = ext.clone();
+    let want = Vec3::splat(c * f0(1.5) + w * w * f0(1.5));
+    assert_near(
+        plate("cc_black", black, None),
+        want,
+        1e-4,
+        "clear-coated black non-metal",
+    );
+    let base = [0.9f32, 0.5, 0.1];
+    let mut metal = pbr(base, 1.0, 0.0);
+    metal["extensions"] = ext;
+    let want = Vec3::splat(c * f0(1.5)) + w * w * Vec3::from(base);
+    assert_near(
+        plate("cc_metal", metal, None),
+        want,
+        2e-3,
+        "clear-coated smooth metal",
     );
 }

@@ -462,6 +462,146 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
     return true;
 }
 
+// --------------------------------------------------------------- clearcoat
+// clearcoat.rs: a GGX coat (IOR 1.5) of weight c = m.extra.y, alpha
+// m.extra.z, over the coated and metallic kinds:
+// f = c f_cc + w(mu_o) w(mu_i) f_inner, w(mu) = 1 - c E_cc(mu).
+
+#define CLEARCOAT_IOR 1.5
+
+bool cc_smooth(Material m) {
+    return !HAS(F_ROUGH) || m.extra.z < SMOOTH_ALPHA_THRESHOLD;
+}
+
+float cc_through(Material m, float mu) {
+    return 1.0 - m.extra.y * coat_albedo(abs(mu), max(m.extra.z, MIN_ALPHA), CLEARCOAT_IOR, cc_smooth(m));
+}
+
+float cc_coat_eval(Material m, vec3 wo, vec3 wi) {
+    if (cc_smooth(m) || wo.z * wi.z <= 0.0) {
+        return 0.0;
+    }
+    wo.z = abs(wo.z);
+    wi.z = abs(wi.z);
+    float a = max(m.extra.z, MIN_ALPHA);
+    vec3 h = normalize(wo + wi);
+    float d = dot(wo, h);
+    if (d <= 0.0) {
+        return 0.0;
+    }
+    return m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(h, a, a)
+        * ggx_visibility(wo, wi, a, a, false);
+}
+
+float cc_coat_pdf(Material m, vec3 wo, vec3 wi) {
+    if (cc_smooth(m) || wo.z * wi.z <= 0.0) {
+        return 0.0;
+    }
+    wo.z = abs(wo.z);
+    wi.z = abs(wi.z);
+    float a = max(m.extra.z, MIN_ALPHA);
+    vec3 h = normalize(wo + wi);
+    float d = dot(wo, h);
+    if (d <= 0.0) {
+        return 0.0;
+    }
+    return ggx_pdf_visible(wo, h, a, a) / (4.0 * d);
+}
+
+// The glTF material under its clear coat.
+vec3 gltf_inner_eval(Material m, vec3 wo, vec3 wi) {
+    return m.kind == KIND_COATED ? coated_eval(m.reflectance.xyz, m, wo, wi)
+                                 : metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+}
+
+float gltf_inner_pdf(Material m, vec3 wo, vec3 wi) {
+    return m.kind == KIND_COATED ? coated_pdf(m.reflectance.xyz, m, wo, wi)
+                                 : metallic_pdf(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+}
+
+bool gltf_inner_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    if (m.kind == KIND_COATED) {
+        return coated_sample(m.reflectance.xyz, m, wo, uc, u, s);
+    }
+    return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
+}
+
+vec3 gltf_eval(Material m, vec3 wo, vec3 wi) {
+    vec3 inner = gltf_inner_eval(m, wo, wi);
+    if (m.extra.y <= 0.0) {
+        return inner;
+    }
+    return vec3(cc_coat_eval(m, wo, wi)) + inner * (cc_through(m, wo.z) * cc_through(m, wi.z));
+}
+
+float gltf_pdf(Material m, vec3 wo, vec3 wi) {
+    float inner = gltf_inner_pdf(m, wo, wi);
+    if (m.extra.y <= 0.0) {
+        return inner;
+    }
+    float p = clamp(1.0 - cc_through(m, wo.z), 0.0, 1.0);
+    return p * cc_coat_pdf(m, wo, wi) + (1.0 - p) * inner;
+}
+
+bool gltf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    if (m.extra.y <= 0.0) {
+        return gltf_inner_sample(m, wo, uc, u, s);
+    }
+    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+    if (wo.z == 0.0) {
+        return false;
+    }
+    float p = clamp(1.0 - cc_through(m, wo.z), 0.0, 1.0);
+    float w_o = cc_through(m, wo.z);
+    if (uc < p) {
+        if (cc_smooth(m)) {
+            float f = m.extra.y * fresnel_dielectric(abs(wo.z), CLEARCOAT_IOR);
+            s = BsdfSample(vec3(-wo.x, -wo.y, wo.z), p, vec3(f / p), 1.0, true);
+            return true;
+        }
+        vec3 up = vec3(wo.x, wo.y, abs(wo.z));
+        float a = max(m.extra.z, MIN_ALPHA);
+        vec3 wm = ggx_sample_visible(up, a, a, u);
+        float d = dot(up, wm);
+        vec3 wi = reflect_dir(up, wm);
+        if (wi.z <= 0.0 || d <= 0.0 || !(ggx_g1(up, a, a) > 0.0)) {
+            return false;
+        }
+        float pdf_c = ggx_pdf_visible(up, wm, a, a) / (4.0 * d);
+        float f_c = m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(wm, a, a)
+            * ggx_g2(up, wi, a, a, false) / (4.0 * up.z * wi.z);
+        if (wo.z < 0.0) {
+            wi.z = -wi.z;
+        }
+        float pdf = p * pdf_c + (1.0 - p) * gltf_inner_pdf(m, wo, wi);
+        if (!(pdf > 0.0) || isinf(pdf)) {
+            return false;
+        }
+        vec3 f = vec3(f_c) + gltf_inner_eval(m, wo, wi) * (w_o * cc_through(m, wi.z));
+        s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
+        return true;
+    }
+    if (!gltf_inner_sample(m, wo, clamp((uc - p) / (1.0 - p), 0.0, ONE_MINUS_EPS), u, s)) {
+        return false;
+    }
+    float w_i = cc_through(m, s.wi.z);
+    if (s.delta) {
+        s.weight *= w_o * w_i / (1.0 - p);
+        s.pdf *= 1.0 - p;
+        return true;
+    }
+    vec3 f_in = s.weight * (s.pdf / abs(s.wi.z));
+    float pdf = p * cc_coat_pdf(m, wo, s.wi) + (1.0 - p) * s.pdf;
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+        return false;
+    }
+    vec3 f = vec3(cc_coat_eval(m, wo, s.wi)) + f_in * (w_o * w_i);
+    s.weight = f * (abs(s.wi.z) / pdf);
+    s.pdf = pdf;
+    return true;
+}
+
 // ---------------------------------------------------------------- dispatch
 
 vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
@@ -472,7 +612,7 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_eval(m.eta.x, m, wo, wi);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
-        return coated_eval(m.reflectance.xyz, m, wo, wi);
+        return gltf_eval(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_eval(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_ROUGH_PLASTIC) {
@@ -481,7 +621,7 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return vec3(0.0);
     }
     if (HAS(F_METALLIC)) {
-        return metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+        return gltf_eval(m, wo, wi);
     }
     return vec3(0.0);
 }
@@ -494,7 +634,7 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_pdf(m.eta.x, m, wo, wi);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
-        return coated_pdf(m.reflectance.xyz, m, wo, wi);
+        return gltf_pdf(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_pdf(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_ROUGH_PLASTIC) {
@@ -503,7 +643,7 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return 0.0;
     }
     if (HAS(F_METALLIC)) {
-        return metallic_pdf(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+        return gltf_pdf(m, wo, wi);
     }
     return 0.0;
 }
@@ -516,7 +656,7 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_sample(m.eta.x, m, wo, uc, u, s);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
-        return coated_sample(m.reflectance.xyz, m, wo, uc, u, s);
+        return gltf_sample(m, wo, uc, u, s);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_sample(m, wo, uc, u, s);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_ROUGH_PLASTIC) {
@@ -525,7 +665,7 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         return thin_sample(m, wo, uc, s);
     }
     if (HAS(F_METALLIC)) {
-        return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
+        return gltf_sample(m, wo, uc, u, s);
     }
     return false;
 }
@@ -538,14 +678,15 @@ bool bsdf_is_delta(Material m) {
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_is_smooth(m.eta.x, m);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
-        return m.extra.x >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v);
+        return m.extra.x >= 1.0 && roughness_is_smooth(m.alpha_u, m.alpha_v)
+            && (m.extra.y <= 0.0 || cc_smooth(m));
     } else if (HAS(F_PLASTIC) && (m.kind == KIND_PLASTIC || m.kind == KIND_ROUGH_PLASTIC)) {
         return false;
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return true;
     }
     return HAS(F_METALLIC) && (m.reflectance.w >= 1.0 || m.extra.x >= 1.0)
-        && roughness_is_smooth(m.alpha_u, m.alpha_v);
+        && roughness_is_smooth(m.alpha_u, m.alpha_v) && (m.extra.y <= 0.0 || cc_smooth(m));
 }
 
 bool bsdf_has_transmission(Material m) {

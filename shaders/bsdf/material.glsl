@@ -29,7 +29,7 @@ struct Material {
     vec4 specular;    // conductor specular_reflectance rgb
     vec4 emission;    // emitted radiance rgb; .w = 1 when both faces emit
     vec4 coat;        // non-metal coat: KHR_materials_specular scale rgb; .w = IOR
-    vec4 extra;       // non-metal: .x = thin-walled transmission probability
+    vec4 extra;       // .x thin-walled transmission probability; .y clear coat weight, .z its alpha
 };
 
 #endif

@@ -64,15 +64,30 @@ pub struct CoatParams {
     /// thin-walled transmission lobe (`thinwall.rs`, tinted by the base
     /// colour) in place of the coat over the base.
     pub transmission: f32,
+    /// `KHR_materials_clearcoat`: clearcoatFactor (0: none) and the clear
+    /// coat's GGX alpha (clearcoatRoughness^2), over the whole material
+    /// (`clearcoat.rs`).
+    pub clearcoat: f32,
+    pub clearcoat_alpha: f32,
 }
 
 impl CoatParams {
-    /// glTF's default coat: IOR 1.5, no specular scaling, opaque.
+    /// glTF's default coat: IOR 1.5, no specular scaling, opaque, no clear coat.
     pub const GLTF_DEFAULT: Self = Self {
         eta: 1.5,
         specular: Vec3::ONE,
         transmission: 0.0,
+        clearcoat: 0.0,
+        clearcoat_alpha: 0.0,
     };
+
+    /// The clear coat, if any.
+    pub fn clearcoat(&self) -> Option<super::clearcoat::Clearcoat> {
+        (self.clearcoat > 0.0).then_some(super::clearcoat::Clearcoat {
+            weight: self.clearcoat,
+            alpha: self.clearcoat_alpha,
+        })
+    }
 }
 
 /// Grid sizes of the coat tables: mu^(1/4), sqrt(alpha) and

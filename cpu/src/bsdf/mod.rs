@@ -12,6 +12,7 @@
 
 use glam::{Vec2, Vec3};
 
+pub mod clearcoat;
 pub mod coated;
 pub mod conductor;
 pub mod dielectric;
@@ -172,13 +173,18 @@ impl Bsdf {
                 base,
                 coat,
                 roughness,
-            } => coated_eval(*base, coat, roughness, wo, wi),
+            } => with_clearcoat_eval(coat, wo, wi, coated_eval(*base, coat, roughness, wo, wi)),
             Bsdf::Metallic {
                 metallic,
                 base,
                 conductor,
                 coat,
-            } => metallic_eval(*metallic, *base, conductor, coat, wo, wi),
+            } => with_clearcoat_eval(
+                coat,
+                wo,
+                wi,
+                metallic_eval(*metallic, *base, conductor, coat, wo, wi),
+            ),
         }
     }
 
@@ -195,13 +201,18 @@ impl Bsdf {
                 base,
                 coat,
                 roughness,
-            } => coated_pdf(*base, coat, roughness, wo, wi),
+            } => with_clearcoat_pdf(coat, wo, wi, coated_pdf(*base, coat, roughness, wo, wi)),
             Bsdf::Metallic {
                 metallic,
                 base,
                 conductor,
                 coat,
-            } => metallic_pdf(*metallic, *base, conductor, coat, wo, wi),
+            } => with_clearcoat_pdf(
+                coat,
+                wo,
+                wi,
+                metallic_pdf(*metallic, *base, conductor, coat, wo, wi),
+            ),
         }
     }
 
@@ -219,6 +230,24 @@ impl Bsdf {
                 reflectance,
                 transmittance,
             } => thin_sample(*eta, *reflectance, *transmittance, wo, uc, u),
+            Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } => match coat.clearcoat() {
+                None => self.sample_under_clearcoat(wo, uc, u),
+                Some(cc) => clearcoat::clearcoat_sample(
+                    &cc,
+                    wo,
+                    uc,
+                    u,
+                    &|uc| self.sample_under_clearcoat(wo, uc, u),
+                    &|wi| self.eval_under_clearcoat(wo, wi),
+                    &|wi| self.pdf_under_clearcoat(wo, wi),
+                ),
+            },
+        }
+    }
+
+    /// The glTF material under its clear coat (the coat left out).
+    fn sample_under_clearcoat(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
+        match self {
             Bsdf::Coated {
                 base,
                 coat,
@@ -230,6 +259,41 @@ impl Bsdf {
                 conductor,
                 coat,
             } => metallic_sample(*metallic, *base, conductor, coat, wo, uc, u),
+            _ => self.sample(wo, uc, u),
+        }
+    }
+
+    fn eval_under_clearcoat(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        match self {
+            Bsdf::Coated {
+                base,
+                coat,
+                roughness,
+            } => coated_eval(*base, coat, roughness, wo, wi),
+            Bsdf::Metallic {
+                metallic,
+                base,
+                conductor,
+                coat,
+            } => metallic_eval(*metallic, *base, conductor, coat, wo, wi),
+            _ => self.eval(wo, wi),
+        }
+    }
+
+    fn pdf_under_clearcoat(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Bsdf::Coated {
+                base,
+                coat,
+                roughness,
+            } => coated_pdf(*base, coat, roughness, wo, wi),
+            Bsdf::Metallic {
+                metallic,
+                base,
+                conductor,
+                coat,
+            } => metallic_pdf(*metallic, *base, conductor, coat, wo, wi),
+            _ => self.pdf(wo, wi),
         }
     }
 
@@ -243,7 +307,7 @@ impl Bsdf {
             // transmissive (thin-walled) non-metal is.
             Bsdf::Coated {
                 coat, roughness, ..
-            } => roughness.is_smooth() && coat.transmission >= 1.0,
+            } => roughness.is_smooth() && coat.transmission >= 1.0 && clearcoat_is_smooth(coat),
             Bsdf::Plastic(_) | Bsdf::RoughPlastic(_) => false,
             Bsdf::ThinDielectric { .. } => true,
             Bsdf::Metallic {
@@ -262,6 +326,25 @@ impl Bsdf {
             Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } => coat.transmission > 0.0,
             _ => false,
         }
+    }
+}
+
+/// No clear coat, or a smooth one (a delta lobe).
+fn clearcoat_is_smooth(coat: &CoatParams) -> bool {
+    coat.clearcoat <= 0.0 || coat.clearcoat_alpha < SMOOTH_ALPHA_THRESHOLD
+}
+
+fn with_clearcoat_eval(coat: &CoatParams, wo: Vec3, wi: Vec3, inner: Vec3) -> Vec3 {
+    match coat.clearcoat() {
+        Some(cc) => clearcoat::clearcoat_eval(&cc, inner, wo, wi),
+        None => inner,
+    }
+}
+
+fn with_clearcoat_pdf(coat: &CoatParams, wo: Vec3, wi: Vec3, inner: f32) -> f32 {
+    match coat.clearcoat() {
+        Some(cc) => clearcoat::clearcoat_pdf(&cc, inner, wo, wi),
+        None => inner,
     }
 }
 

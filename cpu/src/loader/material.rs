@@ -62,6 +62,7 @@ fn isotropic(alpha: f32) -> Roughness {
 /// compensation of every rough model whose `extras.bsdf` does not say.
 pub fn convert(
     m: &gltf::Material,
+    raw: &Value,
     multiscatter: bool,
     warnings: &mut Vec<String>,
 ) -> Result<Material, String> {
@@ -69,11 +70,12 @@ pub fn convert(
         Some(n) => format!("material {} ('{n}')", m.index().unwrap_or(0)),
         None => format!("material {}", m.index().unwrap_or(0)),
     };
-    convert_inner(m, multiscatter, warnings, &label).map_err(|e| format!("{label}: {e}"))
+    convert_inner(m, raw, multiscatter, warnings, &label).map_err(|e| format!("{label}: {e}"))
 }
 
 fn convert_inner(
     m: &gltf::Material,
+    raw: &Value,
     multiscatter: bool,
     warnings: &mut Vec<String>,
     label: &str,
@@ -88,7 +90,7 @@ fn convert_inner(
         Some(b) => {
             bsdf_from_extras_with(b, multiscatter).map_err(|e| format!("extras.bsdf: {e}"))?
         }
-        None => bsdf_from_gltf(m, multiscatter, warnings, label)?,
+        None => bsdf_from_gltf(m, raw, multiscatter, warnings, label)?,
     };
     let factor = Vec3::from(m.emissive_factor());
     check_range(factor, 0.0, 1.0, "emissiveFactor")?;
@@ -128,6 +130,7 @@ fn check_unit(x: f32, what: &str) -> Result<f32, String> {
 /// channel so the base term stays energy conserving, with a warning).
 pub fn gltf_coat(
     m: &gltf::Material,
+    raw: &Value,
     warnings: &mut Vec<String>,
     label: &str,
 ) -> Result<CoatParams, String> {
@@ -170,11 +173,60 @@ pub fn gltf_coat(
             "{label}: transmissionTexture is not supported yet; transmissionFactor is used"
         ));
     }
+    let (clearcoat, clearcoat_alpha) = gltf_clearcoat(raw, warnings, label)?;
     Ok(CoatParams {
         eta,
         specular,
         transmission,
+        clearcoat,
+        clearcoat_alpha,
     })
+}
+
+/// `KHR_materials_clearcoat`: (clearcoatFactor, clearcoatRoughnessFactor^2).
+/// Its textures and normal texture are not read yet (a warning).
+fn gltf_clearcoat(
+    raw: &Value,
+    warnings: &mut Vec<String>,
+    label: &str,
+) -> Result<(f32, f32), String> {
+    let cc = &raw["extensions"]["KHR_materials_clearcoat"];
+    if cc.is_null() {
+        return Ok((0.0, 0.0));
+    }
+    let num = |key: &str| -> Result<f32, String> {
+        match cc.get(key) {
+            None => Ok(0.0),
+            Some(v) => v
+                .as_f64()
+                .map(|x| x as f32)
+                .ok_or_else(|| format!("KHR_materials_clearcoat {key} must be a number, got {v}")),
+        }
+    };
+    let factor = check_unit(
+        num("clearcoatFactor")?,
+        "KHR_materials_clearcoat clearcoatFactor",
+    )?;
+    let rough = check_unit(
+        num("clearcoatRoughnessFactor")?,
+        "KHR_materials_clearcoat clearcoatRoughnessFactor",
+    )?;
+    let textured = [
+        "clearcoatTexture",
+        "clearcoatRoughnessTexture",
+        "clearcoatNormalTexture",
+    ]
+    .iter()
+    .filter(|k| cc.get(**k).is_some())
+    .copied()
+    .collect::<Vec<_>>();
+    if !textured.is_empty() {
+        warnings.push(format!(
+            "{label}: KHR_materials_clearcoat {} not supported yet; the factors are used",
+            textured.join(", ")
+        ));
+    }
+    Ok((factor, rough * rough))
 }
 
 /// The contract's core-glTF mapping: transmission first, then the metal
@@ -183,6 +235,7 @@ pub fn gltf_coat(
 /// (`texture::textured_bsdf`); here their factors are used.
 fn bsdf_from_gltf(
     m: &gltf::Material,
+    raw: &Value,
     multiscatter: bool,
     warnings: &mut Vec<String>,
     label: &str,
@@ -245,11 +298,12 @@ fn bsdf_from_gltf(
     }
     // A metallicRoughnessTexture can make a metallic-1 material a blend
     // per hit: it keeps its coat.
+    // (So does a clear coat: the blend at metallic 1 carries it.)
     let textured = pbr.metallic_roughness_texture().is_some();
-    if metallic >= 1.0 && !textured {
+    let coat = gltf_coat(m, raw, warnings, label)?;
+    if metallic >= 1.0 && !textured && coat.clearcoat <= 0.0 {
         return Ok(Bsdf::Conductor(conductor_from_f0(base, rough)));
     }
-    let coat = gltf_coat(m, warnings, label)?;
     Ok(gltf_blend(metallic, base, rough, coat))
 }
 

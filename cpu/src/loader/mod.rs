@@ -106,7 +106,10 @@ fn parse_inner(path: &Path, options: LoadOptions) -> Result<Scene, String> {
     };
     let mut materials = doc
         .materials()
-        .map(|m| material::convert(&m, options.multiscatter, &mut warnings))
+        .map(|m| {
+            let raw = &src.raw["materials"][m.index().unwrap_or(0)];
+            material::convert(&m, raw, options.multiscatter, &mut warnings)
+        })
         .collect::<Result<Vec<_>, _>>()?;
     let default_material = materials.len() as u32;
     // The default material is appended (and untextured) if used.

@@ -24,6 +24,7 @@ pub const SUPPORTED_REQUIRED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_emissive_strength",
     "KHR_materials_specular",
+    "KHR_materials_clearcoat",
     "KHR_materials_volume",
     "KHR_mesh_quantization",
     "KHR_texture_transform",

@@ -570,6 +570,8 @@ pub fn chi2_cases() -> Vec<Case> {
             eta,
             specular,
             transmission: 0.0,
+            clearcoat: 0.0,
+            clearcoat_alpha: 0.0,
         },
         roughness: r,
     };
@@ -628,8 +630,37 @@ pub fn chi2_cases() -> Vec<Case> {
                     eta: 1.5,
                     specular: Vec3::ONE,
                     transmission: t,
+                    clearcoat: 0.0,
+                    clearcoat_alpha: 0.0,
                 },
                 roughness: rough(a, a, Shadowing::Correlated),
+            },
+            wo: dir_cos(c, PHI_O),
+        });
+    }
+    // KHR_materials_clearcoat over the non-metal and over the blend.
+    for &(a, cc, ca, c) in &[(0.3, 1.0, 0.05, 0.7), (0.5, 0.6, 0.3, -0.4)] {
+        let coat = CoatParams {
+            clearcoat: cc,
+            clearcoat_alpha: ca,
+            ..CoatParams::GLTF_DEFAULT
+        };
+        v.push(Case {
+            name: format!("clearcoat {cc} a={ca} over coated a={a} cos={c}"),
+            bsdf: Bsdf::Coated {
+                base: Vec3::new(0.8, 0.5, 0.2),
+                coat,
+                roughness: rough(a, a, Shadowing::Correlated),
+            },
+            wo: dir_cos(c, PHI_O),
+        });
+        v.push(Case {
+            name: format!("clearcoat {cc} a={ca} over metallic a={a} cos={c}"),
+            bsdf: Bsdf::Metallic {
+                metallic: 0.7,
+                base: Vec3::new(0.9, 0.6, 0.3),
+                conductor: gold(rough(a, a, Shadowing::Correlated)),
+                coat,
             },
             wo: dir_cos(c, PHI_O),
         });
