@@ -687,7 +687,8 @@ fn ior_and_specular_shape_the_coat() {
 #[test]
 fn transmission_is_thin_walled_unless_the_volume_has_a_thickness() {
     let d = material_doc(vec![
-        json!({ "pbrMetallicRoughness": { "roughnessFactor": 0, "baseColorFactor": [1, 0.5, 0.25, 1] },
+        json!({ "pbrMetallicRoughness": { "roughnessFactor": 0, "metallicFactor": 0,
+                                          "baseColorFactor": [1, 0.5, 0.25, 1] },
                 "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 } } }),
         // metallic 1: the metal ignores transmission (glTF: it is the
         // dielectric part's).
