@@ -354,9 +354,9 @@ pub fn read_uri(
         rest
     } else if uri.contains(':') && !is_windows_drive(uri) {
         let scheme = uri.split(':').next().unwrap_or_default();
+        // No control characters here (refused above).
         return Err(format!(
-            "URI scheme {} is not supported (relative paths, file: and data URIs are)",
-            shown(&format!("{scheme}:"))
+            "URI scheme '{scheme}:' is not supported (relative paths, file: and data URIs are)"
         ));
     } else {
         uri
