@@ -173,7 +173,7 @@ pub fn available_memory() -> Option<u64> {
             .ok()
             .and_then(|s| kib(&s, "VmSize:"))
             .unwrap_or(0);
-        take((lim.rlim_cur as u64).saturating_sub(used));
+        take(lim.rlim_cur.saturating_sub(used));
     }
     best
 }
