@@ -46,7 +46,7 @@ for scene in ${SCENES:-assets/*.gltf assets/*.glb}; do
   mkdir -p "$cache"
   setup() {
     XDG_CACHE_HOME="$cache" MESA_SHADER_CACHE_DIR="$cache/mesa" \
-      "$glint" render "$scene" -o "$work/s.png" --width "$width" --spp 1 --quiet --stats "$work/s.json"
+      "$glint" render "$scene" -o "$work/s.png" --width "$width" --spp 1 --quiet --stats "$work/s.json" --backend gpu
     json "$work/s.json" setup_seconds
   }
   cold=$(setup)

@@ -154,12 +154,12 @@ impl From<KernelArg> for glint::backend::KernelChoice {
 pub struct RenderOpts {
     /// Image width in pixels (1..=16384); alone, the height follows the
     /// camera's aspect ratio. Default 512.
-    #[arg(long, value_name = "W")]
+    #[arg(long, value_name = "W", allow_negative_numbers = true, value_parser = parse_side)]
     pub width: Option<u32>,
 
     /// Image height in pixels (1..=16384); alone, the width follows the
     /// camera's aspect ratio.
-    #[arg(long, value_name = "H")]
+    #[arg(long, value_name = "H", allow_negative_numbers = true, value_parser = parse_side)]
     pub height: Option<u32>,
 
     /// Longest path (Mitsuba's convention): 1 = emitters seen directly,
@@ -220,7 +220,12 @@ pub struct RenderOpts {
     pub envmap: Option<PathBuf>,
 
     /// Multiplies the environment map's radiance.
-    #[arg(long, value_name = "S", default_value_t = 1.0)]
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
     pub envmap_scale: f32,
 
     /// Turns the environment map about +Y by this many degrees.
@@ -257,6 +262,27 @@ pub fn parse_rgb(s: &str) -> Result<[f32; 3], String> {
             .ok_or_else(|| format!("'{s}': each of R,G,B must be a finite number >= 0"))?;
     }
     Ok(c)
+}
+
+/// `--width`, `--height`: a whole number of pixels, said so for "-5"
+/// (clap's "unexpected argument '-5'" named no option; its error now reads
+/// "invalid value '-5' for '--width <W>': ...").
+/// (The range itself, 0 included, is checked with the other parameters.)
+fn parse_side(s: &str) -> Result<u32, String> {
+    s.trim().parse::<u32>().map_err(|_| {
+        format!(
+            "an image side is a whole number of pixels from 1 to {}",
+            crate::cmd::MAX_SIZE
+        )
+    })
+}
+
+/// A count (`--spp`, `--repeat`, `--reference-spp`): a whole number, said
+/// so for "-5" (0 is refused with the other parameter checks).
+fn parse_count(s: &str) -> Result<u32, String> {
+    s.trim()
+        .parse::<u32>()
+        .map_err(|_| format!("a whole number from 1 to {}", u32::MAX))
 }
 
 /// `--seed`: a whole number 0..=2^64-1, said so for "-1" rather than
@@ -339,7 +365,7 @@ pub struct SceneArgs {
 
     /// Samples per pixel (at least 1). Default 64; with --time-limit and no
     /// --spp, as many as fit.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_count)]
     pub spp: Option<u32>,
 
     #[command(flatten)]
@@ -356,8 +382,10 @@ pub struct RenderArgs {
     #[arg(short = 'o', long = "output", value_name = "FILE", required = true)]
     pub outputs: Vec<PathBuf>,
 
-    /// Which renderer runs the path tracer.
-    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
+    /// Which renderer runs the path tracer: auto (a GPU when Vulkan lists
+    /// one, else the CPU backend), gpu (Vulkan; lavapipe where no GPU
+    /// exists) or cpu.
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
     pub backend: Backend,
 
     /// Write timings and counts as JSON to this file.
@@ -400,8 +428,24 @@ pub struct DiffArgs {
 
     /// Overall significance of the statistical test (the chance that two
     /// renders of the same image are reported as differing).
-    #[arg(long, value_name = "P", default_value_t = 1e-3)]
+    #[arg(
+        long,
+        value_name = "P",
+        default_value_t = 1e-3,
+        allow_negative_numbers = true
+    )]
     pub alpha: f64,
+
+    /// Agree only if relMSE is at most X. Without variance in both files
+    /// (or with a non-finite value, or sizes that differ) the thresholds
+    /// decide 0 or 1 where diff would otherwise exit 2; with variance they
+    /// must hold as well as the statistical test.
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    pub max_relmse: Option<f64>,
+
+    /// Agree only if FLIP is at most X (as --max-relmse).
+    #[arg(long, value_name = "X", allow_negative_numbers = true)]
+    pub max_flip: Option<f64>,
 }
 
 #[derive(clap::Args, Debug)]
@@ -423,7 +467,12 @@ pub struct CompareArgs {
 
     /// Overall significance of the test (the chance that two correct
     /// renderers are reported as differing).
-    #[arg(long, value_name = "P", default_value_t = 1e-3)]
+    #[arg(
+        long,
+        value_name = "P",
+        default_value_t = 1e-3,
+        allow_negative_numbers = true
+    )]
     pub alpha: f64,
 }
 
@@ -434,7 +483,7 @@ pub struct BenchArgs {
 
     /// Renders per backend; the fastest counts (the others absorb warm-up
     /// and noise from the rest of the machine).
-    #[arg(long, value_name = "N", default_value_t = 1)]
+    #[arg(long, value_name = "N", default_value_t = 1, allow_negative_numbers = true, value_parser = parse_count)]
     pub repeat: u32,
 
     /// Also write the figures as JSON to this file.
@@ -460,7 +509,7 @@ pub struct ConvergeArgs {
 
     /// Render the reference with the CPU backend at N spp (an independent
     /// seed), cached in the user's cache folder by scene content and options.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", allow_negative_numbers = true, value_parser = parse_count)]
     pub reference_spp: Option<u32>,
 
     /// Sample counts of each variant, comma-separated.
@@ -497,8 +546,8 @@ pub struct ConvergeArgs {
 #[derive(Parser, Debug)]
 #[command(name = "variant", no_binary_name = true, args_override_self = true)]
 pub struct VariantCli {
-    /// Which renderer runs the path tracer.
-    #[arg(long, value_enum, default_value_t = Backend::Gpu)]
+    /// Which renderer runs the path tracer (as render's --backend).
+    #[arg(long, value_enum, default_value_t = Backend::Auto)]
     pub backend: Backend,
 
     #[command(flatten)]

@@ -89,6 +89,8 @@ fn main() -> ExitCode {
             Err(_) => ExitCode::from(101),
         };
     }
+    // merge: every refusal is bad input, 2, as diff's.
+    let all_bad_input = matches!(cli.command, Command::Merge(_));
     let result = match cli.command {
         Command::Render(args) => std::panic::catch_unwind(|| cmd::render::run(&args)),
         Command::Compare(args) => std::panic::catch_unwind(|| cmd::compare::run(&args)),
@@ -103,7 +105,11 @@ fn main() -> ExitCode {
         Ok(Ok(())) => ExitCode::SUCCESS,
         Ok(Err(e)) => {
             eprintln!("glint: {}", one_line(&format!("{e:#}")));
-            ExitCode::FAILURE
+            if all_bad_input || e.downcast_ref::<cmd::BadInput>().is_some() {
+                ExitCode::from(2)
+            } else {
+                ExitCode::FAILURE
+            }
         }
         Err(_) => ExitCode::from(101),
     }

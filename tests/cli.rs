@@ -434,14 +434,14 @@ fn gpu_backend_renders_and_compare_finds_the_backends_agree() {
     // Nothing written.
     assert_eq!(files_in(&dir), ["scene.bin", "scene.gltf"]);
 
-    // The default backend is the GPU; its stats name the device and driver.
+    // The GPU backend's stats name the device and driver.
     let (png, stats) = (dir.join("g.png"), dir.join("g.json"));
     let out = glint()
         .arg("render")
         .arg(&scene)
         .arg("-o")
         .arg(&png)
-        .args(["--spp", "4", "--width", "24", "--stats"])
+        .args(["--backend", "gpu", "--spp", "4", "--width", "24", "--stats"])
         .arg(&stats)
         .output()
         .unwrap();

@@ -476,10 +476,18 @@ fn diff_exit_status_and_guards() {
         text.contains("relMSE") && text.contains("FLIP") && text.contains("agree"),
         "{text}"
     );
-    // Without variance: metrics, no verdict, exit 0.
+    // Without variance: metrics, no verdict, exit 2 (contract, "Second
+    // additions") unless a threshold decides.
     let out = diff(&a, &c, &[]);
-    assert_eq!(out.status.code(), Some(0));
-    assert!(String::from_utf8_lossy(&out.stdout).contains("no statistical verdict"));
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("relMSE"));
+    assert_one_line_error(&out, "no statistical verdict");
+    assert_eq!(
+        diff(&a, &c, &["--max-relmse", "1e9"]).status.code(),
+        Some(0)
+    );
+    assert_eq!(diff(&a, &c, &["--max-relmse", "0"]).status.code(), Some(1));
+    assert_eq!(diff(&a, &c, &["--max-flip", "1"]).status.code(), Some(0));
     // Bad input: 2 with one line.
     let out = diff(&a, &dir.join("missing.exr"), &[]);
     assert_eq!(out.status.code(), Some(2));

@@ -135,7 +135,7 @@ fn pipeline_cache_survives_runs_and_corruption() {
             .env("GLINT_CACHE_DIR", &dir)
             .args(["render", asset("diffuse.gltf").to_str().unwrap(), "-o"])
             .arg(dir.join("x.png"))
-            .args(["--width", "8", "--spp", "1"])
+            .args(["--backend", "gpu", "--width", "8", "--spp", "1"])
             .output()
             .unwrap()
     };

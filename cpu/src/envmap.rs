@@ -116,10 +116,25 @@ impl EnvMap {
     /// Read an equirectangular `.exr` or `.hdr` (linear RGB), size checked
     /// from the header before decoding.
     pub fn load(path: &Path, scale: f32, rotation_degrees: f32) -> Result<Self, String> {
-        let reader = image::ImageReader::open(path)
-            .map_err(|e| format!("cannot open: {e}"))?
-            .with_guessed_format()
-            .map_err(|e| format!("cannot read: {e}"))?;
+        Self::load_checked(path, scale, rotation_degrees).map(|(map, _)| map)
+    }
+
+    /// [`EnvMap::load`], and how many texels were not finite (NaN or
+    /// infinite, after `scale`): those light nothing (they become 0), which
+    /// the caller warns about. Only a regular file is opened (a FIFO or a
+    /// device is refused without blocking).
+    pub fn load_checked(
+        path: &Path,
+        scale: f32,
+        rotation_degrees: f32,
+    ) -> Result<(Self, usize), String> {
+        let open = || -> Result<image::ImageReader<std::io::BufReader<std::fs::File>>, String> {
+            let file = crate::safe_fs::open_regular(path)?;
+            image::ImageReader::new(std::io::BufReader::new(file))
+                .with_guessed_format()
+                .map_err(|e| format!("cannot read: {e}"))
+        };
+        let reader = open()?;
         match reader.format() {
             Some(image::ImageFormat::OpenExr) | Some(image::ImageFormat::Hdr) => {}
             _ => return Err("not an .exr or .hdr image".into()),
@@ -137,15 +152,19 @@ impl EnvMap {
                 "is {w}x{h}; glint reads environment maps of at most {MAX_ENVMAP_TEXELS} pixels"
             ));
         }
-        let img = image::ImageReader::open(path)
-            .map_err(|e| format!("cannot open: {e}"))?
-            .with_guessed_format()
-            .map_err(|e| format!("cannot read: {e}"))?
+        let img = open()?
             .decode()
             .map_err(|e| format!("does not decode: {e}"))?
             .to_rgb32f();
         let rgb: Vec<[f32; 3]> = img.pixels().map(|p| p.0).collect();
-        Ok(Self::new(w, h, &rgb, scale, rotation_degrees.to_radians()))
+        let bad = rgb
+            .iter()
+            .filter(|c| !(Vec3::from(**c) * scale).is_finite())
+            .count();
+        Ok((
+            Self::new(w, h, &rgb, scale, rotation_degrees.to_radians()),
+            bad,
+        ))
     }
 
     /// World direction to map direction (undo the rotation about +Y).

@@ -73,6 +73,107 @@ pub enum ExrError {
     Attribute(&'static str, String),
     #[error("holds variance.{0} but not all of variance.R, variance.G, variance.B")]
     PartialVariance(&'static str),
+    /// Not a regular file, unreadable, or a header whose size the file (or
+    /// the machine) cannot back.
+    #[error("{0}")]
+    Refused(String),
+}
+
+/// The largest side glint reads (and renders).
+pub const MAX_SIDE: usize = 16384;
+
+/// How many times its file size an EXR's pixels may claim to be. Deflate
+/// (ZIP, and DWA's final stage) packs at most about 1032:1; RLE, PIZ, PXR24
+/// and B44 far less. A header claiming more is lying about its size.
+pub const MAX_COMPRESSION_RATIO: u64 = 2048;
+
+/// Check what an EXR's headers claim against the file's bytes and against
+/// [`MAX_SIDE`] and the machine's memory, before any pixel is allocated.
+fn check_headers(meta: &exr::meta::MetaData, file_bytes: u64) -> Result<(), ExrError> {
+    let mut need = 0u64;
+    for h in meta.headers.iter() {
+        let (w, ht) = (h.layer_size.width(), h.layer_size.height());
+        if w > MAX_SIDE || ht > MAX_SIDE {
+            return Err(ExrError::Refused(format!(
+                "header claims {w}x{ht} pixels; glint reads images up to {MAX_SIDE} on a side"
+            )));
+        }
+        let raw = (w as u64) * (ht as u64) * (h.channels.bytes_per_pixel as u64);
+        // Each chunk costs an 8-byte offset and an 8-byte chunk header at
+        // least, whatever it compresses to.
+        let floor = (h.chunk_count as u64).saturating_mul(16);
+        if raw > file_bytes.saturating_mul(MAX_COMPRESSION_RATIO) || floor > file_bytes {
+            return Err(ExrError::Refused(format!(
+                "header claims {w}x{ht} pixels ({raw} bytes) but the file holds only {file_bytes} bytes"
+            )));
+        }
+        // The decoded planes, their f32 copies and the Vec3 images.
+        let channels = h.channels.list.len() as u64;
+        need += (w as u64) * (ht as u64) * (h.channels.bytes_per_pixel as u64 + 8 * channels + 24);
+    }
+    if let Some(have) = crate::safe_fs::available_memory()
+        && need > have
+    {
+        return Err(ExrError::Refused(format!(
+            "reading it needs about {:.1} GB but about {:.1} GB is available",
+            need as f64 / 1e9,
+            have as f64 / 1e9
+        )));
+    }
+    Ok(())
+}
+
+/// Sort a single-part EXR header's attributes by name, in place. The
+/// `exr` crate writes custom attributes from a `HashMap` (a new order each
+/// run); sorted, the same image gives the same bytes. The header's length
+/// is unchanged, so the offset table after it stays valid. A layout this
+/// does not recognise is left alone.
+fn sort_header_attributes(bytes: &mut [u8]) {
+    // Magic number and version field; then the attributes up to a 0 byte.
+    let start = 8usize;
+    let mut at = start;
+    let mut attrs: Vec<(Vec<u8>, std::ops::Range<usize>)> = Vec::new();
+    loop {
+        let Some(&first) = bytes.get(at) else {
+            return;
+        };
+        if first == 0 {
+            break;
+        }
+        let name_end = match bytes[at..].iter().position(|&b| b == 0) {
+            Some(n) => at + n,
+            None => return,
+        };
+        let type_end = match bytes
+            .get(name_end + 1..)
+            .and_then(|r| r.iter().position(|&b| b == 0))
+        {
+            Some(n) => name_end + 1 + n,
+            None => return,
+        };
+        let Some(size) = bytes
+            .get(type_end + 1..type_end + 5)
+            .map(|b| i32::from_le_bytes(b.try_into().expect("4 bytes")))
+        else {
+            return;
+        };
+        let Some(end) = usize::try_from(size)
+            .ok()
+            .map(|s| type_end + 5 + s)
+            .filter(|&e| e <= bytes.len())
+        else {
+            return;
+        };
+        attrs.push((bytes[at..name_end].to_vec(), at..end));
+        at = end;
+    }
+    let mut sorted: Vec<&(Vec<u8>, std::ops::Range<usize>)> = attrs.iter().collect();
+    sorted.sort_by(|a, b| a.0.cmp(&b.0));
+    let block: Vec<u8> = sorted
+        .iter()
+        .flat_map(|(_, r)| bytes[r.clone()].to_vec())
+        .collect();
+    bytes[start..at].copy_from_slice(&block);
 }
 
 /// Names of the attributes.
@@ -186,7 +287,14 @@ impl RadianceImage {
             Encoding::SMALL_LOSSLESS,
             AnyChannels::sort(SmallVec::from_vec(channels)),
         );
-        Image::from_layer(layer).write().to_buffered(w)?;
+        let mut buf = std::io::Cursor::new(Vec::new());
+        Image::from_layer(layer).write().to_buffered(&mut buf)?;
+        let mut bytes = buf.into_inner();
+        sort_header_attributes(&mut bytes);
+        let mut w = w;
+        w.write_all(&bytes)
+            .and_then(|_| w.flush())
+            .map_err(|e| ExrError::Exr(exr::error::Error::Io(e)))?;
         Ok(())
     }
 
@@ -199,14 +307,27 @@ impl RadianceImage {
 
     /// Read an EXR: its first layer's `R`, `G`, `B` (any sample type),
     /// `variance.*` when present, glint's attributes when present.
+    /// Only a regular file is opened (a FIFO or a device is refused without
+    /// blocking), and its header's size is checked against the file's
+    /// bytes, [`MAX_SIDE`] and the machine's memory before anything is
+    /// allocated ([`check_headers`]).
     pub fn read(path: &Path) -> Result<Self, ExrError> {
+        let mut file = crate::safe_fs::open_regular(path).map_err(ExrError::Refused)?;
+        let file_bytes = file
+            .metadata()
+            .map_err(|e| ExrError::Refused(format!("cannot read: {e}")))?
+            .len();
+        let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(&file), false)?;
+        check_headers(&meta, file_bytes)?;
+        file.rewind()
+            .map_err(|e| ExrError::Refused(format!("cannot read: {e}")))?;
         let image = read()
             .no_deep_data()
             .largest_resolution_level()
             .all_channels()
             .first_valid_layer()
             .all_attributes()
-            .from_file(path)?;
+            .from_buffered(std::io::BufReader::new(file))?;
         let layer = image.layer_data;
         let (w, h) = (layer.size.width(), layer.size.height());
         let n = w * h;
@@ -352,6 +473,35 @@ mod tests {
         let back = RadianceImage::read(&path).unwrap();
         assert_eq!((back.variance, back.meta), (None, None));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn the_same_image_encodes_to_the_same_bytes() {
+        let mut f = Film::new(4, 3);
+        f.spp = 2;
+        f.sum[5] = Vec3::new(1.0, 2.0, 3.0);
+        let meta = RenderMeta {
+            spp: 2,
+            seed: 9,
+            sampler: "sobol".into(),
+            shard: "0/1".into(),
+            version: "0.1.0".into(),
+            samples: vec![(0, 2)],
+            scene: Some("ab".into()),
+            variance_batch: 1,
+        };
+        let img = RadianceImage::from_film(&f, true, Some(meta));
+        let encode = || {
+            let mut c = std::io::Cursor::new(Vec::new());
+            img.write(&mut c).unwrap();
+            c.into_inner()
+        };
+        // Each HashMap gets its own random keys: eight attributes came out
+        // in a new order nearly every time.
+        let first = encode();
+        for _ in 0..8 {
+            assert_eq!(encode(), first);
+        }
     }
 
     #[test]

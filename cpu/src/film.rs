@@ -183,6 +183,28 @@ pub fn variance_batch_for(spp: u32, shards: u32) -> u32 {
     l
 }
 
+/// Bytes per pixel a CPU render holds at its peak: the film's four sums
+/// (48), its means (12) and the EXR writer's planes of mean and variance
+/// with their compressed copy (about 36).
+pub const CPU_BYTES_PER_PIXEL: u64 = 96;
+
+/// Refuse a CPU film the machine cannot hold ([`crate::safe_fs::available_memory`]),
+/// before anything is allocated: the allocator would otherwise abort the
+/// process, leaving its temporaries behind.
+pub fn check_memory(width: u32, height: u32) -> Result<(), String> {
+    let need = width as u64 * height as u64 * CPU_BYTES_PER_PIXEL;
+    match crate::safe_fs::available_memory() {
+        Some(have) if need > have => Err(format!(
+            "a {width}x{height} CPU render needs about {:.1} GB but about {:.1} GB is available; \
+             render a smaller image (--width/--height) or split the samples with --shard \
+             across machines with more memory",
+            need as f64 / 1e9,
+            have as f64 / 1e9
+        )),
+        _ => Ok(()),
+    }
+}
+
 /// The image formats `glint render` writes, chosen by file extension.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum OutputFormat {
@@ -376,9 +398,8 @@ impl Film {
             path: path.to_path_buf(),
             message: e.to_string(),
         };
-        let tmp = temp_path_for(path);
+        let (file, tmp) = crate::safe_fs::create_temp_beside(path).map_err(|e| io(&e))?;
         let result = (|| {
-            let file = std::fs::File::create(&tmp).map_err(|e| io(&e))?;
             let mut w = std::io::BufWriter::new(file);
             self.encode(&mut w, format).map_err(|e| io(&e))?;
             let file = w.into_inner().map_err(|e| io(&e.error().to_string()))?;
@@ -390,16 +411,6 @@ impl Film {
         }
         result
     }
-}
-
-/// `DIR/.NAME.tmp-PID`: beside the final file (so the rename stays on one
-/// file system) and hidden.
-pub fn temp_path_for(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.tmp-{}", std::process::id()))
 }
 
 #[cfg(test)]

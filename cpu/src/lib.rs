@@ -18,6 +18,7 @@ pub mod lights;
 pub mod loader;
 pub mod metrics;
 pub mod quadrature;
+pub mod safe_fs;
 pub mod sampling;
 pub mod scene;
 pub mod sobol;

@@ -68,7 +68,7 @@ fn bsdf_err(test: &str, bsdf: Value, needle: &str) -> String {
 fn missing_file() {
     let dir = temp_dir("missing");
     expect_err(&dir.join("nope.gltf"), "cannot open");
-    expect_err(&dir, "not a file");
+    expect_err(&dir, "a directory, not a regular file");
 }
 
 #[test]

@@ -18,7 +18,7 @@ use glint::cpu::metrics::{self, ImageRef, Metrics};
 use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 
 use super::outputs::Outputs;
-use super::{TIME_LIMIT_MAX_SPP, check_opts, encode, load, render_on, render_options};
+use super::{TIME_LIMIT_MAX_SPP, check_opts, encode, render_on, render_options};
 use crate::cli::{ConvergeArgs, RenderOpts, VariantCli};
 
 /// The reference's seed: independent of every variant's stream.
@@ -262,16 +262,20 @@ pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
 }
 
 /// Read a linear RGB EXR (or any image the `image` crate decodes).
+/// A reference EXR's size and means: a regular file whose header the file
+/// backs (`RadianceImage::read`), every value finite. A NaN or infinite
+/// reference would put NaN in every row of the table: refused, exit 2.
 pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
-    let img = image::open(path)
-        .with_context(|| format!("{}: cannot read the image", path.display()))?
-        .into_rgb32f();
-    let (w, h) = img.dimensions();
-    let px = img
-        .pixels()
-        .map(|p| Vec3::new(p.0[0], p.0[1], p.0[2]))
-        .collect();
-    Ok((w, h, px))
+    let img = glint::cpu::exr_file::RadianceImage::read(path)
+        .map_err(|e| anyhow!("{}: cannot read the image: {e}", path.display()))?;
+    if let Some(at) = super::first_non_finite(img.width, &img.mean) {
+        return Err(super::BadInput(format!(
+            "{}: a non-finite value (NaN or infinite) at {at}; no error can be measured against it",
+            path.display()
+        ))
+        .into());
+    }
+    Ok((img.width, img.height, img.mean))
 }
 
 /// The CPU reference at `spp` for `base` (an independent seed), from the
@@ -327,13 +331,13 @@ fn reference_image(
                 // Through a temporary, so a crash leaves no half-written entry.
                 let meta =
                     super::shard::render_meta(scene, &opts, super::shard::Shard::WHOLE, r.film.spp);
-                let tmp = glint::cpu::film::temp_path_for(c);
+                let mut bytes = std::io::Cursor::new(Vec::new());
                 RadianceImage::from_film(&r.film, false, Some(meta))
-                    .write_file(&tmp)
+                    .write(&mut bytes)
                     .map_err(|e| e.to_string())
-                    .and_then(|_| std::fs::rename(&tmp, c).map_err(|e| e.to_string()))
-                    .inspect_err(|_| {
-                        let _ = std::fs::remove_file(&tmp);
+                    .and_then(|_| {
+                        glint::cpu::safe_fs::write_atomic(c, bytes.get_ref())
+                            .map_err(|e| e.to_string())
                     })
             });
         if let Err(e) = stored {
@@ -433,7 +437,9 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
         }
     }
 
-    let scene = load(&args.scene, &args.opts)?;
+    let (scene, mut inputs) = super::load_with_inputs(&args.scene, &args.opts)?;
+    inputs.extend(args.reference.clone());
+    outputs.refuse_inputs(&inputs)?;
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
     let (rw, rh, reference) = match (&args.reference, args.reference_spp) {
         (Some(p), _) => read_exr(p)?,
@@ -474,10 +480,10 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
                 "glint: converge: {} {} spp: relMSE {:.3e} in {:.3} s",
                 v.name, r.film.spp, m.relmse, r.render_seconds
             );
-            devices.push((v.backend, r.device.clone()));
+            devices.push((r.backend, r.device.clone()));
             rows.push(Row {
                 variant: v.name.clone(),
-                backend: v.backend,
+                backend: r.backend,
                 spp: r.film.spp,
                 seconds: r.render_seconds,
                 metrics: m,

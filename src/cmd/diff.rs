@@ -1,8 +1,10 @@
 //! `glint diff A.exr B.exr [--diff OUT.png] [--json FILE]`: A measured
 //! against B (the reference) with `glint_cpu::metrics`; when both files
 //! carry `variance.*`, the block z-test of `glint_cpu::compare` decides
-//! whether they agree. `run` returns Ok(true) for agree (or no verdict
-//! possible without variance), Ok(false) for differ; errors are bad input.
+//! whether they agree. `run` returns Ok(true) for agree, Ok(false) for
+//! differ; errors are bad input (exit 2), and so is no verdict at all
+//! (either file without variance, a non-finite value, sizes that differ)
+//! unless `--max-relmse` / `--max-flip` is given, which then decides.
 
 use std::path::Path;
 
@@ -102,10 +104,28 @@ fn max_relative_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Where `img` holds a value that is not finite (mean or variance).
+fn non_finite(img: &RadianceImage) -> Option<String> {
+    if let Some(at) = super::first_non_finite(img.width, &img.mean) {
+        return Some(format!("a non-finite value (NaN or infinite) at {at}"));
+    }
+    let v = img.variance.as_ref()?;
+    super::first_non_finite(img.width, v)
+        .map(|at| format!("a non-finite variance (NaN or infinite) at {at}"))
+}
+
 pub fn run(args: &DiffArgs) -> Result<bool> {
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
         bail!("--alpha {} is out of range (0, 1)", args.alpha);
     }
+    for (name, v) in [("max-relmse", args.max_relmse), ("max-flip", args.max_flip)] {
+        if let Some(x) = v
+            && !(x.is_finite() && x >= 0.0)
+        {
+            bail!("--{name} {x} is out of range (a finite number >= 0)");
+        }
+    }
+    let thresholds = args.max_relmse.is_some() || args.max_flip.is_some();
     if let Some(d) = &args.diff
         && glint::cpu::OutputFormat::from_path(d) != Some(glint::cpu::OutputFormat::Png)
     {
@@ -113,7 +133,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
     }
     for o in args.diff.iter().chain(&args.json) {
         for input in [&args.a, &args.b] {
-            if super::same_file(o, input) {
+            if super::outputs::names_same(o, input) {
                 bail!("{}: is an input; refusing to overwrite it", o.display());
             }
         }
@@ -125,13 +145,24 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
     let b = read(&args.b)?;
     let (an, bn) = (args.a.display(), args.b.display());
     if (a.width, a.height) != (b.width, b.height) {
-        bail!(
+        let why = format!(
             "{an}: {}x{} but {bn} is {}x{}",
-            a.width,
-            a.height,
-            b.width,
-            b.height
+            a.width, a.height, b.width, b.height
         );
+        if thresholds {
+            println!("differ: {why} (no threshold can hold)");
+            return Ok(false);
+        }
+        bail!("{why}");
+    }
+    for (img, name) in [(&a, &an), (&b, &bn)] {
+        if let Some(why) = non_finite(img) {
+            if thresholds {
+                println!("differ: {name}: {why} (no threshold can hold)");
+                return Ok(false);
+            }
+            bail!("{name}: {why}; no verdict");
+        }
     }
     if let (Some(ma), Some(mb)) = (&a.meta, &b.meta) {
         if ma.scene.is_some() && mb.scene.is_some() && ma.scene != mb.scene {
@@ -170,10 +201,15 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
                 variance: vb,
                 samples: b.variance_samples(),
             };
-            Some(
-                compare::compare_estimates(&ea, &eb, args.alpha)
-                    .map_err(|e| anyhow!("{an} vs {bn}: {e}"))?,
-            )
+            match compare::compare_estimates(&ea, &eb, args.alpha) {
+                Ok(r) => Some(r),
+                // No statistical verdict (no power): the thresholds decide.
+                Err(e) if thresholds => {
+                    println!("no statistical verdict: {an} vs {bn}: {e}");
+                    None
+                }
+                Err(e) => bail!("{an} vs {bn}: {e}"),
+            }
         }
         _ => None,
     };
@@ -184,9 +220,16 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
         use std::io::Write;
         outputs.write(slot, |w| Ok(w.write_all(&png)?))?;
     }
-    let verdict = report
-        .as_ref()
-        .map(|r| if r.pass { "agree" } else { "differ" });
+    let within = |m_: f64, max: Option<f64>| max.is_none_or(|x| m_ <= x);
+    let thresholds_hold = within(m.relmse, args.max_relmse) && within(m.flip, args.max_flip);
+    // The statistical verdict when there is one (and the thresholds, when
+    // given, must hold too); else the thresholds alone; else none.
+    let pass: Option<bool> = match &report {
+        Some(r) => Some(r.pass && thresholds_hold),
+        None if thresholds => Some(thresholds_hold),
+        None => None,
+    };
+    let verdict = pass.map(|p| if p { "agree" } else { "differ" });
     if let Some(slot) = json_slot {
         let mut j = serde_json::json!({
             "a": args.a.display().to_string(),
@@ -203,6 +246,8 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
             "max_relative_difference": max_rel,
             "verdict": verdict,
             "alpha": args.alpha,
+            "max_relmse": args.max_relmse,
+            "max_flip": args.max_flip,
         });
         if let Some(r) = &report {
             j["test"] = serde_json::json!({
@@ -227,17 +272,28 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
         "{an} vs {bn}: relMSE {:.4e}, RMSE {:.4e}, FLIP {:.4}, mean ratio [{:.4}, {:.4}, {:.4}]",
         m.relmse, m.rmse, m.flip, ratio.x, ratio.y, ratio.z
     );
-    match &report {
-        Some(r) => {
-            println!("{}: {r}", if r.pass { "agree" } else { "differ" });
-            Ok(r.pass)
-        }
+    if let Some(r) = &report {
+        println!("{}: {r}", if r.pass { "agree" } else { "differ" });
+    }
+    if thresholds {
+        let limits: Vec<String> = [("relMSE", args.max_relmse), ("FLIP", args.max_flip)]
+            .iter()
+            .filter_map(|(n, x)| x.map(|x| format!("{n} <= {x:e}")))
+            .collect();
+        println!(
+            "thresholds {}: {}",
+            limits.join(", "),
+            if thresholds_hold { "met" } else { "not met" }
+        );
+    }
+    match pass {
+        Some(p) => Ok(p),
         None => {
             let missing = if a.variance.is_none() { &an } else { &bn };
-            println!(
-                "no statistical verdict: {missing} holds no variance (render with --variance)"
-            );
-            Ok(true)
+            bail!(
+                "{missing}: holds no variance, so there is no statistical verdict \
+                 (render with --variance, or give --max-relmse / --max-flip)"
+            )
         }
     }
 }

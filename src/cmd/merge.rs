@@ -25,7 +25,7 @@ use glam::DVec3;
 use glint::cpu::exr_file::{RadianceImage, RenderMeta, format_ranges};
 
 use super::outputs::Outputs;
-use super::same_file;
+use super::outputs::names_same;
 use crate::cli::MergeArgs;
 
 struct Shard {
@@ -46,6 +46,23 @@ fn read(path: &Path) -> Result<Shard> {
     if meta.scene.is_none() {
         bail!(
             "{}: no glint.scene attribute to match shards by",
+            path.display()
+        );
+    }
+    // A NaN or infinite shard would poison every merged pixel it covers.
+    if let Some(at) = super::first_non_finite(img.width, &img.mean) {
+        bail!(
+            "{}: a non-finite value (NaN or infinite) at {at}",
+            path.display()
+        );
+    }
+    if let Some(at) = img
+        .variance
+        .as_ref()
+        .and_then(|v| super::first_non_finite(img.width, v))
+    {
+        bail!(
+            "{}: a non-finite variance (NaN or infinite) at {at}",
             path.display()
         );
     }
@@ -201,7 +218,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         bail!("{}: merge writes .exr only", out.display());
     }
     for s in &args.shards {
-        if same_file(s, out) {
+        if names_same(out, s) {
             bail!(
                 "{}: is one of the shards; refusing to overwrite it",
                 out.display()

@@ -13,7 +13,7 @@ pub mod shard;
 pub mod stability;
 
 use std::io::IsTerminal;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
 use glint::backend::{self, Backend, BackendRender, GpuOptions};
@@ -32,9 +32,47 @@ pub const DEFAULT_SPP: u32 = 64;
 /// The most samples a time-limited render takes when --spp is not given.
 pub const TIME_LIMIT_MAX_SPP: u32 = 1 << 24;
 
-/// Whitespace (newlines included) folded to single spaces.
+/// Whitespace (newlines included) folded to single spaces; any other
+/// control character (a NUL from a file name or URI) escaped, so a message
+/// stays one printable line.
 pub fn one_line(s: &str) -> String {
-    s.split_whitespace().collect::<Vec<_>>().join(" ")
+    s.split_whitespace()
+        .map(|w| {
+            w.chars()
+                .flat_map(|c| {
+                    let e: Vec<char> = if c.is_control() {
+                        c.escape_debug().collect()
+                    } else {
+                        vec![c]
+                    };
+                    e
+                })
+                .collect::<String>()
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// A refusal of bad input that the verb reports with exit status 2
+/// (`diff`, `merge`, and `converge`'s non-finite reference): the contract's
+/// "2 on bad input".
+#[derive(Debug)]
+pub struct BadInput(pub String);
+
+impl std::fmt::Display for BadInput {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BadInput {}
+
+/// The first pixel of `values` that is not finite, as "(x, y)", for a
+/// refusal naming the file.
+pub fn first_non_finite(width: u32, values: &[glam::Vec3]) -> Option<String> {
+    let i = values.iter().position(|v| !v.is_finite())?;
+    let w = width.max(1) as usize;
+    Some(format!("pixel ({}, {})", i % w, i / w))
 }
 
 /// Pick the camera (the loader's rule: a name first, then an index).
@@ -48,7 +86,9 @@ fn resolve_camera(scene: &Scene, path: &Path, camera: Option<&str>) -> Result<us
 
 /// The image size: both given, or one given and the other from the
 /// camera's aspect ratio (glTF `aspectRatio`, else 1:1), or 512 wide.
-fn image_size(opts: &RenderOpts, aspect: f32) -> Result<(u32, u32)> {
+/// A side that the aspect ratio pushes past [`MAX_SIZE`] is clamped, with a
+/// line in `warnings`.
+fn image_size(opts: &RenderOpts, aspect: f32, warnings: &mut Vec<String>) -> Result<(u32, u32)> {
     let check = |name: &str, v: u32| -> Result<u32> {
         if (1..=MAX_SIZE).contains(&v) {
             Ok(v)
@@ -56,7 +96,16 @@ fn image_size(opts: &RenderOpts, aspect: f32) -> Result<(u32, u32)> {
             bail!("--{name} {v} is out of range (1..={MAX_SIZE})")
         }
     };
-    let from = |v: u32, r: f32| ((v as f32 * r).round() as u32).clamp(1, MAX_SIZE);
+    let mut from = |v: u32, r: f32| {
+        let side = (v as f64 * r as f64).round();
+        if !(1.0..=MAX_SIZE as f64).contains(&side) {
+            warnings.push(format!(
+                "the camera's aspectRatio {aspect} makes the other side {side} pixels; \
+                 clamped to 1..={MAX_SIZE} (give both --width and --height)"
+            ));
+        }
+        (side as u32).clamp(1, MAX_SIZE)
+    };
     Ok(match (opts.width, opts.height) {
         (Some(w), Some(h)) => (check("width", w)?, check("height", h)?),
         (Some(w), None) => {
@@ -180,21 +229,41 @@ pub fn same_file(a: &Path, b: &Path) -> bool {
 /// then print its warnings (`glint: warning: FILE: ...`), or, with
 /// `--strict`, fail on the first.
 pub fn load(path: &Path, o: &RenderOpts) -> Result<Scene> {
+    load_with_inputs(path, o).map(|(scene, _)| scene)
+}
+
+/// [`load`], and every file it read: the scene, its external buffers and
+/// images (real paths) and the environment map. No output may name one.
+pub fn load_with_inputs(path: &Path, o: &RenderOpts) -> Result<(Scene, Vec<PathBuf>)> {
     check_envmap_opts(o)?;
     check_scene_path(path)?;
     let options = glint::cpu::loader::LoadOptions {
         allow_any_path: o.allow_any_path,
         multiscatter: o.multiscatter == OnOff::On,
     };
-    let mut scene = glint::cpu::loader::load_with(path, options)?;
+    let (mut scene, mut inputs) = glint::cpu::loader::load_with_inputs(path, options)?;
+    inputs.push(path.to_path_buf());
     if let Some(bg) = o.background {
         scene.background = bg.into();
     }
     if let Some(env) = &o.envmap {
-        let map = glint::cpu::envmap::EnvMap::load(env, o.envmap_scale, o.envmap_rotate)
-            .map_err(|e| anyhow!("{}: {e}", env.display()))?;
+        let (map, bad) =
+            glint::cpu::envmap::EnvMap::load_checked(env, o.envmap_scale, o.envmap_rotate)
+                .map_err(|e| anyhow!("{}: {e}", env.display()))?;
+        if bad > 0 {
+            scene.warnings.push(format!(
+                "{}: {bad} texel(s) not finite (NaN or infinite{}); they emit nothing",
+                env.display(),
+                if o.envmap_scale != 1.0 {
+                    ", after --envmap-scale"
+                } else {
+                    ""
+                }
+            ));
+        }
         scene.background = glam::Vec3::ZERO;
         scene.envmap = Some(std::sync::Arc::new(map));
+        inputs.push(env.clone());
     }
     // Exact simplifications (glint_cpu::features::simplify): they shrink
     // what the specialised kernel carries without changing the image.
@@ -204,7 +273,7 @@ pub fn load(path: &Path, o: &RenderOpts) -> Result<Scene> {
         scene.warnings.push(w);
     }
     report_warnings(path, &scene, o.strict)?;
-    Ok(scene)
+    Ok((scene, inputs))
 }
 
 fn check_envmap_opts(o: &RenderOpts) -> Result<()> {
@@ -271,7 +340,16 @@ pub fn render_options(
         .and_then(|c| c.aspect_ratio)
         .filter(|a| a.is_finite() && *a > 0.0)
         .unwrap_or(1.0);
-    let (width, height) = image_size(o, aspect)?;
+    let mut warnings = Vec::new();
+    let (width, height) = image_size(o, aspect, &mut warnings)?;
+    if o.strict
+        && let Some(w) = warnings.first()
+    {
+        bail!("{}: {} (--strict)", path.display(), one_line(w));
+    }
+    for w in &warnings {
+        eprintln!("glint: warning: {}: {}", path.display(), one_line(w));
+    }
     let opts = RenderOptions {
         spp,
         max_depth: o.max_depth,
@@ -320,6 +398,11 @@ pub fn render_on(
         kernel: ro.kernel.into(),
         pipeline_cache: true,
     };
+    let backend = backend.resolve(ro.device.as_deref());
+    if backend == Backend::Cpu {
+        glint::cpu::film::check_memory(opts.width, opts.height)
+            .map_err(|e| anyhow!("{}: {e}", path.display()))?;
+    }
     let r = backend::render(backend, scene, opts, &gpu, &progress)
         .map_err(|e| anyhow!("{}: {e}", path.display()))?;
     if let Some(pb) = pb {

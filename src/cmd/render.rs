@@ -7,7 +7,10 @@ use glint::cpu::OutputFormat;
 
 use super::outputs::Outputs;
 use super::shard::{self, Shard};
-use super::{check_params, check_scene_path, encode, load_scene, render_on, same_file};
+use super::{
+    check_params, check_scene_path, encode, load_with_inputs, render_on, render_options, same_file,
+    spp_of,
+};
 use crate::cli::RenderArgs;
 use crate::stats::Stats;
 
@@ -15,7 +18,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     check_params(&args.scene)?;
     for o in args.outputs.iter().chain(&args.stats) {
-        if same_file(o, &args.scene.scene) {
+        if super::outputs::names_same(o, &args.scene.scene) || same_file(o, &args.scene.scene) {
             bail!(
                 "{}: is the input scene; refusing to overwrite it",
                 o.display()
@@ -61,7 +64,16 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(|s| outputs.reserve(s))
         .transpose()?;
 
-    let (scene, mut opts) = load_scene(&args.scene)?;
+    let (scene, inputs) = load_with_inputs(&args.scene.scene, &args.scene.opts)?;
+    // Before anything renders: no output may overwrite what the scene read
+    // (its buffers and images, the environment map).
+    outputs.refuse_inputs(&inputs)?;
+    let mut opts = render_options(
+        &scene,
+        &args.scene.scene,
+        spp_of(args.scene.spp, &args.scene.opts),
+        &args.scene.opts,
+    )?;
     if args.shard.is_some() {
         shard::apply(&mut opts, shard)?;
     }
@@ -80,7 +92,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     }
     if let Some(slot) = stats_slot {
         let st = Stats {
-            backend: args.backend.name(),
+            // The backend that ran (`auto` resolved).
+            backend: r.backend.name(),
             device: r.device.clone(),
             driver: r.driver.clone(),
             scene: args.scene.scene.display().to_string(),

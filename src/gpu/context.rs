@@ -575,6 +575,34 @@ impl Drop for InstanceGuard {
     }
 }
 
+/// Whether Vulkan lists a GPU: a discrete, integrated or virtual device
+/// (not a CPU implementation such as lavapipe) with a compute queue and
+/// Vulkan 1.2, whose name contains `wanted` when given. `--backend auto`
+/// asks this; any failure (no loader, no driver) is "no".
+pub fn gpu_available(wanted: Option<&str>) -> bool {
+    // SAFETY: as in `Context::new`.
+    let Ok(entry) = (unsafe { ash::Entry::load() }) else {
+        return false;
+    };
+    let app = vk::ApplicationInfo::default().api_version(vk::API_VERSION_1_2);
+    let info = vk::InstanceCreateInfo::default().application_info(&app);
+    // SAFETY: a plain instance without layers or extensions, destroyed
+    // below; nothing else holds it.
+    let Ok(instance) = (unsafe { entry.create_instance(&info, None) }) else {
+        return false;
+    };
+    let found = pick_device(&instance, wanted).is_ok_and(|c| {
+        matches!(
+            c.device_type,
+            vk::PhysicalDeviceType::DISCRETE_GPU
+                | vk::PhysicalDeviceType::INTEGRATED_GPU
+                | vk::PhysicalDeviceType::VIRTUAL_GPU
+        )
+    });
+    unsafe { instance.destroy_instance(None) };
+    found
+}
+
 fn pick_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<Candidate, GpuError> {
     let pds = unsafe { instance.enumerate_physical_devices() }
         .map_err(vk_err("vkEnumeratePhysicalDevices"))?;

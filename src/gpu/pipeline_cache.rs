@@ -15,6 +15,10 @@ use super::GpuError;
 use super::context::Context;
 use crate::cache::fnv64;
 
+/// The most bytes read from a pipeline cache file (lavapipe's are 32
+/// bytes, a GPU driver's a few MB).
+const MAX_CACHE_BYTES: u64 = 1 << 30;
+
 pub struct PipelineCache<'a> {
     ctx: &'a Context,
     handle: vk::PipelineCache,
@@ -52,8 +56,22 @@ fn valid_data<'d>(ctx: &Context, file: &'d [u8]) -> Result<&'d [u8], &'static st
 impl<'a> PipelineCache<'a> {
     /// Open the cache at `path` (created on save if missing). Problems with
     /// the file are warnings, never errors: a cache only saves time.
+    /// Only a regular file is read: a FIFO or a device under the cache's
+    /// name is ignored with a warning, without being waited on.
     pub fn open(ctx: &'a Context, path: &Path) -> Result<Self, GpuError> {
-        let file = std::fs::read(path).ok();
+        let file = match std::fs::symlink_metadata(path) {
+            Err(_) => None,
+            Ok(_) => match glint_cpu::safe_fs::read_regular(path, MAX_CACHE_BYTES) {
+                Ok(bytes) => Some(bytes),
+                Err(why) => {
+                    eprintln!(
+                        "glint: warning: {}: pipeline cache ignored ({why})",
+                        path.display()
+                    );
+                    None
+                }
+            },
+        };
         let data = match file.as_deref().map(|f| valid_data(ctx, f)) {
             None => &[][..],
             Some(Ok(d)) => d,
@@ -103,12 +121,18 @@ impl<'a> PipelineCache<'a> {
             if let Some(dir) = self.path.parent() {
                 std::fs::create_dir_all(dir).map_err(|e| e.to_string())?;
             }
-            let tmp = glint_cpu::film::temp_path_for(&self.path);
-            std::fs::write(&tmp, &data).map_err(|e| e.to_string())?;
-            std::fs::rename(&tmp, &self.path).map_err(|e| {
-                let _ = std::fs::remove_file(&tmp);
-                e.to_string()
-            })
+            // Exclusive temporary, renamed over the cache: a planted link
+            // is never written through. A cache path that is not a regular
+            // file (a FIFO, a device) is left alone.
+            if let Ok(m) = std::fs::metadata(&self.path)
+                && !m.is_file()
+            {
+                return Err(format!(
+                    "{}, not a regular file",
+                    glint_cpu::safe_fs::describe(m.file_type())
+                ));
+            }
+            glint_cpu::safe_fs::write_atomic(&self.path, &data).map_err(|e| e.to_string())
         })();
         if let Err(e) = result {
             eprintln!(

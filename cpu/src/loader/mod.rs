@@ -82,10 +82,27 @@ pub fn parse(path: &Path) -> Result<Scene, LoadError> {
 
 /// [`parse`] with explicit [`LoadOptions`].
 pub fn parse_with(path: &Path, options: LoadOptions) -> Result<Scene, LoadError> {
-    parse_inner(path, options).map_err(|message| LoadError::Invalid {
+    parse_inner(path, options)
+        .map(|(scene, _)| scene)
+        .map_err(|message| LoadError::Invalid {
+            path: path.to_path_buf(),
+            message,
+        })
+}
+
+/// [`load_with`], and the real paths of the files the scene's URIs named
+/// (external buffers and images, each once): what an output must not
+/// overwrite.
+pub fn load_with_inputs(
+    path: &Path,
+    options: LoadOptions,
+) -> Result<(Scene, Vec<PathBuf>), LoadError> {
+    let (mut scene, inputs) = parse_inner(path, options).map_err(|message| LoadError::Invalid {
         path: path.to_path_buf(),
         message,
-    })
+    })?;
+    scene.build_bvh();
+    Ok((scene, inputs))
 }
 
 /// [`load`] and the seconds it took (file reading and parsing, BVH build).
@@ -95,7 +112,7 @@ pub fn load_timed(path: &Path) -> Result<(Scene, f64), LoadError> {
     Ok((scene, start.elapsed().as_secs_f64()))
 }
 
-fn parse_inner(path: &Path, options: LoadOptions) -> Result<Scene, String> {
+fn parse_inner(path: &Path, options: LoadOptions) -> Result<(Scene, Vec<PathBuf>), String> {
     let mut warnings = Vec::new();
     let src = source::read(path, options, &mut warnings)?;
     let doc = &src.doc;
@@ -144,7 +161,46 @@ fn parse_inner(path: &Path, options: LoadOptions) -> Result<Scene, String> {
     };
     scene.set_shading(&collected.shading);
     scene.assign_emitters();
-    Ok(scene)
+    warn_non_finite_lights(&mut scene);
+    let mut inputs = src.inputs.take();
+    inputs.sort();
+    inputs.dedup();
+    Ok((scene, inputs))
+}
+
+/// A light whose colour x intensity overflows f32 made the whole image
+/// black (the light table's total power is infinite): such lights are
+/// dropped with a warning. An emission whose factor x strength overflows is
+/// named in a warning.
+fn warn_non_finite_lights(scene: &mut Scene) {
+    use crate::scene::PunctualLight;
+    let finite = |l: &PunctualLight| match l {
+        PunctualLight::Point { intensity, .. } | PunctualLight::Spot { intensity, .. } => {
+            intensity.is_finite()
+        }
+        PunctualLight::Directional { irradiance, .. } => irradiance.is_finite(),
+    };
+    let before = scene.lights.len();
+    scene.lights.retain(finite);
+    let bad_lights = before - scene.lights.len();
+    if bad_lights > 0 {
+        scene.warnings.push(format!(
+            "{bad_lights} punctual light(s) with a colour x intensity beyond f32's range \
+             (infinite); dropped, they light nothing"
+        ));
+    }
+    let bad_emission: Vec<&str> = scene
+        .materials
+        .iter()
+        .filter(|m| !m.emission.is_finite())
+        .map(|m| m.name.as_str())
+        .collect();
+    if !bad_emission.is_empty() {
+        scene.warnings.push(format!(
+            "material(s) {} emit a radiance beyond f32's range (emissiveFactor x strength is infinite)",
+            bad_emission.join(", ")
+        ));
+    }
 }
 
 fn background(extras: Option<&serde_json::value::RawValue>) -> Result<Vec3, String> {

@@ -6,7 +6,7 @@
 //! relative files, the GLB BIN chunk) and each is checked against the
 //! `byteLength` the document declares.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use gltf::Document;
 
@@ -56,6 +56,19 @@ pub struct Source {
     /// The JSON as written (for what the typed document drops, e.g.
     /// `KHR_texture_transform` on every texture slot).
     pub raw: serde_json::Value,
+    /// Every file read through a URI so far (real paths): the CLI refuses
+    /// an output that would overwrite one.
+    pub inputs: std::cell::RefCell<Vec<PathBuf>>,
+}
+
+impl Source {
+    /// [`read_uri`] against the scene's folder and options, recording the
+    /// file read in [`Source::inputs`].
+    pub fn read_uri(&self, uri: &str, limit: u64) -> Result<Vec<u8>, String> {
+        let (bytes, file) = read_uri(uri, &self.base, self.options, limit)?;
+        self.inputs.borrow_mut().extend(file);
+        Ok(bytes)
+    }
 }
 
 /// Read `path` (either container), validate it and load its buffers.
@@ -98,13 +111,14 @@ pub fn read(
     let raw: serde_json::Value = serde_json::from_slice(json).map_err(|e| e.to_string())?;
     let doc = Document::from_json_without_validation(root);
     let base = path.parent().unwrap_or(Path::new(".")).to_path_buf();
-    let buffers = load_buffers(&doc, &base, bin, options)?;
+    let (buffers, inputs) = load_buffers(&doc, &base, bin, options)?;
     Ok(Source {
         doc,
         buffers,
         base,
         options,
         raw,
+        inputs: std::cell::RefCell::new(inputs),
     })
 }
 
@@ -112,18 +126,10 @@ fn unsupported_version(v: &str) -> String {
     format!("glTF version {v} is not supported (glTF 2.0 only)")
 }
 
+/// A regular file's bytes, at most [`MAX_FILE_BYTES`]; a FIFO or a device
+/// is refused without being waited on (`crate::safe_fs::read_regular`).
 fn read_file(path: &Path) -> Result<Vec<u8>, String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot open: {e}"))?;
-    if !meta.is_file() {
-        return Err("not a file".into());
-    }
-    if meta.len() > MAX_FILE_BYTES {
-        return Err(format!(
-            "file is {} bytes; glint reads files up to {MAX_FILE_BYTES} bytes",
-            meta.len()
-        ));
-    }
-    std::fs::read(path).map_err(|e| format!("cannot read: {e}"))
+    crate::safe_fs::read_regular(path, MAX_FILE_BYTES)
 }
 
 fn le_u32(b: &[u8], at: usize) -> Option<u32> {
@@ -265,8 +271,9 @@ fn load_buffers(
     base: &Path,
     bin: Option<&[u8]>,
     options: LoadOptions,
-) -> Result<Vec<Vec<u8>>, String> {
+) -> Result<(Vec<Vec<u8>>, Vec<PathBuf>), String> {
     let mut out = Vec::new();
+    let mut inputs = Vec::new();
     for (i, buffer) in doc.as_json().buffers.iter().enumerate() {
         let data = match &buffer.uri {
             None if i == 0 => bin
@@ -277,8 +284,12 @@ fn load_buffers(
                     "buffer {i} has no uri (only buffer 0 may use the GLB BIN chunk)"
                 ));
             }
-            Some(uri) => read_uri(uri, base, options, MAX_FILE_BYTES)
-                .map_err(|e| format!("buffer {i}: {e}"))?,
+            Some(uri) => {
+                let (bytes, file) = read_uri(uri, base, options, MAX_FILE_BYTES)
+                    .map_err(|e| format!("buffer {i}: {e}"))?;
+                inputs.extend(file);
+                bytes
+            }
         };
         let declared = buffer.byte_length.0;
         if (data.len() as u64) < declared {
@@ -289,19 +300,40 @@ fn load_buffers(
         }
         out.push(data);
     }
-    Ok(out)
+    Ok((out, inputs))
 }
 
-/// The bytes a URI names: a base64 data URI, or a file relative to `base`
-/// (a `file:` URI follows the same rule). A file outside `base` (an
-/// absolute path, or `..` leaving the folder) is refused unless
-/// `allow_any_path`. At most `limit` bytes are read.
+/// A URI as messages show it: quoted, control characters (a NUL, a
+/// newline) escaped, cut at 200 characters.
+pub fn shown(uri: &str) -> String {
+    let mut e: String = uri.chars().flat_map(char::escape_debug).take(200).collect();
+    if e.len() < uri.escape_debug().count() {
+        e.push_str("...");
+    }
+    format!("\"{e}\"")
+}
+
+/// The bytes a URI names, and the real path of the file read (none for a
+/// data URI): a base64 data URI, or a file relative to `base` (a `file:`
+/// URI follows the same rule; `file://HOST/...` names another machine and
+/// is refused). A file outside `base` is refused unless `allow_any_path`:
+/// an absolute path, `..` leaving the folder, or a symbolic link (of the
+/// file or of a folder on the way) whose target lies outside it; real
+/// paths are compared, so the text of the URI alone decides nothing. Only a
+/// regular file is read (a FIFO or a device is refused without blocking),
+/// at most `limit` bytes.
 pub fn read_uri(
     uri: &str,
     base: &Path,
     options: LoadOptions,
     limit: u64,
-) -> Result<Vec<u8>, String> {
+) -> Result<(Vec<u8>, Option<PathBuf>), String> {
+    if uri.chars().any(char::is_control) {
+        return Err(format!(
+            "URI {} holds a control character (a NUL or a line break)",
+            shown(uri)
+        ));
+    }
     if let Some(rest) = uri.strip_prefix("data:") {
         let (_, payload) = rest
             .split_once(";base64,")
@@ -309,38 +341,100 @@ pub fn read_uri(
         if payload.len() as u64 / 4 * 3 > limit {
             return Err(format!("data URI holds more than {limit} bytes"));
         }
-        return decode_base64(payload).map_err(|e| format!("data URI does not decode: {e}"));
+        let bytes = decode_base64(payload).map_err(|e| format!("data URI does not decode: {e}"))?;
+        return Ok((bytes, None));
     }
     let path_part = if let Some(rest) = uri.strip_prefix("file://") {
-        // file:///abs/path (empty host) or file://localhost/abs/path.
-        rest.strip_prefix("localhost").unwrap_or(rest)
+        // file:///abs/path (empty host) or file://localhost/abs/path; any
+        // other host is another machine, not a path on this one.
+        let local = rest.strip_prefix("localhost").unwrap_or(rest);
+        if !local.starts_with('/') {
+            let host = rest.split('/').next().unwrap_or_default();
+            return Err(format!(
+                "URI {} names the host {}; only local files (file:///PATH) are read",
+                shown(uri),
+                shown(host)
+            ));
+        }
+        local
     } else if let Some(rest) = uri.strip_prefix("file:") {
         rest
     } else if uri.contains(':') && !is_windows_drive(uri) {
         let scheme = uri.split(':').next().unwrap_or_default();
+        // No control characters here (refused above).
         return Err(format!(
             "URI scheme '{scheme}:' is not supported (relative paths, file: and data URIs are)"
         ));
     } else {
         uri
     };
-    let rel = percent_decode(path_part).ok_or_else(|| format!("URI '{uri}' has a bad %-escape"))?;
+    let rel = percent_decode(path_part)
+        .ok_or_else(|| format!("URI {} has a bad %-escape", shown(uri)))?;
+    if rel.chars().any(char::is_control) {
+        return Err(format!(
+            "URI {} decodes to a control character (a NUL or a line break)",
+            shown(uri)
+        ));
+    }
     if !options.allow_any_path && escapes(&rel) {
         return Err(format!(
-            "URI '{uri}' names a file outside the scene's folder (absolute or leaving it with '..'); --allow-any-path permits it"
+            "URI {} names a file outside the scene's folder (absolute or leaving it with '..'); --allow-any-path permits it",
+            shown(uri)
         ));
     }
     let file = base.join(&rel);
-    let meta =
-        std::fs::metadata(&file).map_err(|e| format!("{}: cannot open: {e}", file.display()))?;
-    if meta.len() > limit {
-        return Err(format!(
-            "{}: file is {} bytes; glint reads up to {limit} bytes here",
-            file.display(),
-            meta.len()
-        ));
+    let real = std::fs::canonicalize(&file).map_err(|e| {
+        if std::fs::symlink_metadata(&file).is_ok_and(|m| m.file_type().is_symlink()) {
+            format!(
+                "{}: a symbolic link to a missing file ({e})",
+                file.display()
+            )
+        } else {
+            format!("{}: cannot open: {e}", file.display())
+        }
+    })?;
+    if !options.allow_any_path {
+        check_inside(base, &rel, &real, uri)?;
     }
-    read_file(&file).map_err(|e| format!("{}: {e}", file.display()))
+    let bytes = crate::safe_fs::read_regular(&real, limit)
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+    Ok((bytes, Some(real)))
+}
+
+/// Refuse `real` (the resolved `base/rel`) unless it lies inside the real
+/// path of `base`, naming the symbolic link that leads out.
+fn check_inside(base: &Path, rel: &str, real: &Path, uri: &str) -> Result<(), String> {
+    let dir = if base.as_os_str().is_empty() {
+        Path::new(".")
+    } else {
+        base
+    };
+    let real_base = std::fs::canonicalize(dir)
+        .map_err(|e| format!("{}: cannot open the scene's folder: {e}", dir.display()))?;
+    if real.starts_with(&real_base) {
+        return Ok(());
+    }
+    // The first link on the way whose target leaves the folder.
+    let mut at = dir.to_path_buf();
+    for part in Path::new(rel).components() {
+        at.push(part);
+        let is_link = std::fs::symlink_metadata(&at).is_ok_and(|m| m.file_type().is_symlink());
+        if is_link && !std::fs::canonicalize(&at).is_ok_and(|t| t.starts_with(&real_base)) {
+            let target = std::fs::read_link(&at)
+                .map(|t| t.display().to_string())
+                .unwrap_or_default();
+            return Err(format!(
+                "URI {}: {} is a symbolic link to {target}, outside the scene's folder; --allow-any-path permits it",
+                shown(uri),
+                at.display()
+            ));
+        }
+    }
+    Err(format!(
+        "URI {} resolves to {}, outside the scene's folder; --allow-any-path permits it",
+        shown(uri),
+        real.display()
+    ))
 }
 
 fn is_windows_drive(uri: &str) -> bool {

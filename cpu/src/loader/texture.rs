@@ -15,7 +15,7 @@ use std::io::Cursor;
 use glam::Vec2;
 use serde_json::Value;
 
-use super::source::{MAX_FILE_BYTES, Source, read_uri};
+use super::source::{MAX_FILE_BYTES, Source};
 use crate::scene::Material;
 use crate::texture::{
     GpuTexture, MAP_EXTRAS, MAP_GLTF, MAP_NONE, MAX_TEXELS, MAX_TEXTURE_SIDE, MaterialTextures,
@@ -240,7 +240,7 @@ fn load_texture(src: &Source, tex: &Value, out: &mut SceneTextures) -> Result<u3
 
 fn image_bytes(src: &Source, image: &Value) -> Result<Vec<u8>, String> {
     if let Some(uri) = image["uri"].as_str() {
-        return read_uri(uri, &src.base, src.options, MAX_FILE_BYTES);
+        return src.read_uri(uri, MAX_FILE_BYTES);
     }
     let view = image["bufferView"]
         .as_u64()
