@@ -103,6 +103,11 @@ fn normal_mapped_glossy_sphere_has_no_black_rims_on_either_backend() {
             }
             means.push((0..n).map(|i| f.mean(i).x).sum::<f32>() / n as f32);
         }
-        assert!((means[0] - means[1]).abs() < 0.03, "{name}: gpu {} cpu {}", means[0], means[1]);
+        assert!(
+            (means[0] - means[1]).abs() < 0.03,
+            "{name}: gpu {} cpu {}",
+            means[0],
+            means[1]
+        );
     }
 }

@@ -535,7 +535,7 @@ pub fn valid_reflection_normal(ng: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
     let x = (n - n.dot(ng) * ng).normalize_or_zero();
     let ix = wo.dot(x);
     let a = ix * ix + iz * iz;
-    if !(a > 0.0) || x == Vec3::ZERO {
+    if a.is_nan() || a <= 0.0 || x == Vec3::ZERO {
         return ng * side;
     }
     let b = 2.0 * (a + iz * threshold);

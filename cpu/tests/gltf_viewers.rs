@@ -283,9 +283,17 @@ fn white_furnace_of_normal_mapped_surfaces() {
         for f in [&fm, &fp] {
             for i in 0..n {
                 let bound = 1.0 + 5.0 * f.variance_of_mean(i).x.sqrt() + 1e-4;
-                assert!(f.mean(i).x <= bound, "{name}: pixel {i} = {} > {bound}", f.mean(i));
+                assert!(
+                    f.mean(i).x <= bound,
+                    "{name}: pixel {i} = {} > {bound}",
+                    f.mean(i)
+                );
             }
-            assert!(image_mean(f).x <= 1.0 + 2e-3, "{name}: mean {}", image_mean(f));
+            assert!(
+                image_mean(f).x <= 1.0 + 2e-3,
+                "{name}: mean {}",
+                image_mean(f)
+            );
         }
         let (mm, mp) = (image_mean(&fm).x, image_mean(&fp).x);
         eprintln!("{name}: mapped {mm:.4}, unmapped {mp:.4}");
