@@ -14,13 +14,14 @@
 //   - `#define BVH_NODE_COUNT <expression>`: the number of nodes; 0 for an
 //     empty scene (Vulkan buffers cannot be empty, so the array's length
 //     cannot say so), and then every query misses.
-//   - optionally `#define BVH_PRESENT(tri, u, v) <bool expression>`: the
-//     alpha-mask hook at the leaf triangle test (default: always true).
+//   - optionally `#define BVH_PRESENT(tri, u, v, o, d) <bool expression>`:
+//     the alpha-test hook at the leaf triangle test, given the query's ray
+//     (default: always true).
 #ifndef GLINT_BVH_GLSL
 #define GLINT_BVH_GLSL
 
 #ifndef BVH_PRESENT
-#define BVH_PRESENT(tri, u, v) true
+#define BVH_PRESENT(tri, u, v, o, d) true
 #endif
 
 #include "bvh_types.glsl"
@@ -185,7 +186,7 @@ bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
         if (count > 0u) {
             for (uint i = first; i < first + count; i++) {
                 float t, u, v;
-                if (intersect_triangle(r, triangles[i], hit.t, t, u, v) && BVH_PRESENT(i, u, v)) {
+                if (intersect_triangle(r, triangles[i], hit.t, t, u, v) && BVH_PRESENT(i, u, v, o, d)) {
                     hit = Hit(t, i, u, v);
                 }
             }
@@ -240,7 +241,7 @@ bool bvh_occluded(vec3 o, vec3 d, float tmax) {
         if (count > 0u) {
             for (uint i = first; i < first + count; i++) {
                 float t, u, v;
-                if (intersect_triangle(r, triangles[i], tmax, t, u, v) && BVH_PRESENT(i, u, v)) {
+                if (intersect_triangle(r, triangles[i], tmax, t, u, v) && BVH_PRESENT(i, u, v, o, d)) {
                     return true;
                 }
             }
@@ -370,7 +371,7 @@ bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
             uint count = ((cur >> 27) & 0xfu) + 1u;
             for (uint i = first; i < first + count; i++) {
                 float t, u, v;
-                if (intersect_triangle(r, triangles[i], hit.t, t, u, v) && BVH_PRESENT(i, u, v)) {
+                if (intersect_triangle(r, triangles[i], hit.t, t, u, v) && BVH_PRESENT(i, u, v, o, d)) {
                     hit = Hit(t, i, u, v);
                 }
             }
@@ -422,7 +423,7 @@ bool bvh_occluded(vec3 o, vec3 d, float tmax) {
             uint count = ((cur >> 27) & 0xfu) + 1u;
             for (uint i = first; i < first + count; i++) {
                 float t, u, v;
-                if (intersect_triangle(r, triangles[i], tmax, t, u, v) && BVH_PRESENT(i, u, v)) {
+                if (intersect_triangle(r, triangles[i], tmax, t, u, v) && BVH_PRESENT(i, u, v, o, d)) {
                     return true;
                 }
             }

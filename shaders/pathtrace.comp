@@ -11,11 +11,12 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #include "features.glsl"
 #include "bindings.glsl"
 #include "texture.glsl"
-// The alpha-mask hook at bvh.glsl's leaf triangle test.
-bool bvh_present(uint tri, float u, float v) {
-    return params.masked == 0u || alpha_pass(floatBitsToUint(triangles[tri].p0.w), tri, u, v);
+// The alpha-test hook (MASK, BLEND) at bvh.glsl's leaf triangle test, for
+// the ray (o, d).
+bool bvh_present(uint tri, float u, float v, vec3 o, vec3 d) {
+    return params.masked == 0u || alpha_pass(floatBitsToUint(triangles[tri].p0.w), tri, u, v, o, d);
 }
-#define BVH_PRESENT(tri, u, v) bvh_present(tri, u, v)
+#define BVH_PRESENT(tri, u, v, o, d) bvh_present(tri, u, v, o, d)
 #include "bvh.glsl"
 #include "bsdf/bsdf.glsl"
 #include "integrator/rng.glsl"
@@ -125,12 +126,12 @@ SurfaceFrame surface(uint tri, float u, float v) {
 
 // PathTracer::apply_textures: the normal map tilts the shading frame, the
 // other textures set the material's parameters.
-void apply_textures(uint material, uint tri, float u, float v, inout SurfaceFrame sf, inout Material m) {
+void apply_textures(uint material, uint tri, float u, float v, vec3 wo, inout SurfaceFrame sf, inout Material m) {
     MaterialTextures mt = material_textures[material];
     if (!material_textures_used(mt)) {
         return;
     }
-    vec3 ns = normal_mapped(mt, tri, u, v, sf.ng, sf.frame.s, sf.frame.t, sf.frame.n);
+    vec3 ns = normal_mapped(mt, tri, u, v, sf.ng, wo, sf.frame.s, sf.frame.t, sf.frame.n);
     if (ns != sf.ns) {
         sf.frame = frame_from_normal_tangent(ns, sf.frame.s);
         sf.ns = ns;
@@ -218,7 +219,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         uint material = floatBitsToUint(tri.p0.w);
         Material m = materials[material];
         if (params.textured != 0u) {
-            apply_textures(material, hit.tri, hit.u, hit.v, sf, m);
+            apply_textures(material, hit.tri, hit.u, hit.v, wo, sf, m);
         }
         vec3 wo_local = frame_to_local(sf.frame, wo);
         vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));

@@ -102,22 +102,49 @@ vec4 texture_lookup(TexRef r, uint tri, float u, float v, bool srgb) {
     return texture_sample(textures[r.texture], texref_apply(r, uv), srgb);
 }
 
-// SceneTextures::alpha_pass.
-bool alpha_pass(uint material, uint tri, float u, float v) {
+// texture::hash_u32 (lowbias32).
+uint hash_u32(uint x) {
+    x ^= x >> 16;
+    x *= 0x7feb352du;
+    x ^= x >> 15;
+    x *= 0x846ca68bu;
+    x ^= x >> 16;
+    return x;
+}
+
+// texture::blend_random: BLEND's uniform number for (triangle, ray), from
+// the same bits as the CPU's.
+float blend_random(uint tri, vec3 o, vec3 d) {
+    uint h = hash_u32(tri ^ 0x9e3779b9u);
+    h = hash_u32(h ^ floatBitsToUint(o.x));
+    h = hash_u32(h ^ floatBitsToUint(o.y));
+    h = hash_u32(h ^ floatBitsToUint(o.z));
+    h = hash_u32(h ^ floatBitsToUint(d.x));
+    h = hash_u32(h ^ floatBitsToUint(d.y));
+    h = hash_u32(h ^ floatBitsToUint(d.z));
+    return float(h >> 8) * (1.0 / 16777216.0);
+}
+
+// SceneTextures::alpha_pass: MASK keeps alpha >= cutoff, BLEND keeps a hit
+// with probability alpha.
+bool alpha_pass(uint material, uint tri, float u, float v, vec3 o, vec3 d) {
     MaterialTextures m = material_textures[material];
-    if (m.alpha_cutoff < 0.0) {
+    if (m.alpha_cutoff < 0.0 && m.blend == 0u) {
         return true;
     }
     float a = m.base_alpha;
     if (m.base_color.texture != NO_TEXTURE) {
         a *= texture_lookup(m.base_color, tri, u, v, false).w;
     }
+    if (m.blend != 0u) {
+        return blend_random(tri, o, d) < a;
+    }
     return a >= m.alpha_cutoff;
 }
 
 bool material_textures_used(MaterialTextures m) {
-    return m.mode != MAP_NONE || m.alpha_cutoff >= 0.0 || m.normal.texture != NO_TEXTURE
-        || m.emissive.texture != NO_TEXTURE;
+    return m.mode != MAP_NONE || m.alpha_cutoff >= 0.0 || m.blend != 0u
+        || m.normal.texture != NO_TEXTURE || m.emissive.texture != NO_TEXTURE;
 }
 
 // glint_cpu::loader::conductor_from_f0 (MAX_F0 = 0.999); the roughness
@@ -195,15 +222,45 @@ vec3 perturb_normal(vec3 rgb, float scale, vec3 n, vec3 t, vec3 b) {
     return n;
 }
 
+// texture::valid_reflection_normal (Cycles' ensure_valid_specular_reflection).
+vec3 valid_reflection_normal(vec3 ng, vec3 wo, vec3 n) {
+    float side = dot(wo, ng) < 0.0 ? -1.0 : 1.0;
+    ng *= side;
+    n *= side;
+    float iz = dot(wo, ng);
+    vec3 r = 2.0 * dot(n, wo) * n - wo;
+    float threshold = min(0.9 * iz, 0.01);
+    if (dot(r, ng) >= threshold) {
+        return n * side;
+    }
+    vec3 x = n - dot(n, ng) * ng;
+    float xl2 = dot(x, x);
+    x = xl2 > 0.0 ? x / sqrt(xl2) : vec3(0.0);
+    float ix = dot(wo, x);
+    float a = ix * ix + iz * iz;
+    if (!(a > 0.0) || xl2 == 0.0) {
+        return ng * side;
+    }
+    float b = 2.0 * (a + iz * threshold);
+    float c = (threshold + iz) * (threshold + iz);
+    float disc = sqrt(max(b * b - 4.0 * a * c, 0.0));
+    float nz2 = ix < 0.0 ? 0.25 * (b + disc) / a : 0.25 * (b - disc) / a;
+    float nx = sqrt(max(1.0 - nz2, 0.0));
+    float nz = sqrt(max(nz2, 0.0));
+    vec3 m = nx * x + nz * ng;
+    float ml2 = dot(m, m);
+    return (ml2 > 0.0 ? m / sqrt(ml2) : vec3(0.0)) * side;
+}
+
 // texture::normal_mapped: the frame's (s, t, n) are (tangent, cross(n, s), n).
-vec3 normal_mapped(MaterialTextures mt, uint tri, float u, float v, vec3 ng, vec3 fs, vec3 ft, vec3 fn) {
+vec3 normal_mapped(MaterialTextures mt, uint tri, float u, float v, vec3 ng, vec3 wo, vec3 fs, vec3 ft, vec3 fn) {
     if (mt.normal.texture == NO_TEXTURE) {
         return fn;
     }
     vec3 c = texture_lookup(mt.normal, tri, u, v, false).xyz;
     float sign_b = triangle_uvs[tri].extra.x;
     vec3 n = perturb_normal(c, mt.normal.scale, fn, fs, ft * sign_b);
-    return dot(n, ng) > 0.0 ? n : fn;
+    return dot(n, ng) > 0.0 ? valid_reflection_normal(ng, wo, n) : fn;
 }
 
 // texture::emission_factor.

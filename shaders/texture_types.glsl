@@ -31,7 +31,7 @@ struct MaterialTextures {
     uint mode;           // MAP_*
     float alpha_cutoff;  // < 0: opaque
     float base_alpha;
-    uint pad;
+    uint blend;          // 1: alphaMode BLEND (stochastic transparency)
     vec4 base_factor;
     vec4 mr_factor;      // metallic, roughness, transmission, ior
     TexRef base_color;

@@ -561,6 +561,12 @@ fn warnings_strict_background_and_the_no_light_rule() {
     assert!(!err.contains("the scene has no light"), "{err}");
     let dim = mean_of_exr(&dir.join("dim.exr"));
     assert!((dim / white - 0.1).abs() < 0.03, "{dim} vs {white}");
+    // --background 0,0,0 keeps the scene dark (contract, "Second additions").
+    let out = render(&["--background", "0,0,0"], "dark.exr");
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("the scene has no light"), "{err}");
+    assert_eq!(mean_of_exr(&dir.join("dark.exr")), 0.0);
     let out = render(&["--background", "1,2"], "bad.exr");
     assert_one_line_error(&out, "R,G,B");
 }
@@ -589,6 +595,13 @@ fn info_describes_the_textured_asset() {
         "checker 64x64 wrap repeat/repeat nearest",
         "roughness ramp 64x64",
         "alpha mask < 0.5",
+        // A textured channel as "texture x factor", not the bare factor.
+        "roughness texture 1.G x 1.0000",
+        "baseColor texture 0 x 1.0000,1.0000,1.0000",
+        "normal texture 2 x scale 1",
+        // The model each maps to (the glTF non-metal is the coated one).
+        "glTF per texel: metal/coated non-metal blend",
+        "coated non-metal (ggx coat alpha 1.0000 ior 1.5000 over diffuse base 0.7000,0.3000,0.2500)",
         "lights: 0 emissive triangles, 1 punctual",
         "directional toward",
         "triangles: 8",

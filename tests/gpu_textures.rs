@@ -14,7 +14,7 @@ use glint_cpu::Bsdf;
 use glint_cpu::scene::GpuMaterial;
 use glint_cpu::texture::{
     GpuTexture, MAP_GLTF, MaterialTextures, SceneTextures, TEX_NEAREST, TexRef, TriangleUv,
-    texture_sample, textured_bsdf,
+    blend_random, texture_sample, textured_bsdf,
 };
 
 #[repr(C)]
@@ -80,9 +80,12 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
     // Materials: glTF mapping with base colour and metallicRoughness
     // textures, transformed UVs on set 0 or 1, masked or not.
     for k in 0..6u32 {
+        // k = 1 and 4: alphaMode BLEND (stochastic, the ray's hash decides).
+        let blend = k % 3 == 1;
         let mut mt = MaterialTextures {
             mode: MAP_GLTF,
-            alpha_cutoff: if k % 2 == 0 { 0.5 } else { -1.0 },
+            alpha_cutoff: if k % 2 == 0 && !blend { 0.5 } else { -1.0 },
+            blend: blend as u32,
             base_alpha: 0.9,
             base_factor: [0.9, 0.8, 0.7, 1.0],
             mr_factor: [if k < 3 { 1.0 } else { 0.6 }, 0.8, 0.0, 1.5],
@@ -123,7 +126,7 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
             Query {
                 uv_srgb: [u, v, (i % 2) as f32, 0.0],
                 ids: [rng.u32() % 18, rng.u32() % 6, rng.u32() % 32, 0],
-                bary: [b.x, b.y, 0.0, 0.0],
+                bary: [b.x, b.y, rng.f32() * 8.0 - 4.0, rng.f32() * 2.0 - 1.0],
             }
         })
         .collect();
@@ -168,10 +171,23 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
         if !close(base, g.base, 2e-4) {
             failures.push(format!("texture_lookup {q:?}: cpu {base} gpu {:?}", g.base));
         }
-        if st.alpha_pass(mat, tri, u, v) != (g.flags[0] == 1) {
-            // Alpha exactly at the cutoff: only a rounding apart.
+        // The alpha test's ray (texture_test.comp): o = (uv, bary.z), d =
+        // (bary.xy, bary.w). BLEND's hash must agree to the bit.
+        let o = Vec3::new(q.uv_srgb[0], q.uv_srgb[1], q.bary[2]);
+        let d = Vec3::new(q.bary[0], q.bary[1], q.bary[3]);
+        let xi = blend_random(tri, o, d);
+        if xi.to_bits() != g.flags[2] {
+            failures.push(format!(
+                "blend_random {q:?}: cpu {xi} gpu {}",
+                f32::from_bits(g.flags[2])
+            ));
+        }
+        if st.alpha_pass(mat, tri, u, v, o, d) != (g.flags[0] == 1) {
+            // Alpha exactly at the cutoff (or at the BLEND number): only a
+            // rounding apart.
             let a = mt.base_alpha * base.w;
-            if (a - mt.alpha_cutoff).abs() > 1e-4 {
+            let edge = if mt.is_blended() { xi } else { mt.alpha_cutoff };
+            if (a - edge).abs() > 1e-4 {
                 failures.push(format!("alpha_pass {q:?}: alpha {a}"));
             }
         }

@@ -75,6 +75,7 @@ mod tests {
     fn centre_ray_looks_down_minus_z_and_corners_span_the_fov() {
         let cam = Camera {
             name: None,
+            node_name: None,
             to_world: Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)),
             yfov: std::f32::consts::FRAC_PI_2,
             aspect_ratio: None,

@@ -271,6 +271,9 @@ pub enum PunctualLight {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
     pub name: Option<String>,
+    /// The name of the node the camera hangs off (`--camera` matches
+    /// either: exporters name the node, the camera object or both).
+    pub node_name: Option<String>,
     pub to_world: Mat4,
     /// Vertical field of view in radians.
     pub yfov: f32,
@@ -312,12 +315,26 @@ impl Scene {
     /// GPU reads unchanged); then number the emitters in that final order.
     pub fn build_bvh(&mut self) {
         let (bvh, order) = Bvh4::build(&self.triangles);
-        let records: Vec<TriangleShading> =
-            order.iter().map(|&i| self.shading_of(i as usize)).collect();
-        self.triangles = order.iter().map(|&i| self.triangles[i as usize]).collect();
-        // Repacked in leaf order, so neighbouring leaves read neighbouring
-        // shading data.
-        self.set_shading(&records);
+        // Triangles and their packed shading data moved into leaf order
+        // together, so neighbouring leaves read neighbouring shading data.
+        // (What `set_shading` of the unpacked records in leaf order would
+        // store, without the 96-byte record per triangle in between.)
+        let mut packed = Vec::with_capacity(self.shading.len());
+        let mut triangles = Vec::with_capacity(self.triangles.len());
+        for &i in &order {
+            let mut t = self.triangles[i as usize];
+            let kept = 3
+                * ((t.flags & TRI_NORMALS != 0) as usize + (t.flags & TRI_TANGENTS != 0) as usize);
+            if kept > 0 {
+                let from = (t.flags >> TRI_SHADING_SHIFT) as usize;
+                let to = packed.len() as u32;
+                packed.extend_from_slice(&self.shading[from..from + kept]);
+                t.flags = (t.flags & ((1 << TRI_SHADING_SHIFT) - 1)) | (to << TRI_SHADING_SHIFT);
+            }
+            triangles.push(t);
+        }
+        self.triangles = triangles;
+        self.shading = packed;
         if !self.textures.uvs.is_empty() {
             let uvs = &self.textures.uvs;
             self.textures.uvs = order.iter().map(|&i| uvs[i as usize]).collect();
@@ -452,7 +469,7 @@ impl Scene {
             .collect()
     }
 
-    /// Closest hit, alpha masks applied when the scene has any.
+    /// Closest hit, alpha tests (MASK, BLEND) applied when the scene has any.
     pub fn intersect(&self, ray: &crate::bvh::Ray) -> Option<crate::bvh::Hit> {
         self.intersect_with(ray, self.textures.has_masks())
     }
@@ -467,7 +484,7 @@ impl Scene {
     pub fn intersect_with(&self, ray: &crate::bvh::Ray, masks: bool) -> Option<crate::bvh::Hit> {
         if masks {
             self.bvh
-                .intersect_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v))
+                .intersect_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v, ray))
         } else {
             self.bvh.intersect(&self.triangles, ray)
         }
@@ -477,38 +494,64 @@ impl Scene {
     pub fn occluded_with(&self, ray: &crate::bvh::Ray, masks: bool) -> bool {
         if masks {
             self.bvh
-                .occluded_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v))
+                .occluded_masked(&self.triangles, ray, |i, u, v| self.present(i, u, v, ray))
         } else {
             self.bvh.occluded(&self.triangles, ray)
         }
     }
 
-    /// The alpha test of triangle `tri` at barycentrics (u, v).
-    fn present(&self, tri: u32, u: f32, v: f32) -> bool {
+    /// The alpha test of triangle `tri` at barycentrics (u, v) for `ray`.
+    fn present(&self, tri: u32, u: f32, v: f32, ray: &crate::bvh::Ray) -> bool {
         let m = self.triangles[tri as usize].material;
-        self.textures.alpha_pass(m, tri, u, v)
+        self.textures.alpha_pass(m, tri, u, v, ray.o, ray.d)
     }
 
-    /// Whether anything lights the scene: an emissive triangle, a punctual
-    /// light or a non-black background.
+    /// Whether anything lights the scene by the contract's default-lighting
+    /// rule ("Second additions"): a punctual light, a non-black background
+    /// or an emitter of constant emission (an emissive material without
+    /// `emissiveTexture`: a lamp, a light panel). Textured emission (a
+    /// screen, a label, a helmet's glow map) still emits but does not count:
+    /// a file lit only by it renders nearly black in every viewer's sense.
     pub fn has_light(&self) -> bool {
         self.background.max_element() > 0.0
             || self.envmap.is_some()
             || !self.lights.is_empty()
-            || self.triangles.iter().any(|t| t.light != NO_LIGHT)
+            || self
+                .triangles
+                .iter()
+                .any(|t| t.light != NO_LIGHT && !self.textures.has_emissive_texture(t.material))
     }
 
-    /// The contract's no-light rule: a scene with nothing that emits is lit
-    /// by a constant white background of radiance 1, with a warning.
-    /// Returns whether it applied.
+    /// The number of emissive triangles whose emission is textured.
+    pub fn textured_emitters(&self) -> usize {
+        self.triangles
+            .iter()
+            .filter(|t| t.light != NO_LIGHT && self.textures.has_emissive_texture(t.material))
+            .count()
+    }
+
+    /// The contract's default-lighting rule: a scene with no punctual
+    /// light, no background and no emitter of constant emission is lit by a
+    /// constant white background of radiance 1, with a warning that says
+    /// which rule applied. Returns whether it applied.
     pub fn light_if_unlit(&mut self) -> bool {
         if self.has_light() {
             return false;
         }
         self.background = Vec3::ONE;
-        self.warnings.push(
-            "the scene has no light (no emitter, punctual light or background); lit by a constant white background of radiance 1".into(),
-        );
+        let textured = self.textured_emitters();
+        let why = if textured > 0 {
+            format!(
+                "the scene's only emitters ({textured} triangles) have textured emission \
+                 (emissiveTexture), which does not count as lighting, and it has no punctual \
+                 light or background"
+            )
+        } else {
+            "the scene has no light (no emitter, punctual light or background)".to_string()
+        };
+        self.warnings.push(format!(
+            "{why}; lit by a constant white background of radiance 1 (--background 0,0,0 keeps it dark)"
+        ));
         true
     }
 

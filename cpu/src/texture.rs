@@ -86,14 +86,17 @@ impl TexRef {
         self.texture != NO_TEXTURE
     }
 
-    /// KHR_texture_transform: uv' = T * R * S * uv with the extension's
-    /// GLSL matrices (column-major `mat3(cos, sin, 0, -sin, cos, 0, 0, 0, 1)`,
-    /// so u' = cos sx u - sin sy v + ox, v' = sin sx u + cos sy v + oy).
+    /// KHR_texture_transform: uv' = T * R * S * uv, with R as the sample
+    /// model TextureTransformTest, Blender, Babylon.js and three.js agree
+    /// on: u' = cos(r) sx u + sin(r) sy v + ox, v' = -sin(r) sx u + cos(r)
+    /// sy v + oy. The GLSL listing in the extension's text has the
+    /// opposite sign (KhronosGroup/glTF#1563); following it turns the
+    /// sample's arrow to its red "error" marker.
     pub fn set_transform(&mut self, offset: Vec2, rotation: f32, scale: Vec2) {
         let (s, c) = rotation.sin_cos();
         self.transform = [
-            [c * scale.x, -s * scale.y, offset.x, 0.0],
-            [s * scale.x, c * scale.y, offset.y, 0.0],
+            [c * scale.x, s * scale.y, offset.x, 0.0],
+            [-s * scale.x, c * scale.y, offset.y, 0.0],
         ];
     }
 
@@ -126,7 +129,9 @@ pub struct MaterialTextures {
     pub alpha_cutoff: f32,
     /// baseColorFactor's alpha.
     pub base_alpha: f32,
-    pub _pad: u32,
+    /// 1: alphaMode BLEND, as stochastic transparency (a hit is kept with
+    /// probability alpha, [`blend_random`]); 0 otherwise.
+    pub blend: u32,
     /// baseColorFactor rgb (MAP_GLTF).
     pub base_factor: [f32; 4],
     /// metallicFactor, roughnessFactor, transmissionFactor, ior (MAP_GLTF).
@@ -144,7 +149,7 @@ impl Default for MaterialTextures {
             mode: MAP_NONE,
             alpha_cutoff: -1.0,
             base_alpha: 1.0,
-            _pad: 0,
+            blend: 0,
             base_factor: [1.0; 4],
             mr_factor: [0.0, 1.0, 0.0, 1.5],
             base_color: TexRef::default(),
@@ -160,11 +165,19 @@ impl MaterialTextures {
     pub fn is_used(&self) -> bool {
         self.mode != MAP_NONE
             || self.is_masked()
+            || self.is_blended()
             || self.normal.is_some()
             || self.emissive.is_some()
     }
     pub fn is_masked(&self) -> bool {
         self.alpha_cutoff >= 0.0
+    }
+    pub fn is_blended(&self) -> bool {
+        self.blend != 0
+    }
+    /// Whether traversal must run this material's alpha test.
+    pub fn has_alpha_test(&self) -> bool {
+        self.is_masked() || self.is_blended()
     }
 }
 
@@ -215,9 +228,16 @@ impl SceneTextures {
         self.materials.iter().all(|m| !m.is_used())
     }
 
-    /// Whether some material has an alpha mask.
+    /// Whether some material has an alpha test (MASK or BLEND): traversal
+    /// then runs [`SceneTextures::alpha_pass`].
     pub fn has_masks(&self) -> bool {
-        self.materials.iter().any(|m| m.is_masked())
+        self.materials.iter().any(|m| m.has_alpha_test())
+    }
+
+    /// Whether `material`'s emission is textured (`emissiveTexture`).
+    pub fn has_emissive_texture(&self, material: u32) -> bool {
+        self.material(material)
+            .is_some_and(|m| m.emissive.is_some())
     }
 
     /// The material's textures, if it uses any.
@@ -247,21 +267,54 @@ impl SceneTextures {
         )
     }
 
-    /// Alpha-mask test: whether the surface of `tri` at (u, v) is there.
-    /// Opaque materials (and scenes without masks) always pass.
-    pub fn alpha_pass(&self, material: u32, tri: u32, u: f32, v: f32) -> bool {
+    /// Alpha test: whether the surface of `tri` at (u, v) is there for the
+    /// ray (o, d). MASK: alpha >= alphaCutoff. BLEND: `xi < alpha`, `xi` the
+    /// ray's uniform number for this triangle ([`blend_random`]), so a hit is kept
+    /// with probability alpha and passed through with 1 - alpha: unbiased
+    /// transparency for camera, bounce and shadow rays alike. Opaque
+    /// materials (and scenes without alpha tests) always pass.
+    pub fn alpha_pass(&self, material: u32, tri: u32, u: f32, v: f32, o: Vec3, d: Vec3) -> bool {
         let Some(m) = self.materials.get(material as usize) else {
             return true;
         };
-        if !m.is_masked() {
+        if !m.has_alpha_test() {
             return true;
         }
         let mut a = m.base_alpha;
         if m.base_color.is_some() {
             a *= self.lookup(&m.base_color, tri, u, v, false).w;
         }
-        a >= m.alpha_cutoff
+        if m.is_blended() {
+            blend_random(tri, o, d) < a
+        } else {
+            a >= m.alpha_cutoff
+        }
     }
+}
+
+/// Chris Wellons' `lowbias32` integer hash (a full-avalanche 32-bit mix).
+pub fn hash_u32(mut x: u32) -> u32 {
+    x ^= x >> 16;
+    x = x.wrapping_mul(0x7feb_352d);
+    x ^= x >> 15;
+    x = x.wrapping_mul(0x846c_a68b);
+    x ^= x >> 16;
+    x
+}
+
+/// The uniform number in [0, 1) that decides a BLEND hit of triangle `tri`
+/// by the ray (o, d): a hash of the triangle index and the ray's origin and
+/// direction bits. It needs no sampler dimension (traversal has none to
+/// spare, and shadow rays would need their own), a ray asking twice about
+/// one triangle gets one answer, and different rays (every sample jitters
+/// the camera ray; every bounce starts elsewhere) get independent ones.
+/// `shaders/texture.glsl` computes the same bits from the same inputs.
+pub fn blend_random(tri: u32, o: Vec3, d: Vec3) -> f32 {
+    let mut h = hash_u32(tri ^ 0x9e37_79b9);
+    for x in [o.x, o.y, o.z, d.x, d.y, d.z] {
+        h = hash_u32(h ^ x.to_bits());
+    }
+    (h >> 8) as f32 * (1.0 / 16_777_216.0)
 }
 
 /// sRGB transfer function to linear (IEC 61966-2-1).
@@ -455,8 +508,14 @@ pub fn textured_bsdf(
 }
 
 /// The shading normal after `mt`'s normal map, in the frame (ns, s, t)
-/// of the hit (s the tangent, t = cross(ns, s)); `ns` itself when there is
-/// no normal map or the result would face away from `ng`.
+/// of the hit (s the tangent, t = cross(ns, s)), seen from `wo`; `ns`
+/// itself when there is no normal map or the result would face away from
+/// `ng`. The mapped normal is then adapted ([`valid_reflection_normal`])
+/// so that the mirror direction of `wo` about it stays above the
+/// geometric surface: a glossy lobe about a strongly tilted normal would
+/// otherwise point into the surface, where the light-leak rule ends the
+/// path (black rims on every bump).
+#[allow(clippy::too_many_arguments)]
 pub fn normal_mapped(
     st: &SceneTextures,
     mt: &MaterialTextures,
@@ -464,6 +523,7 @@ pub fn normal_mapped(
     u: f32,
     v: f32,
     ng: Vec3,
+    wo: Vec3,
     frame: &Frame,
 ) -> Vec3 {
     if !mt.normal.is_some() {
@@ -472,7 +532,49 @@ pub fn normal_mapped(
     let c = st.lookup(&mt.normal, tri, u, v, false).truncate();
     let sign = st.uvs[tri as usize].extra[0];
     let n = perturb_normal(c, mt.normal.scale, frame.n, frame.s, frame.t * sign);
-    if n.dot(ng) > 0.0 { n } else { frame.n }
+    if n.dot(ng) > 0.0 {
+        valid_reflection_normal(ng, wo, n)
+    } else {
+        frame.n
+    }
+}
+
+/// Cycles' `ensure_valid_specular_reflection` (Blender's
+/// `kernel/closure/bsdf_util.h`): the shading normal `n` (on `ng`'s side)
+/// turned toward the geometric normal `ng` just enough that the mirror
+/// direction of `wo` about it rises at least min(0.9 cos_o, 0.01) above
+/// the geometric surface (cos_o = |wo . ng|); `n` itself when it already
+/// does. Worked on `wo`'s side of the surface, so a hit from behind
+/// (transmission) is adapted the same way. Both unit vectors.
+pub fn valid_reflection_normal(ng: Vec3, wo: Vec3, n: Vec3) -> Vec3 {
+    let side = if wo.dot(ng) < 0.0 { -1.0 } else { 1.0 };
+    let (ng, n) = (ng * side, n * side);
+    let iz = wo.dot(ng);
+    let r = 2.0 * n.dot(wo) * n - wo;
+    let threshold = (0.9 * iz).min(0.01);
+    if r.dot(ng) >= threshold {
+        return n * side;
+    }
+    // Frame: ng as z, n in the x-z plane. The adapted n' = (nx, 0, nz)
+    // solves 2 (n' . wo) n'.z - wo.z = threshold, a quadratic in nz^2 of
+    // which one root is the valid one (Cycles' derivation).
+    let x = (n - n.dot(ng) * ng).normalize_or_zero();
+    let ix = wo.dot(x);
+    let a = ix * ix + iz * iz;
+    if a.is_nan() || a <= 0.0 || x == Vec3::ZERO {
+        return ng * side;
+    }
+    let b = 2.0 * (a + iz * threshold);
+    let c = (threshold + iz) * (threshold + iz);
+    let disc = (b * b - 4.0 * a * c).max(0.0).sqrt();
+    let nz2 = if ix < 0.0 {
+        0.25 * (b + disc) / a
+    } else {
+        0.25 * (b - disc) / a
+    };
+    let nx = (1.0 - nz2).max(0.0).sqrt();
+    let nz = nz2.max(0.0).sqrt();
+    (nx * x + nz * ng).normalize_or_zero() * side
 }
 
 /// The emissive texture's factor at a hit (1 without one).

@@ -129,12 +129,14 @@ fn uv_transform_and_tex_coord() {
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let r = s.textures.materials[0].base_color;
     assert_eq!(r.tex_coord, 1, "the extension's texCoord overrides");
-    // The extension's matrices: T(offset) R(rotation) S(scale).
+    // T(offset) R(rotation) S(scale), R by the sample model's (and
+    // Blender's, three.js's) convention: u' = cos u + sin v, v' = -sin u +
+    // cos v (the extension text's listing has the other sign).
     let uv = Vec2::new(0.3, 0.7);
     let (sn, cs) = 0.5f32.sin_cos();
     let want = Vec2::new(
-        cs * 2.0 * uv.x - sn * 3.0 * uv.y + 0.5,
-        sn * 2.0 * uv.x + cs * 3.0 * uv.y + 0.25,
+        cs * 2.0 * uv.x + sn * 3.0 * uv.y + 0.5,
+        -sn * 2.0 * uv.x + cs * 3.0 * uv.y + 0.25,
     );
     assert!(
         (r.apply(uv) - want).length() < 1e-5,
@@ -370,13 +372,11 @@ fn alpha_mask_casts_the_masks_shadow() {
 }
 
 #[test]
-fn blend_is_mask_at_one_half_with_a_warning() {
+fn blend_with_alpha_zero_or_one_is_exact_and_not_warned_about() {
+    // Stochastic transparency keeps a hit with probability alpha: 0 and 1
+    // are certain (the fractional case: tests/gltf_viewers.rs).
     let s = masked_scene("blend", "BLEND");
-    assert!(
-        s.warnings.iter().any(|w| w.contains("alphaMode BLEND")),
-        "{:?}",
-        s.warnings
-    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let ray = |x: f32, y: f32| Ray {
         o: Vec3::new(x, y, 1e-3),
         d: Vec3::Z,

@@ -15,7 +15,8 @@ layout(std430, set = 0, binding = 3) readonly buffer TriangleUvBuffer { Triangle
 #include "texture.glsl"
 
 // uv_srgb: (u, v, srgb, unused); ids: (texture, material, triangle, unused);
-// bary: (u, v) on the triangle.
+// bary: (u, v) on the triangle, then two more numbers; the alpha test's
+// ray is o = (uv, bary.z), d = (bary.xy, bary.w).
 struct Query {
     vec4 uv_srgb;
     uvec4 ids;
@@ -27,7 +28,7 @@ struct Result {
     vec4 base;         // texture_lookup(base_color slot, tri, bary, true)
     vec4 reflectance;  // textured_bsdf(...).reflectance (w: metallic)
     vec4 k_alpha;      // textured_bsdf(...).k.xyz, alpha_u
-    uvec4 flags;       // x: alpha_pass, y: textured kind
+    uvec4 flags;       // x: alpha_pass, y: textured kind, z: blend_random's bits
 };
 
 layout(std430, set = 0, binding = 4) readonly buffer Queries { Query queries[]; };
@@ -60,6 +61,9 @@ void main() {
     Material t = textured_bsdf(mt, m, q.ids.z, q.bary.x, q.bary.y);
     r.reflectance = t.reflectance;
     r.k_alpha = vec4(t.k.xyz, t.alpha_u);
-    r.flags = uvec4(alpha_pass(q.ids.y, q.ids.z, q.bary.x, q.bary.y) ? 1u : 0u, t.kind, 0u, 0u);
+    vec3 ro = vec3(q.uv_srgb.xy, q.bary.z);
+    vec3 rd = vec3(q.bary.xy, q.bary.w);
+    r.flags = uvec4(alpha_pass(q.ids.y, q.ids.z, q.bary.x, q.bary.y, ro, rd) ? 1u : 0u, t.kind,
+                    floatBitsToUint(blend_random(q.ids.z, ro, rd)), 0u);
     results[i] = r;
 }

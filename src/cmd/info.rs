@@ -6,7 +6,7 @@ use std::mem::size_of;
 use anyhow::Result;
 use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness};
 use glint::cpu::lights::{GpuEmitter, GpuLight};
-use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF};
+use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF, MaterialTextures, TexRef};
 use glint::cpu::{Bvh4Node, GpuMaterial, PunctualLight, Scene, Triangle, TriangleShading};
 
 use super::{check_scene_path, load_quiet, one_line};
@@ -47,6 +47,48 @@ fn conductor(c: &ConductorParams) -> String {
         format!("roughconductor {}", roughness(&c.roughness))
     };
     format!("{name} eta {} k {}", rgb(c.eta), rgb(c.k))
+}
+
+/// A glTF metallic-roughness material whose channels are textured: each
+/// channel as "texture N x factor" (metallic from the texture's B,
+/// roughness from its G), or the bare factor where untextured.
+fn gltf_channels(mt: &MaterialTextures) -> String {
+    let channel = |name: &str, r: &TexRef, texel: &str, factor: String| {
+        if r.is_some() {
+            format!("{name} texture {}{texel} x {factor}", r.texture)
+        } else {
+            format!("{name} {factor}")
+        }
+    };
+    let [metallic, roughness, transmission, ior] = mt.mr_factor;
+    let mut parts = vec![
+        channel(
+            "baseColor",
+            &mt.base_color,
+            "",
+            rgb(glam::Vec3::from_slice(&mt.base_factor[..3])),
+        ),
+        channel(
+            "metallic",
+            &mt.metallic_roughness,
+            ".B",
+            format!("{metallic:.4}"),
+        ),
+        channel(
+            "roughness",
+            &mt.metallic_roughness,
+            ".G",
+            format!("{roughness:.4}"),
+        ),
+    ];
+    parts.push(format!("coat ior {ior:.4}"));
+    if transmission > 0.0 {
+        parts.push(format!("transmission {transmission:.4}"));
+    }
+    format!(
+        "glTF per texel: metal/coated non-metal blend, {}",
+        parts.join(", ")
+    )
 }
 
 /// The model a material maps to, Mitsuba 3's names.
@@ -160,34 +202,44 @@ pub fn describe(path: &str, s: &Scene) -> String {
     let _ = writeln!(o, "materials: {}", s.materials.len());
     for (i, m) in s.materials.iter().enumerate() {
         let mut extra = Vec::new();
+        let mt = s.textures.materials.get(i);
+        let textured_emission = mt.is_some_and(|mt| mt.emissive.is_some());
         if m.is_emissive() {
-            extra.push(format!("emission {}", rgb(m.emission)));
+            extra.push(match mt {
+                Some(mt) if textured_emission => format!(
+                    "emission texture {} x {} (textured: not the scene's lighting)",
+                    mt.emissive.texture,
+                    rgb(m.emission)
+                ),
+                _ => format!("emission {}", rgb(m.emission)),
+            });
         }
         if m.double_sided {
             extra.push("double-sided".into());
         }
-        if let Some(mt) = s.textures.materials.get(i) {
-            let mut tex = Vec::new();
-            for (name, r) in [
-                ("baseColor", &mt.base_color),
-                ("metallicRoughness", &mt.metallic_roughness),
-                ("normal", &mt.normal),
-                ("emissive", &mt.emissive),
-            ] {
-                if r.is_some() {
-                    tex.push(format!("{name}=texture {}", r.texture));
-                }
+        let mut bsdf = model(&m.bsdf);
+        if let Some(mt) = mt {
+            if mt.mode == MAP_GLTF {
+                // The BSDF is recomputed per texel: the factor-only model
+                // (a metal "k 63.2" from base colour 1) would mislead.
+                bsdf = gltf_channels(mt);
+            } else if mt.mode == MAP_EXTRAS {
+                extra.push(format!(
+                    "baseColor texture {} x the reflectance above",
+                    mt.base_color.texture
+                ));
             }
-            if !tex.is_empty() {
-                extra.push(tex.join(" "));
-            }
-            match mt.mode {
-                MAP_GLTF => extra.push("per-texel glTF mapping".into()),
-                MAP_EXTRAS => extra.push("baseColorTexture multiplies extras.bsdf".into()),
-                _ => {}
+            if mt.normal.is_some() {
+                extra.push(format!(
+                    "normal texture {} x scale {}",
+                    mt.normal.texture, mt.normal.scale
+                ));
             }
             if mt.is_masked() {
                 extra.push(format!("alpha mask < {}", mt.alpha_cutoff));
+            }
+            if mt.is_blended() {
+                extra.push("alpha blend (stochastic)".into());
             }
         }
         let extra = if extra.is_empty() {
@@ -200,7 +252,7 @@ pub fn describe(path: &str, s: &Scene) -> String {
         } else {
             &m.name
         };
-        let _ = writeln!(o, "  {i}: {name}: {}{extra}", model(&m.bsdf));
+        let _ = writeln!(o, "  {i}: {name}: {bsdf}{extra}");
     }
     let t = &s.textures;
     let _ = writeln!(o, "textures: {}", t.table.len());

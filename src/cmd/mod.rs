@@ -268,7 +268,11 @@ pub fn load_with_inputs(path: &Path, o: &RenderOpts) -> Result<(Scene, Vec<PathB
     // Exact simplifications (glint_cpu::features::simplify): they shrink
     // what the specialised kernel carries without changing the image.
     glint::cpu::features::simplify(&mut scene);
-    scene.light_if_unlit();
+    // The default lighting applies to the file alone: a background the
+    // user gives (even --background 0,0,0, a dark scene) replaces it.
+    if o.background.is_none() && o.envmap.is_none() {
+        scene.light_if_unlit();
+    }
     if let Some(w) = glint::cpu::integrator::precision_warning(&scene) {
         scene.warnings.push(w);
     }
@@ -307,10 +311,12 @@ pub fn load_quiet(
         ..Default::default()
     };
     let mut scene = glint::cpu::loader::load_with(path, options)?;
-    if let Some(bg) = background {
-        scene.background = bg.into();
+    match background {
+        Some(bg) => scene.background = bg.into(),
+        None => {
+            scene.light_if_unlit();
+        }
     }
-    scene.light_if_unlit();
     Ok(scene)
 }
 

@@ -202,23 +202,29 @@ fn choose_split(
         return (count > MAX_LEAF_SIZE).then_some(Split::Median { axis: widest });
     }
 
+    // Flat (and non-finite) centroid extents are skipped: nothing to bin.
+    let binned = [0, 1, 2].map(|a| extent[a] > 0.0 && extent[a].is_finite());
+    let scale = [0, 1, 2].map(|a| BINS as f32 / extent[a]);
+    // All three axes binned in one pass over the triangles (the build's
+    // hot loop: one read of each triangle's bounds instead of three).
+    let mut all_bounds = [[Aabb::EMPTY; BINS]; 3];
+    let mut all_counts = [[0usize; BINS]; 3];
+    for &i in idx {
+        let p = &prims[i as usize];
+        for axis in 0..3 {
+            if binned[axis] {
+                let b = bin_of(p.centroid[axis], centroids.min[axis], scale[axis]);
+                all_bounds[axis][b].grow(&p.bounds);
+                all_counts[axis][b] += 1;
+            }
+        }
+    }
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
-        let lo = centroids.min[axis];
-        let ext = extent[axis];
-        // Skips flat (and non-finite) centroid extents: nothing to bin.
-        if !(ext > 0.0 && ext.is_finite()) {
+        if !binned[axis] {
             continue;
         }
-        let scale = BINS as f32 / ext;
-        let mut bin_bounds = [Aabb::EMPTY; BINS];
-        let mut bin_count = [0usize; BINS];
-        for &i in idx {
-            let p = &prims[i as usize];
-            let b = bin_of(p.centroid[axis], lo, scale);
-            bin_bounds[b].grow(&p.bounds);
-            bin_count[b] += 1;
-        }
+        let (bin_bounds, bin_count) = (&all_bounds[axis], &all_counts[axis]);
         // Sweep from the right: cost of the right side of plane i (bins > i).
         let mut right_cost = [0.0f32; BINS];
         let mut acc = Aabb::EMPTY;

@@ -41,6 +41,10 @@
 //!   ends the path (BSDF sample), since it would pass through the surface
 //!   the interpolated normal pretends is not there (Veach 1996's
 //!   shading-normal asymmetry; pbrt-v3 sec. 16.1 discusses the same leak).
+//!   A normal-mapped normal is first adapted as Cycles does
+//!   (`texture::valid_reflection_normal`) so that the mirror direction of
+//!   wo stays above the geometric surface: glossy lobes keep their energy
+//!   instead of ending in black rims where the map tilts far.
 
 // `!(x > 0.0)` on floats is meant: it rejects NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -331,19 +335,23 @@ impl<'a> PathTracer<'a> {
         SurfaceFrame { ng, ns, frame }
     }
 
-    /// A textured material at a hit: the normal map tilts the shading
-    /// frame, the other textures set the BSDF's parameters.
+    /// A textured material at a hit seen from `wo`: the normal map tilts
+    /// the shading frame (adapted so `wo`'s mirror direction stays above
+    /// the surface, [`crate::texture::valid_reflection_normal`]), the other
+    /// textures set the BSDF's parameters.
+    #[allow(clippy::too_many_arguments)]
     fn apply_textures(
         &self,
         mt: &MaterialTextures,
         tri: u32,
         u: f32,
         v: f32,
+        wo: Vec3,
         sf: &mut SurfaceFrame,
         bsdf: &mut Bsdf,
     ) {
         let st = &self.scene.textures;
-        let ns = normal_mapped(st, mt, tri, u, v, sf.ng, &sf.frame);
+        let ns = normal_mapped(st, mt, tri, u, v, sf.ng, wo, &sf.frame);
         if ns != sf.ns {
             sf.frame = Frame::from_normal_tangent(ns, sf.frame.s);
             sf.ns = ns;
@@ -439,7 +447,7 @@ impl<'a> PathTracer<'a> {
             let mut sf = self.surface(hit.tri, hit.u, hit.v);
             let mut bsdf: Bsdf = scene.materials[tri.material as usize].bsdf;
             if let Some(mt) = scene.textures.material(tri.material) {
-                self.apply_textures(mt, hit.tri, hit.u, hit.v, &mut sf, &mut bsdf);
+                self.apply_textures(mt, hit.tri, hit.u, hit.v, wo, &mut sf, &mut bsdf);
             }
             let bsdf = &bsdf;
             let wo_local = sf.frame.to_local(wo);

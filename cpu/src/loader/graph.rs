@@ -90,8 +90,9 @@ pub fn collect(
             instances.push((mesh, world, label.clone()));
         }
         if let Some(cam) = node.camera {
-            out.cameras
-                .push(camera(src, cam.value(), world).map_err(|e| format!("{label}: {e}"))?);
+            let mut c = camera(src, cam.value(), world).map_err(|e| format!("{label}: {e}"))?;
+            c.node_name = node.name.clone();
+            out.cameras.push(c);
         }
         if let Some(light) = light_index(src, i) {
             out.lights
@@ -335,20 +336,49 @@ fn add_mesh(
                 default_material
             }
         };
+        // Vertex order per glTF 2.0 spec section 3.7.2.1 (strips alternate
+        // winding, fans pivot on vertex 0).
+        let refs_of = |t: usize| match mode {
+            Mode::Triangles => [3 * t, 3 * t + 1, 3 * t + 2],
+            Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
+            Mode::TriangleStrip => [t, t + 2, t + 1],
+            _ => [t + 1, t + 2, 0],
+        };
+        // Without TANGENT, a normal-mapped primitive gets MikkTSpace
+        // tangents (glTF 2.0 sec. 3.7.2.1: what exporters bake against),
+        // per triangle corner, in the normal texture's UV set.
+        let mikk_uvs = match (&tangents, normal_texcoord(src, prim.material().index())) {
+            (None, Some(0)) => uvs.as_deref(),
+            (None, Some(1)) => uvs1.as_deref(),
+            _ => None,
+        };
+        let mikk = match mikk_uvs {
+            Some(uv) => {
+                let faces = (0..n_tris)
+                    .map(|t| {
+                        let r = refs_of(t);
+                        Ok([vertex(r[0])?, vertex(r[1])?, vertex(r[2])?])
+                    })
+                    .collect::<Result<Vec<_>, String>>()?;
+                Some(mikktspace_tangents(
+                    &positions,
+                    normals.as_deref(),
+                    uv,
+                    faces,
+                ))
+            }
+            None => None,
+        };
         for t in 0..n_tris {
-            // Vertex order per glTF 2.0 spec section 3.7.2.1 (strips
-            // alternate winding, fans pivot on vertex 0).
-            let refs = match mode {
-                Mode::Triangles => [3 * t, 3 * t + 1, 3 * t + 2],
-                Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
-                Mode::TriangleStrip => [t, t + 2, t + 1],
-                _ => [t + 1, t + 2, 0],
-            };
+            let refs = refs_of(t);
             let mut v = [vertex(refs[0])?, vertex(refs[1])?, vertex(refs[2])?];
+            // Which corner of the file's triangle each of ours is.
+            let mut corner = [0, 1, 2];
             if flip {
                 // A mirroring transform reverses the winding; swapping two
                 // vertices keeps counter-clockwise = outside.
                 v.swap(1, 2);
+                corner.swap(1, 2);
             }
             let p = v.map(|k| world.transform_point3(Vec3::from(positions[k])));
             if p.iter().any(|q| !q.is_finite()) {
@@ -376,9 +406,15 @@ fn add_mesh(
                 // convenience and readers use the geometric normal.
                 None => sh.n = [geo.extend(0.0).to_array(); 3],
             }
-            if let Some(ts) = &tangents {
-                for (slot, &k) in sh.t.iter_mut().zip(&v) {
-                    let t = linear * Vec3::from_slice(&ts[k][..3]);
+            // The file's tangent (xyz) at each of our corners.
+            let given: Option<[[f32; 4]; 3]> = match (&tangents, &mikk) {
+                (Some(ts), _) => Some(v.map(|k| ts[k])),
+                (None, Some(m)) => Some(corner.map(|j| m[3 * t + j])),
+                _ => None,
+            };
+            if let Some(ts) = &given {
+                for (slot, tg) in sh.t.iter_mut().zip(ts) {
+                    let t = linear * Vec3::from_slice(&tg[..3]);
                     let t = t.normalize_or_zero();
                     *slot = t.extend(if t != Vec3::ZERO { 1.0 } else { 0.0 }).to_array();
                 }
@@ -400,10 +436,13 @@ fn add_mesh(
                         tuv.uv[j][3] = uv[k][1];
                     }
                 }
-                tuv.extra[0] = match (&tangents, &uvs) {
+                // A mirroring transform turns cross(N, T) against the
+                // bitangent it carries: the sign flips with it.
+                let mirror = if flip { -1.0 } else { 1.0 };
+                tuv.extra[0] = match (&given, &uvs) {
                     // glTF: bitangent = cross(normal, tangent.xyz) * w.
-                    (Some(ts), _) if ts[v[0]][3] < 0.0 => -1.0,
-                    (Some(_), _) => 1.0,
+                    (Some(ts), _) if ts[0][3] < 0.0 => -mirror,
+                    (Some(_), _) => mirror,
                     // Without TANGENT: the sign that makes the bitangent
                     // point up the image (-dP/dv, glTF's v running down).
                     (None, Some(uv)) => {
@@ -422,6 +461,89 @@ fn add_mesh(
         }
     }
     Ok(())
+}
+
+/// The UV set (`texCoord`, as `KHR_texture_transform` may override it) of
+/// material `material`'s normal texture, if it has one.
+fn normal_texcoord(src: &Source, material: Option<usize>) -> Option<u64> {
+    let info = &src.raw["materials"][material?]["normalTexture"];
+    if info.is_null() {
+        return None;
+    }
+    let ext = &info["extensions"]["KHR_texture_transform"]["texCoord"];
+    Some(ext.as_u64().or(info["texCoord"].as_u64()).unwrap_or(0))
+}
+
+/// One primitive as `bevy_mikktspace` reads it: triangles of vertex
+/// indices, and the tangent it writes per corner.
+struct MikkMesh<'a> {
+    positions: &'a [[f32; 3]],
+    normals: Option<&'a [[f32; 3]]>,
+    uvs: &'a [[f32; 2]],
+    faces: Vec<[usize; 3]>,
+    out: Vec<[f32; 4]>,
+}
+
+impl bevy_mikktspace::Geometry for MikkMesh<'_> {
+    fn num_faces(&self) -> usize {
+        self.faces.len()
+    }
+    fn num_vertices_of_face(&self, _face: usize) -> usize {
+        3
+    }
+    fn position(&self, face: usize, vert: usize) -> [f32; 3] {
+        self.positions[self.faces[face][vert]]
+    }
+    fn normal(&self, face: usize, vert: usize) -> [f32; 3] {
+        match self.normals {
+            Some(n) => n[self.faces[face][vert]],
+            // glTF: no NORMAL means flat shading, the face's own normal.
+            None => {
+                let p = self.faces[face].map(|k| Vec3::from(self.positions[k]));
+                (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero().into()
+            }
+        }
+    }
+    fn tex_coord(&self, face: usize, vert: usize) -> [f32; 2] {
+        // MikkTSpace's bitangent follows +v; glTF's v runs down the image
+        // and its normal maps' green runs up, so v is flipped, as Blender's
+        // exporter (which computes tangents with v up) has it.
+        let [u, v] = self.uvs[self.faces[face][vert]];
+        [u, 1.0 - v]
+    }
+    fn set_tangent(
+        &mut self,
+        tangent_space: Option<bevy_mikktspace::TangentSpace>,
+        face: usize,
+        vert: usize,
+    ) {
+        self.out[3 * face + vert] = match tangent_space {
+            Some(ts) => ts.tangent_encoded(),
+            // No tangent (a degenerate face with no neighbour): w = 0 marks
+            // it unknown and the frame is built from the normal.
+            None => [0.0; 4],
+        };
+    }
+}
+
+/// MikkTSpace tangents (xyz, w = bitangent sign) of `faces`, three per
+/// face in corner order, in the mesh's own space.
+pub fn mikktspace_tangents(
+    positions: &[[f32; 3]],
+    normals: Option<&[[f32; 3]]>,
+    uvs: &[[f32; 2]],
+    faces: Vec<[usize; 3]>,
+) -> Vec<[f32; 4]> {
+    let mut m = MikkMesh {
+        positions,
+        normals,
+        uvs,
+        out: vec![[0.0; 4]; 3 * faces.len()],
+        faces,
+    };
+    // The error type has no values: generation cannot fail.
+    let _ = bevy_mikktspace::generate_tangents(&mut m);
+    m.out
 }
 
 /// Triangles drawn from `refs` vertex references (glTF 2.0 spec 3.7.2.1);
@@ -608,6 +730,7 @@ fn camera(src: &Source, index: usize, world: Mat4) -> Result<Camera, String> {
     );
     Ok(Camera {
         name: json.name.clone(),
+        node_name: None,
         to_world,
         yfov: persp.yfov,
         aspect_ratio: persp.aspect_ratio,

@@ -24,7 +24,8 @@
 //! - Textures (`loader::texture`, conventions in [`crate::texture`]):
 //!   baseColor, metallicRoughness, normal and emissive, PNG or JPEG; an
 //!   image that cannot be used is a warning and its factor alone is used.
-//!   alphaMode MASK cuts geometry; BLEND is MASK at 0.5 with a warning.
+//!   alphaMode MASK cuts geometry; BLEND is stochastic transparency (a hit
+//!   is kept with probability alpha).
 //! - Cameras are listed in depth-first node order; orthographic cameras are
 //!   an error. Without a camera, [`default_camera`] frames the scene.
 //! - KHR_lights_punctual `range` is ignored (lights fall off as 1/r^2).
@@ -115,6 +116,7 @@ pub fn load_timed(path: &Path) -> Result<(Scene, f64), LoadError> {
 fn parse_inner(path: &Path, options: LoadOptions) -> Result<(Scene, Vec<PathBuf>), String> {
     let mut warnings = Vec::new();
     let src = source::read(path, options, &mut warnings)?;
+    accept_quiet_extensions(&mut warnings);
     let doc = &src.doc;
     let scene_index = match doc.default_scene() {
         Some(s) => s.index(),
@@ -203,6 +205,21 @@ fn warn_non_finite_lights(scene: &mut Scene) {
     }
 }
 
+/// Extensions glint accepts without a warning although it reads nothing
+/// from them: metadata alone (`KHR_xmp`, `KHR_xmp_json_ld`: authorship and
+/// licence, no effect on the image) and `KHR_materials_variants`, whose
+/// default (each primitive's own `material`) is what glint renders.
+pub const QUIET_EXTENSIONS: &[&str] = &["KHR_xmp", "KHR_xmp_json_ld", "KHR_materials_variants"];
+
+/// Drop the reader's "not supported" warning for [`QUIET_EXTENSIONS`].
+fn accept_quiet_extensions(warnings: &mut Vec<String>) {
+    warnings.retain(|w| {
+        !QUIET_EXTENSIONS
+            .iter()
+            .any(|e| *w == format!("extension {e} is not supported; ignored"))
+    });
+}
+
 fn background(extras: Option<&serde_json::value::RawValue>) -> Result<Vec3, String> {
     let Some(raw) = extras else {
         return Ok(Vec3::ZERO);
@@ -249,20 +266,21 @@ pub fn default_camera(scene: &Scene) -> Camera {
     let distance = radius / (0.5 * DEFAULT_YFOV).sin();
     Camera {
         name: Some("default".into()),
+        node_name: None,
         to_world: Mat4::from_translation(center + Vec3::Z * distance),
         yfov: DEFAULT_YFOV,
         aspect_ratio: Some(1.0),
     }
 }
 
-/// Resolve the CLI's `--camera NAME|INDEX`: a camera name first (exact
-/// match), then a 0-based index into `scene.cameras`.
+/// Resolve the CLI's `--camera NAME|INDEX`: a camera's name or its
+/// node's name first (exact match; the first camera in node order that has
+/// it), then a 0-based index into `scene.cameras`.
 pub fn select_camera(scene: &Scene, name_or_index: &str) -> Result<usize, String> {
-    if let Some(i) = scene
-        .cameras
-        .iter()
-        .position(|c| c.name.as_deref() == Some(name_or_index))
-    {
+    let named = |c: &Camera| {
+        c.name.as_deref() == Some(name_or_index) || c.node_name.as_deref() == Some(name_or_index)
+    };
+    if let Some(i) = scene.cameras.iter().position(named) {
         return Ok(i);
     }
     let n = scene.cameras.len();
@@ -270,9 +288,10 @@ pub fn select_camera(scene: &Scene, name_or_index: &str) -> Result<usize, String
         .cameras
         .iter()
         .enumerate()
-        .map(|(i, c)| match &c.name {
-            Some(name) => format!("{i} '{name}'"),
-            None => i.to_string(),
+        .map(|(i, c)| match (&c.name, &c.node_name) {
+            (Some(name), Some(node)) if name != node => format!("{i} '{name}' (node '{node}')"),
+            (Some(name), _) | (None, Some(name)) => format!("{i} '{name}'"),
+            (None, None) => i.to_string(),
         })
         .collect();
     let available = if n == 0 {

@@ -35,7 +35,6 @@ pub fn collect(
     let mut out = SceneTextures::default();
     // glTF texture index -> table index (NO_TEXTURE when its image failed).
     let mut loaded: HashMap<usize, u32> = HashMap::new();
-    let mut blend = 0usize;
     for (i, m) in mats.iter().enumerate() {
         let label = match m["name"].as_str() {
             Some(n) => format!("material {i} ('{n}')"),
@@ -89,10 +88,9 @@ pub fn collect(
                 }
                 mt.alpha_cutoff = c;
             }
-            Some("BLEND") => {
-                blend += 1;
-                mt.alpha_cutoff = 0.5;
-            }
+            // Stochastic transparency (SceneTextures::alpha_pass): no
+            // sorting, no order-dependent compositing, unbiased.
+            Some("BLEND") => mt.blend = 1,
             _ => {}
         }
         let textured_base = mt.base_color.is_some() || mt.metallic_roughness.is_some();
@@ -108,11 +106,6 @@ pub fn collect(
     // The glTF default material (appended by the caller) has no textures.
     out.materials
         .resize(materials.len(), MaterialTextures::default());
-    if blend > 0 {
-        warnings.push(format!(
-            "{blend} material(s) with alphaMode BLEND rendered as MASK with alphaCutoff 0.5"
-        ));
-    }
     if out.is_empty() {
         return Ok(SceneTextures::default());
     }

@@ -129,6 +129,7 @@ pub fn uv_sphere_inner_radius(r: f32, n_phi: u32, n_theta: u32) -> f32 {
 pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, yfov_deg: f32) -> Camera {
     Camera {
         name: None,
+        node_name: None,
         to_world: Mat4::look_at_rh(eye, target, up).inverse(),
         yfov: yfov_deg.to_radians(),
         aspect_ratio: None,
