@@ -208,23 +208,23 @@ pub fn coat_alpha_value(t: f32) -> f32 {
 
 /// Grid position of t in [0, 1] on an n-point grid: the lower index and
 /// the fraction towards the next.
-fn cell(t: f32, n: usize) -> (usize, f32) {
+pub(crate) fn cell(t: f32, n: usize) -> (usize, f32) {
     let y = t.clamp(0.0, 1.0) * (n - 1) as f32;
     let i = (y as usize).min(n - 2);
     (i, y - i as f32)
 }
 
-/// E(mu, alpha, eta) of the coat with s = 1: trilinear in the tables, and
-/// the exact Fresnel term below the smooth threshold (`smooth`).
-pub fn coat_albedo(mu: f32, alpha: f32, eta: f32, smooth: bool) -> f32 {
-    if smooth {
-        return fresnel_dielectric(mu.clamp(0.0, 1.0), eta);
-    }
-    let t = coat_tables();
-    let (i, fx) = cell(coat_mu_coord(mu), COAT_N_MU);
-    let (j, fy) = cell(coat_alpha_coord(alpha), COAT_N_ALPHA);
-    let (k, fz) = cell(coat_eta_coord(eta), COAT_N_ETA);
-    let at = |i: usize, j: usize, k: usize| t[(k * COAT_N_ALPHA + j) * COAT_N_MU + i];
+/// Trilinear lookup in `t[k][j][i]` (`nx` nodes along i, `ny` along j) at
+/// the cells `x`, `y`, `z` ([`cell`]'s answers): the coat's and
+/// `roughplastic`'s tables.
+pub(crate) fn trilinear(
+    t: &[f32],
+    (nx, ny): (usize, usize),
+    (i, fx): (usize, f32),
+    (j, fy): (usize, f32),
+    (k, fz): (usize, f32),
+) -> f32 {
+    let at = |i: usize, j: usize, k: usize| t[(k * ny + j) * nx + i];
     let plane = |k: usize| {
         let a = at(i, j, k) + (at(i + 1, j, k) - at(i, j, k)) * fx;
         let b = at(i, j + 1, k) + (at(i + 1, j + 1, k) - at(i, j + 1, k)) * fx;
@@ -234,17 +234,39 @@ pub fn coat_albedo(mu: f32, alpha: f32, eta: f32, smooth: bool) -> f32 {
     p0 + (plane(k + 1) - p0) * fz
 }
 
-/// E_avg(alpha, eta) = 2 int E(mu) mu dmu (bilinear; the smooth coat's is
-/// the alpha = 0 row, 2 int F(mu) mu dmu).
-pub fn coat_albedo_avg(alpha: f32, eta: f32, smooth: bool) -> f32 {
-    let t = &coat_tables()[COAT_E_LEN..];
-    let alpha = if smooth { 0.0 } else { alpha };
-    let (j, fy) = cell(coat_alpha_coord(alpha), COAT_N_ALPHA);
-    let (k, fz) = cell(coat_eta_coord(eta), COAT_N_ETA);
-    let at = |j: usize, k: usize| t[k * COAT_N_ALPHA + j];
+/// Bilinear lookup in `t[k][j]` (`ny` nodes along j).
+pub(crate) fn bilinear(t: &[f32], ny: usize, (j, fy): (usize, f32), (k, fz): (usize, f32)) -> f32 {
+    let at = |j: usize, k: usize| t[k * ny + j];
     let a = at(j, k) + (at(j + 1, k) - at(j, k)) * fy;
     let b = at(j, k + 1) + (at(j + 1, k + 1) - at(j, k + 1)) * fy;
     a + (b - a) * fz
+}
+
+/// E(mu, alpha, eta) of the coat with s = 1: trilinear in the tables, and
+/// the exact Fresnel term below the smooth threshold (`smooth`).
+pub fn coat_albedo(mu: f32, alpha: f32, eta: f32, smooth: bool) -> f32 {
+    if smooth {
+        return fresnel_dielectric(mu.clamp(0.0, 1.0), eta);
+    }
+    trilinear(
+        coat_tables(),
+        (COAT_N_MU, COAT_N_ALPHA),
+        cell(coat_mu_coord(mu), COAT_N_MU),
+        cell(coat_alpha_coord(alpha), COAT_N_ALPHA),
+        cell(coat_eta_coord(eta), COAT_N_ETA),
+    )
+}
+
+/// E_avg(alpha, eta) = 2 int E(mu) mu dmu (bilinear; the smooth coat's is
+/// the alpha = 0 row, 2 int F(mu) mu dmu).
+pub fn coat_albedo_avg(alpha: f32, eta: f32, smooth: bool) -> f32 {
+    let alpha = if smooth { 0.0 } else { alpha };
+    bilinear(
+        &coat_tables()[COAT_E_LEN..],
+        COAT_N_ALPHA,
+        cell(coat_alpha_coord(alpha), COAT_N_ALPHA),
+        cell(coat_eta_coord(eta), COAT_N_ETA),
+    )
 }
 
 /// E(mu) of the single-scattering coat (s = 1) by visible-normal sampling

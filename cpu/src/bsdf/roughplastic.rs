@@ -31,6 +31,7 @@ use std::sync::LazyLock;
 
 use glam::{Vec2, Vec3};
 
+use super::coated::{bilinear, cell, coat_eta_coord, trilinear};
 use super::conductor::two_sided;
 use super::fresnel::{fresnel_dielectric, refract_dir};
 use super::microfacet::{
@@ -84,42 +85,25 @@ fn alpha_of(r: &Roughness) -> f32 {
     r.alpha_u.max(MIN_ALPHA)
 }
 
-/// Grid position of t in [0, 1] on an n-point grid.
-fn cell(t: f32, n: usize) -> (usize, f32) {
-    let y = t.clamp(0.0, 1.0) * (n - 1) as f32;
-    let i = (y as usize).min(n - 2);
-    (i, y - i as f32)
-}
-
-fn eta_coord(eta: f32) -> f32 {
-    super::coated::coat_eta_coord(eta)
-}
-
 /// T(mu) of the rough interface (trilinear: mu on Mitsuba's nodes).
 pub fn rp_transmittance(mu: f32, alpha: f32, eta: f32, separable: bool) -> f32 {
-    let t = &roughplastic_tables()[separable as usize * RP_T_LEN..];
-    let (i, fx) = cell(mu, RP_N_MU);
-    let (j, fy) = cell(alpha.sqrt(), RP_N_ALPHA);
-    let (k, fz) = cell(eta_coord(eta), RP_N_ETA);
-    let at = |i: usize, j: usize, k: usize| t[(k * RP_N_ALPHA + j) * RP_N_MU + i];
-    let plane = |k: usize| {
-        let a = at(i, j, k) + (at(i + 1, j, k) - at(i, j, k)) * fx;
-        let b = at(i, j + 1, k) + (at(i + 1, j + 1, k) - at(i, j + 1, k)) * fx;
-        a + (b - a) * fy
-    };
-    let p0 = plane(k);
-    p0 + (plane(k + 1) - p0) * fz
+    trilinear(
+        &roughplastic_tables()[separable as usize * RP_T_LEN..],
+        (RP_N_MU, RP_N_ALPHA),
+        cell(mu, RP_N_MU),
+        cell(alpha.sqrt(), RP_N_ALPHA),
+        cell(coat_eta_coord(eta), RP_N_ETA),
+    )
 }
 
 /// R_int of the rough interface (bilinear).
 pub fn rp_internal_reflectance(alpha: f32, eta: f32, separable: bool) -> f32 {
-    let t = &roughplastic_tables()[2 * RP_T_LEN + separable as usize * RP_R_LEN..];
-    let (j, fy) = cell(alpha.sqrt(), RP_N_ALPHA);
-    let (k, fz) = cell(eta_coord(eta), RP_N_ETA);
-    let at = |j: usize, k: usize| t[k * RP_N_ALPHA + j];
-    let a = at(j, k) + (at(j + 1, k) - at(j, k)) * fy;
-    let b = at(j, k + 1) + (at(j + 1, k + 1) - at(j, k + 1)) * fy;
-    a + (b - a) * fz
+    bilinear(
+        &roughplastic_tables()[2 * RP_T_LEN + separable as usize * RP_R_LEN..],
+        RP_N_ALPHA,
+        cell(alpha.sqrt(), RP_N_ALPHA),
+        cell(coat_eta_coord(eta), RP_N_ETA),
+    )
 }
 
 /// Mitsuba's `eval_transmittance` (`transmit`) or `eval_reflectance` of the
