@@ -196,23 +196,10 @@ pub fn check_input_file(path: &Path, kind: &str) -> Result<()> {
         Err(e) => bail!("{p}: cannot read: {e}"),
     };
     let t = meta.file_type();
-    use std::os::unix::fs::FileTypeExt;
-    let what = if t.is_file() {
+    if t.is_file() {
         return Ok(());
-    } else if t.is_dir() {
-        "a directory"
-    } else if t.is_fifo() {
-        "a named pipe (FIFO)"
-    } else if t.is_char_device() {
-        "a character device"
-    } else if t.is_block_device() {
-        "a block device"
-    } else if t.is_socket() {
-        "a socket"
-    } else {
-        "not a regular file"
-    };
-    bail!("{p}: {what}, not {kind}")
+    }
+    bail!("{p}: {}, not {kind}", glint::cpu::safe_fs::describe(t))
 }
 
 /// Whether `a` and `b` name the same existing file (links followed).
