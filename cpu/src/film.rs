@@ -1,7 +1,4 @@
 //! Render options and the film both backends accumulate into.
-//!
-//! INTERFACE FIXED BY THE LEAD; owned by the integrator work (add image
-//! output, methods; keep these fields).
 
 use std::io::{Seek, Write};
 use std::path::{Path, PathBuf};

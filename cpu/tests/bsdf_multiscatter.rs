@@ -220,7 +220,7 @@ fn tables_match_glsl_and_recomputation() {
         }
     }
     // E decreases with alpha; E_avg in (0, 1].
-    for t in &MS_E_AVG {
+    for t in MS_E_AVG.iter() {
         for j in 1..MS_N {
             assert!(t[j] <= t[j - 1] + 1e-3);
             assert!(t[j] > 0.0 && t[j] <= 1.0 + 1e-3);

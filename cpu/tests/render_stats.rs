@@ -89,10 +89,17 @@ fn comparison_passes_independent_renders_and_fails_a_three_percent_bias() {
     let b = render(&s, &opts(SIZE, 64, -1, 32));
     let r = compare_films(&a, &b).unwrap();
     assert!(r.pass, "independent renders: {r}");
+    // Scale every sample by 1.03: the sums, the squared sums and the batch
+    // sums the default Sobol film takes its variance from, so that the
+    // biased copy is the film a biased renderer would have written.
     let mut biased = b.clone();
-    for (s, s2) in biased.sum.iter_mut().zip(biased.sum_sq.iter_mut()) {
-        *s *= 1.03;
-        *s2 *= 1.03 * 1.03;
+    assert!(biased.variance_batch() > 1, "the film uses batch means");
+    let k = 1.03f32;
+    for i in 0..biased.sum.len() {
+        biased.sum[i] *= k;
+        biased.sum_sq[i] *= k * k;
+        biased.batch_run[i] *= k;
+        biased.batch_sq[i] *= k * k;
     }
     let r = compare_films(&a, &biased).unwrap();
     assert!(!r.pass, "a 3% bias must be caught: {r}");

@@ -11,8 +11,8 @@
 //!
 //! E and E_avg come from glint's own single-scattering BSDF, one table per
 //! Smith form, over mu = cos theta and alpha on uniform grids: written by
-//! `cargo run -p glint-cpu --example ms_tables` into
-//! `cpu/src/bsdf/ms_tables.rs`; the GPU reads the same numbers from a
+//! `cargo run --release -p glint-cpu --example ms_tables` into
+//! `cpu/src/bsdf/ms_tables.bin` (read by `ms_tables`); the GPU reads the same numbers from a
 //! storage buffer ([`gpu_tables`], `shaders/bsdf/multiscatter.glsl`; a test
 //! pins the offsets and recomputes a few entries).
 //! Anisotropic surfaces look the tables up at sqrt(alpha_u alpha_v).
