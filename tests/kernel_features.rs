@@ -3,8 +3,13 @@
 //!
 //! With the same seed both kernels trace the same paths (the specialised
 //! one only lacks code the scene never reaches), so almost every pixel must
-//! agree to float rounding, for every bundled scene and for variants that
-//! switch single features off (no bounces, no NEE).
+//! agree to float rounding, for the bundled scenes but two and for variants
+//! that switch single features off (no bounces, no NEE). `textured.gltf` and
+//! `materials.gltf` are left out: their specialised kernels cost minutes of
+//! cold LLVM compilation each on a fresh lavapipe machine (measured: the
+//! test ran past 18 minutes with them); their kernels are checked against
+//! the CPU per image by `tests/gpu_images.rs` and per call by
+//! `tests/gpu_bsdf.rs`.
 
 mod common;
 

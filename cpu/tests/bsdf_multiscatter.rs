@@ -228,8 +228,52 @@ fn tables_match_glsl_and_recomputation() {
     }
 }
 
-/// The mean radiance of a 24x24, 64 spp render of a sphere of `bsdf`
-/// under a background of radiance 1 (a white furnace).
+const FURNACE_SIZE: u32 = 24;
+
+/// The camera of [`rendered_furnace`] (the unit sphere seen from z = 3).
+fn furnace_camera() -> glint_cpu::Camera {
+    render_common::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0)
+}
+
+/// cos theta_o at the unit sphere where `ray` hits it, or None.
+fn sphere_mu(ray: &glint_cpu::Ray, radius: f32) -> Option<f32> {
+    let b = ray.o.dot(ray.d);
+    let disc = b * b - (ray.o.length_squared() - radius * radius);
+    (disc > 0.0).then(|| {
+        let p = ray.o + ray.d * (-b - disc.sqrt());
+        (-ray.d).dot(p.normalize())
+    })
+}
+
+/// The sphere's pixels that the furnace measures: those whose whole
+/// footprint (4 x 4 offsets) lies on a sphere slightly inside the
+/// tessellated one, with the mean cos theta_o over the footprint's
+/// offsets per pixel (background pixels, exactly 1, would dilute the
+/// error: 43% of the image).
+fn sphere_pixels() -> Vec<(usize, Vec<f32>)> {
+    let cam = glint_cpu::camera::PinholeCamera::new(&furnace_camera(), FURNACE_SIZE, FURNACE_SIZE);
+    let mut out = Vec::new();
+    for y in 0..FURNACE_SIZE {
+        for x in 0..FURNACE_SIZE {
+            let mus: Option<Vec<f32>> = (0..16)
+                .map(|k| {
+                    let u = glam::Vec2::new((k % 4) as f32 + 0.5, (k / 4) as f32 + 0.5) / 4.0;
+                    let ray = cam.ray(x, y, u);
+                    sphere_mu(&ray, 0.97).and(sphere_mu(&ray, 1.0))
+                })
+                .collect();
+            if let Some(mus) = mus {
+                out.push(((y * FURNACE_SIZE + x) as usize, mus));
+            }
+        }
+    }
+    assert!(out.len() > 150, "{} sphere pixels", out.len());
+    out
+}
+
+/// A 24x24, 64 spp render of a sphere of `bsdf` under a background of
+/// radiance 1 (a white furnace): the mean radiance over the sphere's
+/// pixels ([`sphere_pixels`]).
 fn rendered_furnace(bsdf: Bsdf, seed: u64) -> f64 {
     use render_common::*;
     let mut mats = vec![diffuse("unused", 0.5)];
@@ -238,26 +282,56 @@ fn rendered_furnace(bsdf: Bsdf, seed: u64) -> f64 {
         uv_sphere(Vec3::ZERO, 1.0, 48, 24, 0),
         mats,
         vec![],
-        look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0),
+        furnace_camera(),
         Vec3::ONE,
     );
-    let film = render(&sc, &opts(24, 64, -1, seed));
-    let n = film.sum.len();
-    (0..n).map(|i| film.mean(i).x as f64).sum::<f64>() / n as f64
+    let film = render(&sc, &opts(FURNACE_SIZE, 64, -1, seed));
+    let px = sphere_pixels();
+    px.iter().map(|(i, _)| film.mean(*i).x as f64).sum::<f64>() / px.len() as f64
+}
+
+/// What a convex sphere of the uncompensated F = 1 conductor renders in
+/// the furnace: one bounce, so each pixel is the directional albedo
+/// E(mu_o), here by quadrature (`ms_albedo_reference`, interpolated on 65
+/// nodes in mu) averaged over the same pixels and footprints.
+fn single_scattering_prediction(alpha: f32) -> f64 {
+    let nodes: Vec<f64> = (0..=64)
+        .into_par_iter()
+        .map(|j| ms_albedo_reference(j as f32 / 64.0, alpha, false, 128))
+        .collect();
+    let e = |mu: f32| {
+        let x = (mu.clamp(0.0, 1.0) * 64.0).min(63.999);
+        let j = x as usize;
+        let f = (x - j as f32) as f64;
+        nodes[j] * (1.0 - f) + nodes[j + 1] * f
+    };
+    let px = sphere_pixels();
+    px.iter()
+        .map(|(_, mus)| mus.iter().map(|&m| e(m)).sum::<f64>() / mus.len() as f64)
+        .sum::<f64>()
+        / px.len() as f64
 }
 
 /// A rendered white furnace: a sphere of the F = 1 conductor in a uniform
-/// background of radiance 1 renders 1 everywhere with `multiscatter`
-/// (statistically, to 1%), and visibly darker without it at alpha = 1.
+/// background of radiance 1 renders 1 on its pixels with `multiscatter`
+/// (statistically, to 1%), and without it exactly what the single
+/// scattering lobe's albedo predicts (to 1%: the loss is bounded from both
+/// sides, not only "darker").
 #[test]
 fn rendered_furnace_is_one() {
-    for (alpha, ms) in [(1.0f32, true), (0.5, true), (1.0, false)] {
+    for (alpha, ms) in [(1.0f32, true), (0.5, true), (1.0, false), (0.5, false)] {
         let mean = rendered_furnace(white(alpha, alpha, Shadowing::Correlated, ms), 9);
-        eprintln!("furnace alpha {alpha} multiscatter {ms}: mean {mean:.4}");
+        eprintln!("furnace alpha {alpha} multiscatter {ms}: sphere mean {mean:.4}");
         if ms {
             assert!((mean - 1.0).abs() < 0.01, "alpha {alpha}: {mean}");
         } else {
-            assert!(mean < 0.97, "alpha {alpha} single scattering: {mean}");
+            let want = single_scattering_prediction(alpha);
+            eprintln!("  single scattering predicts {want:.4}");
+            assert!(want < 0.97, "alpha {alpha}: the lobe loses energy: {want}");
+            assert!(
+                (mean / want - 1.0).abs() < 0.01,
+                "alpha {alpha} single scattering: {mean} vs quadrature {want}"
+            );
         }
     }
 }
@@ -341,8 +415,10 @@ fn rough_glass_sampling_matches_eval_and_pdf() {
 
 /// A rendered furnace of a rough glass sphere renders 1 within 1.5%: each
 /// interaction's albedo is 1 within the tables' interpolation error
-/// (~0.3%), which compounds over the internal bounces (0.989 measured at
-/// alpha = 1, up from 0.96 without compensation).
+/// (~0.3%), which compounds over the internal bounces (on the sphere's
+/// pixels 0.991 measured at alpha = 1, up from 0.342 without
+/// compensation; the whole-image 0.96 this comment once gave was diluted
+/// by the background, which is exactly 1).
 #[test]
 fn rendered_glass_furnace_is_one() {
     for (alpha, ms) in [(1.0f32, true), (0.3, true), (1.0, false)] {
@@ -351,7 +427,7 @@ fn rendered_glass_furnace_is_one() {
         if ms {
             assert!((mean - 1.0).abs() < 0.015, "alpha {alpha}: {mean}");
         } else {
-            assert!(mean < 0.985, "alpha {alpha} single scattering: {mean}");
+            assert!(mean < 0.9, "alpha {alpha} single scattering: {mean}");
         }
     }
 }

@@ -1,6 +1,7 @@
 //! Traversal throughput, binary vs 4-wide BVH, printed with `--nocapture`
 //! (release figures: `cargo test --release -p glint-cpu --test
-//! bvh_throughput -- --nocapture --test-threads 1`). Meshes: the bunny, the
+//! bvh_throughput -- --ignored --nocapture --test-threads 1`; a benchmark the
+//! suite skips). Meshes: the bunny, the
 //! bundled Cornell box, and `../shared/assets/nefertiti.glb` where that file
 //! exists. Rays: coherent primary rays from a pinhole camera, and incoherent
 //! diffuse bounces (cosine-distributed about the normal at each primary hit,
@@ -175,6 +176,7 @@ fn measure(name: &str, input: &[Triangle]) {
 }
 
 #[test]
+#[ignore = "benchmark: cargo test --release -p glint-cpu --test bvh_throughput -- --ignored --nocapture"]
 fn traversal_throughput_binary_vs_wide() {
     eprintln!(
         "rayon threads: {}; wide kernels: {:?}",
