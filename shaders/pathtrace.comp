@@ -188,6 +188,15 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
             break;
         }
         Triangle tri = triangles[hit.tri];
+        // Beer-Lambert inside a solid dielectric (glint_cpu integrator's
+        // `absorb`): reached from the back face, the segment ran inside;
+        // a dielectric's k is its interior's sigma_a.
+        if (HAS(F_DIELECTRIC) && dot(ray_d, triangle_normal(tri)) > 0.0) {
+            uint mi = floatBitsToUint(tri.p0.w);
+            if (materials[mi].kind == KIND_DIELECTRIC) {
+                throughput *= exp(-materials[mi].k.xyz * hit.t);
+            }
+        }
         vec3 p = (1.0 - hit.u - hit.v) * tri.p0.xyz + hit.u * tri.p1.xyz + hit.v * tri.p2.xyz;
         vec3 p_err = hit_error(tri.p0.xyz, tri.p1.xyz, tri.p2.xyz);
         vec3 wo = -ray_d;

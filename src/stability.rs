@@ -694,6 +694,7 @@ pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>,
                 bsdf: p.bsdf,
                 emission: Vec3::ZERO,
                 double_sided: false,
+                absorption: glam::Vec3::ZERO,
             })
         })
         .collect();

@@ -294,6 +294,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
                 bsdf: *b,
                 emission: Vec3::ZERO,
                 double_sided: false,
+                absorption: glam::Vec3::ZERO,
             })
         })
         .collect();

@@ -80,6 +80,16 @@ fn lit_by_background(scene: &mut Scene) {
     scene.background = Vec3::ONE;
 }
 
+/// The glass made an absorbing solid (KHR_materials_volume's
+/// Beer-Lambert interior, read from the dielectric's k on the GPU).
+fn absorbing_glass(scene: &mut Scene) {
+    for m in &mut scene.materials {
+        if matches!(m.bsdf, Bsdf::Dielectric { .. }) {
+            m.absorption = Vec3::new(0.2, 0.8, 2.0);
+        }
+    }
+}
+
 /// Render `file` (after `prepare`, on both sides) with both backends; with
 /// `perturb`, change the GPU's copy of the scene too.
 fn compare_scene(
@@ -160,6 +170,7 @@ scene_tests! {
     textured => "textured.gltf", as_is;
     materials => "materials.gltf", as_is;
     textured_envmap => "textured.gltf", with_envmap;
+    dielectric_absorbing => "dielectric.gltf", absorbing_glass;
 }
 
 /// A procedural sky (a blue gradient with a small bright sun) as an

@@ -197,6 +197,7 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
             bsdf: b,
             emission: Vec3::ZERO,
             double_sided: false,
+            absorption: glam::Vec3::ZERO,
         });
         if gm.kind != g.flags[1]
             || !close(Vec4::from_array(gm.reflectance), g.reflectance, 2e-4)

@@ -307,6 +307,7 @@ mod tests {
             bsdf,
             emission: Vec3::ZERO,
             double_sided: false,
+            absorption: glam::Vec3::ZERO,
         }
     }
 

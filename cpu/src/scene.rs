@@ -85,6 +85,13 @@ pub struct Material {
     pub emission: Vec3,
     /// glTF `doubleSided`: emission leaves both faces.
     pub double_sided: bool,
+    /// Beer-Lambert absorption coefficient sigma_a (rgb, per scene unit) of
+    /// the interior a closed mesh of this material bounds
+    /// (`KHR_materials_volume`: -ln(attenuationColor) / attenuationDistance);
+    /// read with the solid `Dielectric` BSDF only. A path segment that
+    /// reaches a surface of the material from its back face (it travelled
+    /// inside) is weighted by exp(-sigma_a t).
+    pub absorption: Vec3,
 }
 
 impl Material {
@@ -111,7 +118,8 @@ pub struct GpuMaterial {
     /// Conductor eta (rgb); dielectric: `.x` = int_ior / ext_ior. `.w` of
     /// eta, k, specular: the conductor's F_avg (rgb) with `multiscatter`.
     pub eta: [f32; 4],
-    /// Conductor k (rgb).
+    /// Conductor k (rgb); dielectric: the interior's absorption sigma_a
+    /// (rgb, [`Material::absorption`]).
     pub k: [f32; 4],
     /// Conductor specular_reflectance (rgb).
     pub specular: [f32; 4],
@@ -183,6 +191,8 @@ impl From<&Material> for GpuMaterial {
             Bsdf::Dielectric { eta, roughness } => {
                 g.kind = Self::KIND_DIELECTRIC;
                 g.eta = [*eta, 0.0, 0.0, 0.0];
+                // k is the interior's absorption sigma_a for a dielectric.
+                g.k = vec4(m.absorption, 0.0);
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);

@@ -28,6 +28,7 @@ fn furnace() -> (glint_cpu::Scene, f32) {
         name: "glowing wall".into(),
         emission: Vec3::ONE,
         double_sided: true,
+        absorption: glam::Vec3::ZERO,
         ..diffuse("wall", RHO)
     };
     let s = scene(

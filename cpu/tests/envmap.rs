@@ -146,6 +146,7 @@ fn quad_scene() -> Scene {
         },
         emission: Vec3::ZERO,
         double_sided: false,
+        absorption: glam::Vec3::ZERO,
     };
     // The quad [-1, 1]^2 at z = 0 facing +Z, seen from z = 4 with a wider
     // view, so the background shows around it.

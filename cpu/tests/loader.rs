@@ -685,6 +685,58 @@ fn ior_and_specular_shape_the_coat() {
 }
 
 #[test]
+fn a_solid_dielectric_takes_the_volumes_beer_lambert_absorption() {
+    let glass = |volume: serde_json::Value| {
+        json!({ "pbrMetallicRoughness": { "roughnessFactor": 0, "metallicFactor": 0 },
+                "extensions": { "KHR_materials_transmission": { "transmissionFactor": 1 },
+                                "KHR_materials_volume": volume } })
+    };
+    let d = material_doc(vec![
+        glass(
+            json!({ "thicknessFactor": 1, "attenuationColor": [0.5, 1, 0.25],
+                      "attenuationDistance": 2 }),
+        ),
+        // No distance: infinite, a clear interior.
+        glass(json!({ "thicknessFactor": 1, "attenuationColor": [0.5, 0.5, 0.5] })),
+        // Thin-walled (no thickness): glTF ignores the volume.
+        glass(
+            json!({ "thicknessFactor": 0, "attenuationColor": [0.5, 0.5, 0.5],
+                      "attenuationDistance": 1 }),
+        ),
+        // A black channel absorbs everything, finitely (no NaN from 0 t).
+        glass(json!({ "thicknessFactor": 1, "attenuationColor": [0, 1, 1],
+                      "attenuationDistance": 1 })),
+    ]);
+    let s = parse_doc(&d, "volume");
+    assert!(
+        s.warnings.iter().all(|w| !w.contains("attenuation")),
+        "{:?}",
+        s.warnings
+    );
+    let a = s.materials[0].absorption;
+    let ln2 = std::f32::consts::LN_2;
+    assert!(
+        (a - Vec3::new(ln2 / 2.0, 0.0, 2.0 * ln2 / 2.0))
+            .abs()
+            .max_element()
+            < 1e-6,
+        "{a}"
+    );
+    assert!(matches!(s.materials[0].bsdf, Bsdf::Dielectric { .. }));
+    assert_eq!(s.materials[1].absorption, Vec3::ZERO);
+    assert_eq!(s.materials[2].absorption, Vec3::ZERO);
+    assert!(!matches!(s.materials[2].bsdf, Bsdf::Dielectric { .. }));
+    let b = s.materials[3].absorption;
+    assert!(
+        b.x.is_finite() && b.x > 40.0 && (-b.x * 0.0).exp() == 1.0,
+        "{b}"
+    );
+    // The GPU reads it from the dielectric's k.
+    let g = glint_cpu::GpuMaterial::from(&s.materials[0]);
+    assert_eq!(&g.k[..3], &a.to_array()[..]);
+}
+
+#[test]
 fn transmission_is_thin_walled_unless_the_volume_has_a_thickness() {
     let d = material_doc(vec![
         json!({ "pbrMetallicRoughness": { "roughnessFactor": 0, "metallicFactor": 0,

@@ -74,6 +74,7 @@ fn mis_agrees_on_glossy_and_transmissive_surfaces() {
             bsdf,
             emission: Vec3::ZERO,
             double_sided: false,
+            absorption: glam::Vec3::ZERO,
         }]);
         let with = render(&s, &opts(SIZE, 64, -1, 41 + i as u64));
         let without = render_no_nee(&s, &opts(SIZE, 256, -1, 51 + i as u64));
@@ -174,6 +175,7 @@ fn the_film_variance_is_calibrated_for_both_samplers() {
         }),
         emission: Vec3::ZERO,
         double_sided: false,
+        absorption: glam::Vec3::ZERO,
     };
     for (name, s) in [
         ("room", lit_room(vec![])),

@@ -217,6 +217,9 @@ pub fn describe(path: &str, s: &Scene) -> String {
         if m.double_sided {
             extra.push("double-sided".into());
         }
+        if m.absorption != glam::Vec3::ZERO {
+            extra.push(format!("absorbing interior sigma_a {}", rgb(m.absorption)));
+        }
         let mut bsdf = model(&m.bsdf);
         if let Some(mt) = mt {
             if mt.mode == MAP_GLTF {

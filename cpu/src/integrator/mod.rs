@@ -130,6 +130,21 @@ pub fn validate_options(scene: &Scene, opts: &RenderOptions) -> Result<(), Rende
     Ok(())
 }
 
+/// Beer-Lambert absorption inside a solid dielectric
+/// ([`crate::Material::absorption`]): a segment that reaches a surface of
+/// an absorbing material from its back face (`d . n_g > 0`: winding
+/// outward, as glTF's closed meshes are) travelled inside it for `t`
+/// (rays are unit length), and carries exp(-sigma_a t) of its radiance.
+/// Stateless, so it holds for closed, non-nested volumes; shadow rays need
+/// none (a dielectric occludes them).
+#[inline]
+fn absorb(scene: &Scene, tri: &crate::Triangle, ray: &Ray, t: f32, throughput: &mut Vec3) {
+    let sigma = scene.materials[tri.material as usize].absorption;
+    if sigma != Vec3::ZERO && ray.d.dot(tri.geometric_normal()) > 0.0 {
+        *throughput *= (-sigma * t).exp();
+    }
+}
+
 /// Componentwise error bound of a point interpolated from the triangle
 /// `p0 p1 p2` (see the module notes): gamma(7) max(|p0|, |p1|, |p2|), plus
 /// `RAY_ERR_TRI` x the triangle's extent in every component for the next
@@ -416,6 +431,7 @@ impl<'a> PathTracer<'a> {
                 break;
             };
             let tri = &scene.triangles[hit.tri as usize];
+            absorb(scene, tri, &ray, hit.t, &mut throughput);
             let [p0, p1, p2] = tri.vertices();
             // Interpolated from the vertices: its error is bounded by
             // hit_error (see the module notes on ray offsets).

@@ -46,6 +46,7 @@ pub fn gltf_default_material() -> Material {
         bsdf: Bsdf::Conductor(conductor_from_f0(Vec3::ONE, isotropic(1.0))),
         emission: Vec3::ZERO,
         double_sided: false,
+        absorption: glam::Vec3::ZERO,
     }
 }
 
@@ -100,12 +101,36 @@ fn convert_inner(
             "emissiveStrength must be finite and >= 0, got {strength}"
         ));
     }
+    // The interior's absorption: a solid dielectric (KHR_materials_volume
+    // with a thickness, or extras.bsdf's dielectric) only.
+    let absorption = match (&bsdf, m.volume()) {
+        (Bsdf::Dielectric { .. }, Some(v)) => {
+            volume_absorption(Vec3::from(v.attenuation_color()), v.attenuation_distance())
+        }
+        _ => Vec3::ZERO,
+    };
     Ok(Material {
         name: m.name().unwrap_or_default().to_string(),
         bsdf,
         emission: factor * strength,
         double_sided: m.double_sided(),
+        absorption,
     })
+}
+
+/// KHR_materials_volume's Beer-Lambert coefficient: the transmittance
+/// over a distance x is `color^(x / distance)`, so sigma_a =
+/// -ln(color) / distance per channel (0 for an infinite distance; a black
+/// channel absorbs within 1e-20 of its distance, finite so that
+/// sigma_a t never makes a NaN).
+pub fn volume_absorption(color: Vec3, distance: f32) -> Vec3 {
+    if !distance.is_finite() {
+        return Vec3::ZERO;
+    }
+    color
+        .max(Vec3::splat(1e-20))
+        .min(Vec3::ONE)
+        .map(|c| -c.ln() / distance)
 }
 
 fn check_range(v: Vec3, lo: f32, hi: f32, what: &str) -> Result<(), String> {
@@ -275,11 +300,6 @@ fn bsdf_from_gltf(
             }
             let c = Vec3::from(v.attenuation_color());
             check_range(c, 0.0, 1.0, "KHR_materials_volume attenuationColor")?;
-            if a.is_finite() && c != Vec3::ONE {
-                warnings.push(format!(
-                    "{label}: KHR_materials_volume attenuation is not supported yet; the interior is clear"
-                ));
-            }
             d
         }
         None => 0.0,

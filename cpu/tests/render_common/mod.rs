@@ -13,6 +13,7 @@ pub fn diffuse(name: &str, rho: f32) -> Material {
         },
         emission: Vec3::ZERO,
         double_sided: false,
+        absorption: glam::Vec3::ZERO,
     }
 }
 
@@ -24,6 +25,7 @@ pub fn emitter(name: &str, le: Vec3, double_sided: bool) -> Material {
         },
         emission: le,
         double_sided,
+        absorption: glam::Vec3::ZERO,
     }
 }
 
