@@ -5,5 +5,23 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
+# The report test of `glint test` loads its HTML in headless Chromium
+# (Debian's chromium package; the render command's set-up does not need it).
+# Installed here when missing; then the test requires it
+# (GLINT_REQUIRE_BROWSER). Without root and sudo it cannot be installed: the
+# test is skipped with a note.
+if ! command -v chromium >/dev/null 2>&1; then
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  if [ -z "$sudo" ] || sudo -n true 2>/dev/null; then
+    echo "test: installing chromium" >&2
+    export DEBIAN_FRONTEND=noninteractive
+    $sudo apt-get update -qq
+    $sudo apt-get install -y -qq chromium >/dev/null
+  else
+    echo "test: chromium missing and not root: the browser test will be skipped" >&2
+  fi
+fi
+command -v chromium >/dev/null 2>&1 && export GLINT_REQUIRE_BROWSER=1
 export GLINT_VALIDATION=1
 cargo test --workspace --locked "$@"

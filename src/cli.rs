@@ -49,6 +49,10 @@ pub enum Command {
     Diff(DiffArgs),
     /// Combine shards (render --shard I/N) into one image exactly.
     Merge(MergeArgs),
+    /// Run an image-regression suite (SUITE.toml): render each scene, diff
+    /// it against its reference (exit 0 all agree, 1 any differs, 2 bad
+    /// input); --update rewrites the references.
+    Test(TestArgs),
 }
 
 /// The verbs, for messages ("missing command: ...").
@@ -61,6 +65,7 @@ pub const VERBS: &[&str] = &[
     "merge",
     "info",
     "stability",
+    "test",
 ];
 
 #[derive(clap::Args, Debug)]
@@ -571,4 +576,36 @@ pub struct StabilityArgs {
     /// Use the Vulkan device whose name contains NAME.
     #[arg(long, value_name = "NAME")]
     pub device: Option<String>,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct TestArgs {
+    /// The suite manifest (TOML: [defaults] and [[scene]] tables).
+    #[arg(value_name = "SUITE.toml")]
+    pub suite: PathBuf,
+
+    /// (Re)write the references (with variance, more samples than the
+    /// tests and another seed) instead of testing; exits 0.
+    #[arg(long)]
+    pub update: bool,
+
+    /// Write JUnit XML: one testcase per scene.
+    #[arg(long, value_name = "FILE.xml")]
+    pub junit: Option<PathBuf>,
+
+    /// Write DIR/index.html and the images beside it.
+    #[arg(long, value_name = "DIR")]
+    pub html: Option<PathBuf>,
+
+    /// Scenes rendered at once.
+    #[arg(long, value_name = "N", value_parser = parse_count)]
+    pub jobs: Option<u32>,
+
+    /// Only the scenes whose name contains NAME.
+    #[arg(long, value_name = "NAME")]
+    pub filter: Option<String>,
+
+    /// Seed of the test renders (independent re-renders: other seeds).
+    #[arg(long, value_name = "S", default_value_t = 1, value_parser = parse_seed)]
+    pub seed: u64,
 }

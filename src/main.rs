@@ -89,6 +89,17 @@ fn main() -> ExitCode {
             Err(_) => ExitCode::from(101),
         };
     }
+    // test: 0 all agree, 1 any differs, 2 bad input (the contract).
+    if let Command::Test(args) = &cli.command {
+        return match std::panic::catch_unwind(|| cmd::test::run(args)) {
+            Ok(Ok(code)) => ExitCode::from(code),
+            Ok(Err(e)) => {
+                eprintln!("glint: {}", one_line(&format!("{e:#}")));
+                ExitCode::from(2)
+            }
+            Err(_) => ExitCode::from(101),
+        };
+    }
     // merge: every refusal is bad input, 2, as diff's.
     let all_bad_input = matches!(cli.command, Command::Merge(_));
     let result = match cli.command {
@@ -99,7 +110,7 @@ fn main() -> ExitCode {
         Command::Info(args) => std::panic::catch_unwind(|| cmd::info::run(&args)),
         Command::Stability(args) => std::panic::catch_unwind(|| cmd::stability::run(&args)),
         Command::Merge(args) => std::panic::catch_unwind(|| cmd::merge::run(&args)),
-        Command::Diff(_) => unreachable!("handled above"),
+        Command::Diff(_) | Command::Test(_) => unreachable!("handled above"),
     };
     match result {
         Ok(Ok(())) => ExitCode::SUCCESS,

@@ -90,6 +90,17 @@ fn difference_values(a: &RadianceImage, b: &RadianceImage) -> (Vec<f32>, f32, St
     }
 }
 
+/// The relative-error colour-bar image of `a` against `b` (diff's image
+/// for files without variance), as PNG bytes: `glint test`'s difference.
+pub fn relative_difference_png(a: &RadianceImage, b: &RadianceImage) -> Result<Vec<u8>> {
+    let strip = |i: &RadianceImage| RadianceImage {
+        variance: None,
+        ..i.clone()
+    };
+    let (values, range, label) = difference_values(&strip(a), &strip(b));
+    glint::heatmap::png(a.width, a.height, &values, range, &label).map_err(|e| anyhow!("{e}"))
+}
+
 /// The largest |a - b| / max(|a|, |b|) over pixels and channels (0 where
 /// both are 0): how exactly two images match (merged shards against one
 /// render).

@@ -4,13 +4,16 @@
 pub mod bench;
 pub mod compare;
 pub mod converge;
+pub mod detect;
 pub mod diff;
 pub mod info;
 pub mod merge;
 pub mod outputs;
 pub mod render;
+pub mod report;
 pub mod shard;
 pub mod stability;
+pub mod test;
 
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};

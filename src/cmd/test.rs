@@ -1,0 +1,444 @@
+//! `glint test SUITE.toml`: an image-regression suite (contract, "Second
+//! additions"). Each scene is rendered by glint's own `render` (a child
+//! process of this binary, so what is tested is the files glint writes) and
+//! judged by its own `diff` (the block z-tests at the suite's alpha).
+//! `--update` rewrites the references instead. Exit 0 all agree, 1 any
+//! differs, 2 bad input (the suite, a missing or mismatched reference).
+
+use std::ffi::OsString;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use glint::cpu::exr_file::RadianceImage;
+use serde::Deserialize;
+
+use super::{BadInput, detect, report};
+use crate::cli::TestArgs;
+
+/// Samples of the pilot render behind `detect`.
+const PILOT_SPP: u32 = 16;
+/// `detect`'s floor: fewer samples make the per-pixel variance estimate
+/// too rough for the z-test's normal approximation.
+const DETECT_MIN: u32 = 16;
+/// `detect`'s cap when the scene gives no `spp`.
+const DETECT_CAP: u32 = 4096;
+/// Seeds: the references' and the pilots' (tests take `--seed`).
+const REF_SEED: u64 = 0x5eed_0000_0001;
+const PILOT_SEED: u64 = 0x5eed_0000_0002;
+
+/// One table of the manifest: `[defaults]` or a `[[scene]]`.
+#[derive(Deserialize, Default, Clone, Debug)]
+#[serde(deny_unknown_fields)]
+pub struct Entry {
+    name: Option<String>,
+    file: Option<PathBuf>,
+    reference: Option<PathBuf>,
+    backend: Option<String>,
+    width: Option<u32>,
+    height: Option<u32>,
+    spp: Option<u32>,
+    detect: Option<f64>,
+    alpha: Option<f64>,
+    max_depth: Option<i32>,
+    camera: Option<String>,
+    nee: Option<String>,
+    mis: Option<String>,
+    sampler: Option<String>,
+    multiscatter: Option<String>,
+    kernel: Option<String>,
+    options: Option<Vec<String>>,
+}
+
+#[derive(Deserialize, Debug)]
+#[serde(deny_unknown_fields)]
+struct Manifest {
+    defaults: Option<Entry>,
+    #[serde(default)]
+    scene: Vec<Entry>,
+}
+
+/// A scene of the suite, its settings settled.
+#[derive(Clone, Debug)]
+pub struct Case {
+    pub name: String,
+    file: PathBuf,
+    reference: PathBuf,
+    spp: Option<u32>,
+    pub detect: Option<f64>,
+    pub alpha: f64,
+    /// `render` options other than spp, seed and outputs.
+    render_opts: Vec<String>,
+}
+
+/// How one scene went.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Verdict {
+    Pass,
+    Fail(String),
+    Error(String),
+}
+
+/// One scene's result, for the JUnit file and the report.
+#[derive(Debug, Clone)]
+pub struct Outcome {
+    pub case: Case,
+    pub verdict: Verdict,
+    pub seconds: f64,
+    pub spp: Option<u32>,
+    /// `diff --json`'s figures, when diff ran.
+    pub metrics: Option<serde_json::Value>,
+    /// (label, file name in the report's folder).
+    pub images: Vec<(&'static str, String)>,
+}
+
+fn merge(d: &Entry, s: &Entry) -> Entry {
+    macro_rules! pick {
+        ($($f:ident),*) => { Entry { $($f: s.$f.clone().or_else(|| d.$f.clone()),)* options: None } };
+    }
+    let mut e = pick!(
+        name,
+        file,
+        reference,
+        backend,
+        width,
+        height,
+        spp,
+        detect,
+        alpha,
+        max_depth,
+        camera,
+        nee,
+        mis,
+        sampler,
+        multiscatter,
+        kernel
+    );
+    let mut opts = d.options.clone().unwrap_or_default();
+    opts.extend(s.options.clone().unwrap_or_default());
+    e.options = Some(opts);
+    e
+}
+
+fn case(e: &Entry, dir: &Path, i: usize) -> Result<Case> {
+    let name = e
+        .name
+        .clone()
+        .ok_or_else(|| anyhow!("scene {}: no name", i + 1))?;
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-.".contains(c))
+        || name.starts_with('.')
+    {
+        bail!("scene {name:?}: a name is letters, digits, '_', '-' and '.' (it names files)");
+    }
+    let file = dir.join(
+        e.file
+            .as_ref()
+            .ok_or_else(|| anyhow!("scene {name}: no file"))?,
+    );
+    let reference = dir.join(
+        e.reference
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("refs/{name}.exr"))),
+    );
+    let alpha = e.alpha.unwrap_or(1e-3);
+    if !(alpha > 0.0 && alpha < 1.0) {
+        bail!("scene {name}: alpha {alpha} is out of range (0, 1)");
+    }
+    if let Some(d) = e.detect
+        && !(d > 0.0 && d < 1.0)
+    {
+        bail!("scene {name}: detect {d} is out of range (0, 1): a relative change");
+    }
+    let mut o: Vec<String> = Vec::new();
+    let mut flag = |k: &str, v: Option<String>| {
+        if let Some(v) = v {
+            o.push(format!("--{k}"));
+            o.push(v);
+        }
+    };
+    flag("backend", e.backend.clone());
+    flag("width", e.width.map(|v| v.to_string()));
+    flag("height", e.height.map(|v| v.to_string()));
+    flag("max-depth", e.max_depth.map(|v| v.to_string()));
+    flag("camera", e.camera.clone());
+    flag("nee", e.nee.clone());
+    flag("mis", e.mis.clone());
+    flag("sampler", e.sampler.clone());
+    flag("multiscatter", e.multiscatter.clone());
+    flag("kernel", e.kernel.clone());
+    for f in e.options.iter().flatten() {
+        if ["--spp", "--seed", "-o", "--output", "--variance", "--shard"].contains(&f.as_str()) {
+            bail!("scene {name}: options: {f} is set by glint test (use the spp key)");
+        }
+        o.push(f.clone());
+    }
+    Ok(Case {
+        name,
+        file,
+        reference,
+        spp: e.spp,
+        detect: e.detect,
+        alpha,
+        render_opts: o,
+    })
+}
+
+/// Read and check the manifest; every problem is bad input.
+pub fn load(path: &Path) -> Result<Vec<Case>> {
+    super::check_input_file(path, "a suite (.toml)")?;
+    let text = std::fs::read_to_string(path).with_context(|| path.display().to_string())?;
+    let m: Manifest = toml::from_str(&text)
+        .map_err(|e| anyhow!("{}: {}", path.display(), super::one_line(&e.to_string())))?;
+    let d = m.defaults.unwrap_or_default();
+    if d.name.is_some() || d.file.is_some() || d.reference.is_some() {
+        bail!(
+            "{}: [defaults]: name, file and reference are per scene",
+            path.display()
+        );
+    }
+    if m.scene.is_empty() {
+        bail!("{}: no [[scene]]", path.display());
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let mut cases = Vec::new();
+    for (i, s) in m.scene.iter().enumerate() {
+        let c = case(&merge(&d, s), dir, i).map_err(|e| anyhow!("{}: {e}", path.display()))?;
+        if cases.iter().any(|x: &Case| x.name == c.name) {
+            bail!(
+                "{}: scene {}: the name is used twice",
+                path.display(),
+                c.name
+            );
+        }
+        cases.push(c);
+    }
+    Ok(cases)
+}
+
+/// Run this binary with `args`: (exit code, stdout, stderr's last line).
+fn glint(args: &[OsString]) -> Result<(i32, String, String)> {
+    let exe = std::env::current_exe().context("locating the glint binary")?;
+    let out = Command::new(exe)
+        .args(args)
+        .output()
+        .context("running glint")?;
+    let err = String::from_utf8_lossy(&out.stderr);
+    let last = err
+        .lines()
+        .rev()
+        .find(|l| !l.trim().is_empty() && !l.contains("warning:"))
+        .unwrap_or("")
+        .trim_start_matches("glint: ")
+        .to_string();
+    Ok((
+        out.status.code().unwrap_or(101),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        last,
+    ))
+}
+
+/// `glint render` of the case to `out` (with variance) at `spp`, `seed`.
+fn render(c: &Case, out: &Path, spp: u32, seed: u64) -> Result<()> {
+    let mut a: Vec<OsString> = vec!["render".into(), c.file.clone().into()];
+    a.extend(c.render_opts.iter().map(OsString::from));
+    for s in ["--spp", &spp.to_string(), "--seed", &seed.to_string()] {
+        a.push(s.into());
+    }
+    for s in ["--variance", "--quiet", "-o"] {
+        a.push(s.into());
+    }
+    a.push(out.into());
+    let (code, _, err) = glint(&a)?;
+    if code != 0 {
+        bail!("render: {err}");
+    }
+    Ok(())
+}
+
+fn read(path: &Path) -> Result<RadianceImage> {
+    RadianceImage::read(path).map_err(|e| anyhow!("{}: {e}", path.display()))
+}
+
+/// The spp of a case: `spp`, or with `detect` the pilot's rule (`spp` then
+/// the cap).
+fn choose_spp(c: &Case, work: &Path, reference: Option<&RadianceImage>) -> Result<u32> {
+    let Some(delta) = c.detect else {
+        return Ok(c.spp.unwrap_or(super::DEFAULT_SPP));
+    };
+    let pilot_path = work.join(format!("{}-pilot.exr", c.name));
+    render(c, &pilot_path, PILOT_SPP, PILOT_SEED)?;
+    let pilot = read(&pilot_path)?;
+    let _ = std::fs::remove_file(&pilot_path);
+    let cap = c.spp.unwrap_or(DETECT_CAP);
+    let n = detect::required_spp(&pilot, PILOT_SPP, reference, delta, c.alpha, cap);
+    Ok(n.max(DETECT_MIN.min(cap)))
+}
+
+/// `--update`: the reference of `c`, REF_FACTOR x the tests' samples.
+fn update(c: &Case, work: &Path) -> Result<u32> {
+    let spp = choose_spp(c, work, None)?.saturating_mul(detect::REF_FACTOR);
+    if let Some(dir) = c.reference.parent() {
+        std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
+    }
+    render(c, &c.reference, spp, REF_SEED)?;
+    Ok(spp)
+}
+
+/// Render and diff one case; `Err` is bad input (an error testcase).
+fn check(c: &Case, work: &Path, seed: u64, o: &mut Outcome) -> Result<Verdict> {
+    if !c.reference.is_file() {
+        return Err(anyhow!(
+            "{}: no reference; run glint test --update",
+            c.reference.display()
+        ));
+    }
+    let reference = read(&c.reference)?;
+    let spp = choose_spp(c, work, Some(&reference))?;
+    o.spp = Some(spp);
+    let n = &c.name;
+    let out = work.join(format!("{n}.exr"));
+    render(c, &out, spp, seed)?;
+    let img = read(&out)?;
+    let key = |i: &RadianceImage| i.meta.as_ref().and_then(|m| m.scene.clone());
+    if key(&img) != key(&reference) {
+        bail!(
+            "{}: made from another scene or settings (scene key {} here, {} in the \
+             reference); run glint test --update",
+            c.reference.display(),
+            key(&img).unwrap_or_else(|| "none".into()),
+            key(&reference).unwrap_or_else(|| "none".into())
+        );
+    }
+    report::images(n, &img, &reference, work, &mut o.images)?;
+    let json = work.join(format!("{n}.json"));
+    let z = format!("{n}-z.png");
+    let mut a: Vec<OsString> = vec!["diff".into(), out.into(), c.reference.clone().into()];
+    a.extend(["--diff".into(), work.join(&z).into(), "--json".into()]);
+    a.extend([
+        json.clone().into(),
+        "--alpha".into(),
+        c.alpha.to_string().into(),
+    ]);
+    let (code, stdout, err) = glint(&a)?;
+    if let Ok(t) = std::fs::read_to_string(&json) {
+        o.metrics = serde_json::from_str(&t).ok();
+        o.images.push(("z map", z));
+    }
+    let line = stdout
+        .lines()
+        .find(|l| l.starts_with("agree") || l.starts_with("differ"))
+        .unwrap_or("")
+        .to_string();
+    match code {
+        0 => Ok(Verdict::Pass),
+        1 => Ok(Verdict::Fail(line)),
+        _ => Err(anyhow!("diff: {err}")),
+    }
+}
+
+fn run_one(c: &Case, args: &TestArgs, work: &Path) -> Outcome {
+    let t = Instant::now();
+    let mut o = Outcome {
+        case: c.clone(),
+        verdict: Verdict::Pass,
+        seconds: 0.0,
+        spp: None,
+        metrics: None,
+        images: Vec::new(),
+    };
+    o.verdict = if args.update {
+        match update(c, work) {
+            Ok(spp) => {
+                o.spp = Some(spp);
+                Verdict::Pass
+            }
+            Err(e) => Verdict::Error(super::one_line(&format!("{e:#}"))),
+        }
+    } else {
+        check(c, work, args.seed, &mut o)
+            .unwrap_or_else(|e| Verdict::Error(super::one_line(&format!("{e:#}"))))
+    };
+    o.seconds = t.elapsed().as_secs_f64();
+    o
+}
+
+fn print(o: &Outcome, update: bool) {
+    let spp = o.spp.map(|s| format!(", {s} spp")).unwrap_or_default();
+    let what = match (&o.verdict, update) {
+        (Verdict::Pass, true) => format!("reference written to {}", o.case.reference.display()),
+        (Verdict::Pass, false) => "agree".into(),
+        (Verdict::Fail(l), _) => format!("DIFFER: {l}"),
+        (Verdict::Error(e), _) => format!("ERROR: {e}"),
+    };
+    println!("{}: {what} ({:.1} s{spp})", o.case.name, o.seconds);
+}
+
+/// The suite's exit status: 0 all agree, 1 any differs, 2 any bad input.
+pub fn run(args: &TestArgs) -> Result<u8> {
+    let t = Instant::now();
+    let mut cases = load(&args.suite).map_err(|e| BadInput(format!("{e:#}")))?;
+    if let Some(f) = &args.filter {
+        cases.retain(|c| c.name.contains(f.as_str()));
+        if cases.is_empty() {
+            return Err(BadInput(format!("--filter {f}: matches no scene")).into());
+        }
+    }
+    let jobs = args.jobs.unwrap_or(1).max(1) as usize;
+    let temp = std::env::temp_dir().join(format!("glint-test-{}", std::process::id()));
+    let work = args.html.clone().unwrap_or_else(|| temp.clone());
+    std::fs::create_dir_all(&work).with_context(|| work.display().to_string())?;
+    let next = AtomicUsize::new(0);
+    let results: Mutex<Vec<Outcome>> = Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..jobs.min(cases.len()) {
+            s.spawn(|| {
+                while let Some(c) = cases.get(next.fetch_add(1, Ordering::SeqCst)) {
+                    let o = run_one(c, args, &work);
+                    print(&o, args.update);
+                    results.lock().expect("no panics hold it").push(o);
+                }
+            });
+        }
+    });
+    let mut results = results.into_inner().expect("no panics hold it");
+    let order = |n: &str| cases.iter().position(|c| c.name == n);
+    results.sort_by_key(|o| order(&o.case.name));
+    let seconds = t.elapsed().as_secs_f64();
+    let suite_name = args
+        .suite
+        .file_stem()
+        .map_or("suite".into(), |s| s.to_string_lossy().into_owned());
+    if let Some(j) = &args.junit {
+        report::junit(j, &suite_name, &results, seconds)?;
+    }
+    if let Some(h) = &args.html {
+        report::html(h, &suite_name, &results, seconds)?;
+    }
+    if args.html.is_none() {
+        let _ = std::fs::remove_dir_all(&temp);
+    }
+    let count = |f: fn(&Verdict) -> bool| results.iter().filter(|o| f(&o.verdict)).count();
+    let (failed, errors) = (
+        count(|v| matches!(v, Verdict::Fail(_))),
+        count(|v| matches!(v, Verdict::Error(_))),
+    );
+    println!(
+        "{}: {} scenes, {} passed, {failed} failed, {errors} errors ({seconds:.1} s)",
+        args.suite.display(),
+        results.len(),
+        results.len() - failed - errors
+    );
+    Ok(if errors > 0 {
+        2
+    } else if failed > 0 {
+        1
+    } else {
+        0
+    })
+}
