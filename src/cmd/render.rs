@@ -22,18 +22,19 @@ fn check_control(args: &RenderArgs) -> Result<()> {
         ("--adaptive", args.adaptive),
     ] {
         let Some(v) = v else { continue };
+        let refuse = |m: String| Err(super::BadInput(m).into());
         if !(v > 0.0 && v.is_finite()) {
-            bail!("{name} {v} is out of range (a positive number)");
+            return refuse(format!("{name} {v} is out of range (a positive number)"));
         }
         if args.shard.is_some() {
-            bail!(
+            return refuse(format!(
                 "{name} and --shard cannot be combined (a shard cannot stop on the whole render's error: its samples are fixed in advance)"
-            );
+            ));
         }
         if args.scene.opts.time_limit.is_some() {
-            bail!(
+            return refuse(format!(
                 "{name} and --time-limit cannot be combined (the error, not the clock, decides when it stops)"
-            );
+            ));
         }
     }
     Ok(())
