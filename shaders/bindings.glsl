@@ -22,6 +22,8 @@
 //   binding 14 float env_dist[]        EnvMap::marginal then EnvMap::conditional
 //   (bindings 13-14 hold one dummy element when params.env_width == 0)
 //   binding 15 float ms_tables[]       glint_cpu::bsdf::multiscatter::gpu_tables (multiscatter)
+//   binding 16 uint active_pixels[]        1 per pixel: 0 skips the pixel (--adaptive, glint_cpu::adaptive;
+//                                      the host writes it between passes; all 1 otherwise)
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders
 // samples [sample_start, sample_start + sample_count) of every pixel, one
@@ -108,6 +110,7 @@ layout(std430, set = 0, binding = 12) readonly buffer TriangleUvBuffer { Triangl
 layout(std430, set = 0, binding = 13) readonly buffer EnvTexelBuffer { vec4 env_texels[]; };
 layout(std430, set = 0, binding = 14) readonly buffer EnvDistBuffer { float env_dist[]; };
 layout(std430, set = 0, binding = 15) readonly buffer MsTableBuffer { float ms_tables[]; };
+layout(std430, set = 0, binding = 16) readonly buffer ActiveBuffer { uint active_pixels[]; };
 // bsdf/multiscatter.glsl reads its tables through this hook.
 #define MS_TABLE(i) ms_tables[i]
 

@@ -293,6 +293,10 @@ void main() {
         return;
     }
     uint pixel = px.y * params.width + px.x;
+    // An adaptive render's stopped pixel keeps its sums (binding 16).
+    if (active_pixels[pixel] == 0u) {
+        return;
+    }
     uint rays = 0u;
     // Continue the running sums rather than adding a per-dispatch partial
     // sum: the additions then happen in sample order whatever the batch

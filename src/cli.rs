@@ -407,6 +407,19 @@ pub struct RenderArgs {
     #[arg(long, value_name = "I/N")]
     pub shard: Option<crate::cmd::shard::Shard>,
 
+    /// Render whole passes until the image's estimated relMSE (each
+    /// pixel's variance of the mean in place of its squared error) is at
+    /// most E; --spp is then the cap.
+    #[arg(long, value_name = "E", allow_negative_numbers = true)]
+    pub target_error: Option<f64>,
+
+    /// Per-pixel adaptive sampling: a pixel stops once its estimated
+    /// relative standard error is below T (after a minimum, neighbours
+    /// kept alive); --spp is the per-pixel cap; .exr outputs gain a
+    /// `samples` channel.
+    #[arg(long, value_name = "T", allow_negative_numbers = true)]
+    pub adaptive: Option<f64>,
+
     /// No progress bar and no success line.
     #[arg(long)]
     pub quiet: bool,

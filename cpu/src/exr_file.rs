@@ -207,6 +207,12 @@ pub fn parse_ranges(s: &str) -> Option<Vec<(u32, u32)>> {
         .collect()
 }
 
+/// The `samples` channel of an adaptive film (samples each pixel holds),
+/// or None when every pixel holds `spp`.
+pub fn samples_channel(film: &Film) -> Option<(&'static str, Vec<f32>)> {
+    (!film.counts.is_empty()).then(|| ("samples", film.counts.iter().map(|&c| c as f32).collect()))
+}
+
 impl RadianceImage {
     /// The film's means, and its variances of the mean when `variance`;
     /// `meta`'s batch is set to the one the film's estimate used.
@@ -241,6 +247,16 @@ impl RadianceImage {
 
     /// Encode as EXR (32-bit float, ZIP-compressed, lossless).
     pub fn write<W: Write + Seek>(&self, w: W) -> Result<(), ExrError> {
+        self.write_with(w, &[])
+    }
+
+    /// [`RadianceImage::write`] with extra float channels (name, one value
+    /// per pixel): an adaptive render's `samples` ([`samples_channel`]).
+    pub fn write_with<W: Write + Seek>(
+        &self,
+        w: W,
+        extra: &[(&str, Vec<f32>)],
+    ) -> Result<(), ExrError> {
         let n = self.mean.len();
         assert_eq!(n, self.width as usize * self.height as usize);
         let plane = |v: &[Vec3], c: usize| FlatSamples::F32(v.iter().map(|p| p[c]).collect());
@@ -257,6 +273,10 @@ impl RadianceImage {
             {
                 channels.push(AnyChannel::new(*name, plane(v, c)));
             }
+        }
+        for (name, v) in extra {
+            assert_eq!(v.len(), n);
+            channels.push(AnyChannel::new(*name, FlatSamples::F32(v.clone())));
         }
         let mut attributes = LayerAttributes::default();
         if let Some(m) = &self.meta {

@@ -35,6 +35,12 @@ pub struct RenderOptions {
     /// chosen by [`RenderOptions::batch`]. Shards of one render must share
     /// it, so `render --shard` sets it from the full sample count.
     pub variance_batch: u32,
+    /// Whole passes until the image's estimated relMSE is at most this
+    /// (`--target-error`; `spp` is the cap). See [`crate::adaptive`].
+    pub target_error: Option<f64>,
+    /// Per-pixel stopping once a pixel's estimated relative standard error
+    /// is below this (`--adaptive`; `spp` is the per-pixel cap).
+    pub adaptive: Option<f64>,
 }
 
 /// Multiple importance sampling between next-event estimation and BSDF
@@ -116,6 +122,9 @@ pub struct Film {
     pub batch_run: Vec<Vec3>,
     /// Sum over the completed batches of (the batch's sum of samples)^2.
     pub batch_sq: Vec<Vec3>,
+    /// Samples each pixel holds (adaptive renders, a prefix of whole
+    /// batches of its sample indices); empty: every pixel holds `spp`.
+    pub counts: Vec<u32>,
 }
 
 /// Counts and timings a backend reports for `--stats`.
@@ -143,6 +152,8 @@ impl RenderOptions {
             sample_start: 0,
             time_limit: None,
             variance_batch: 0,
+            target_error: None,
+            adaptive: None,
         }
     }
 
@@ -151,10 +162,14 @@ impl RenderOptions {
     /// independent sampler; for Sobol, `variance_batch` when set, else
     /// [`variance_batch_for`] of the render's sample count. A batch that
     /// does not divide `sample_start` falls back to 1 (batches must start
-    /// where the render starts).
+    /// where the render starts). A controlled render (`target_error` or
+    /// `adaptive`) defaults to [`crate::adaptive::control_batch`].
     pub fn batch(&self) -> u32 {
         let l = match (self.sampler, self.variance_batch) {
             (SamplerKind::Independent, _) => 1,
+            (SamplerKind::Sobol, 0) if self.target_error.is_some() || self.adaptive.is_some() => {
+                crate::adaptive::control_batch(self.spp)
+            }
             (SamplerKind::Sobol, 0) => variance_batch_for(self.spp, 1),
             (SamplerKind::Sobol, l) => l,
         };
@@ -281,6 +296,7 @@ impl Film {
             batch: 1,
             batch_run: vec![Vec3::ZERO; n],
             batch_sq: vec![Vec3::ZERO; n],
+            counts: Vec::new(),
         }
     }
 
@@ -303,16 +319,28 @@ impl Film {
         }
     }
 
+    /// Samples pixel i holds ([`Film::counts`], else `spp`).
+    pub fn count(&self, i: usize) -> u32 {
+        self.counts.get(i).copied().unwrap_or(self.spp)
+    }
+
+    /// Mean samples per pixel.
+    pub fn mean_spp(&self) -> f64 {
+        if self.counts.is_empty() {
+            return self.spp as f64;
+        }
+        self.counts.iter().map(|&c| c as f64).sum::<f64>() / self.counts.len().max(1) as f64
+    }
+
     pub fn index(&self, x: u32, y: u32) -> usize {
         y as usize * self.width as usize + x as usize
     }
 
     /// Per-pixel mean radiance (the image).
     pub fn mean(&self, i: usize) -> Vec3 {
-        if self.spp == 0 {
-            Vec3::ZERO
-        } else {
-            self.sum[i] / self.spp as f32
+        match self.count(i) {
+            0 => Vec3::ZERO,
+            n => self.sum[i] / n as f32,
         }
     }
 
@@ -330,11 +358,13 @@ impl Film {
     /// is unbiased when batches are uncorrelated and conservative when
     /// they are negatively correlated, as sub-nets of one net are (the
     /// full net stratifies better than its parts). Measured, not assumed:
-    /// `cpu/tests/render_stats.rs`.
+    /// `cpu/tests/render_stats.rs`. Adaptive films divide by the pixel's
+    /// own count ([`Film::count`], whole batches).
     pub fn variance_of_mean(&self, i: usize) -> Vec3 {
         let l = self.variance_batch();
-        if l > 1 {
-            let c = (self.spp / l) as f64;
+        let count = self.count(i);
+        if l > 1 && count / l >= 2 {
+            let c = (count / l) as f64;
             let lf = l as f64;
             let s = self.sum[i].as_dvec3() / lf;
             let s2 = self.batch_sq[i].as_dvec3() / (lf * lf);
@@ -342,8 +372,8 @@ impl Film {
                 .max(glam::DVec3::ZERO)
                 .as_vec3();
         }
-        let n = self.spp as f64;
-        if self.spp < 2 {
+        let n = count as f64;
+        if count < 2 {
             return Vec3::ZERO;
         }
         let s = self.sum[i].as_dvec3();

@@ -136,6 +136,7 @@ fn variance_estimate_and_truth(
             for f in &films {
                 est += f.variance_of_mean(i)[c] as f64 / k;
                 let single = Film {
+                    counts: Vec::new(),
                     batch: 1,
                     ..f.clone()
                 };

@@ -418,7 +418,12 @@ pub fn encode(
 ) -> Result<()> {
     match format {
         OutputFormat::Exr => RadianceImage::from_film(film, variance, Some(meta.clone()))
-            .write(w)
+            .write_with(
+                w,
+                &glint::cpu::exr_file::samples_channel(film)
+                    .into_iter()
+                    .collect::<Vec<_>>(),
+            )
             .map_err(|e| anyhow!("{e}")),
         OutputFormat::Png => film.encode(w, format).map_err(|e| anyhow!("{e}")),
     }

@@ -14,6 +14,60 @@ use super::{
 use crate::cli::RenderArgs;
 use crate::stats::Stats;
 
+/// `--target-error` and `--adaptive`: positive numbers, and neither with
+/// `--shard` or `--time-limit` (one line each saying why).
+fn check_control(args: &RenderArgs) -> Result<()> {
+    for (name, v) in [
+        ("--target-error", args.target_error),
+        ("--adaptive", args.adaptive),
+    ] {
+        let Some(v) = v else { continue };
+        let refuse = |m: String| Err(super::BadInput(m).into());
+        if !(v > 0.0 && v.is_finite()) {
+            return refuse(format!("{name} {v} is out of range (a positive number)"));
+        }
+        if args.shard.is_some() {
+            return refuse(format!(
+                "{name} and --shard cannot be combined (a shard cannot stop on the whole render's error: its samples are fixed in advance)"
+            ));
+        }
+        if args.scene.opts.time_limit.is_some() {
+            return refuse(format!(
+                "{name} and --time-limit cannot be combined (the error, not the clock, decides when it stops)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// `--stats` of a controlled render: `estimated_relmse`, `mean_spp` (and
+/// `spp`, the most any pixel reached), the samples actually taken.
+fn control_stats(
+    mut v: serde_json::Value,
+    film: &glint::cpu::Film,
+    opts: &glint::cpu::RenderOptions,
+) -> serde_json::Value {
+    if opts.target_error.is_none() && opts.adaptive.is_none() {
+        return v;
+    }
+    let relmse = glint::cpu::adaptive::estimated_relmse(film);
+    v["estimated_relmse"] = serde_json::json!(relmse);
+    v["mean_spp"] = serde_json::json!(film.mean_spp());
+    if let Some(e) = opts.target_error {
+        v["target_error"] = serde_json::json!(e);
+    }
+    if let Some(t) = opts.adaptive {
+        v["adaptive"] = serde_json::json!(t);
+        let samples = (film.mean_spp() * film.sum.len() as f64).round();
+        v["samples"] = serde_json::json!(samples as u64);
+        let secs = v["render_seconds"].as_f64().unwrap_or(0.0);
+        if secs > 0.0 {
+            v["samples_per_second"] = serde_json::json!(samples / secs);
+        }
+    }
+    v
+}
+
 pub fn run(args: &RenderArgs) -> Result<()> {
     let start = Instant::now();
     check_params(&args.scene)?;
@@ -47,6 +101,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "--shard and --time-limit cannot be combined (a shard's samples are fixed in advance)"
         );
     }
+    check_control(args)?;
     if args.variance && !formats.contains(&OutputFormat::Exr) {
         eprintln!("glint: warning: --variance: no .exr output to hold it");
     }
@@ -77,6 +132,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.shard.is_some() {
         shard::apply(&mut opts, shard)?;
     }
+    opts.target_error = args.target_error;
+    opts.adaptive = args.adaptive;
     let load_seconds = start.elapsed().as_secs_f64();
     let r = render_on(
         args.backend,
@@ -117,8 +174,9 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             kernel: r.kernel.map(|k| k.name()),
             features: r.features.names(),
         };
+        let json = control_stats(st.to_json(), &r.film, &opts);
         outputs.write(slot, |w| {
-            serde_json::to_writer_pretty(&mut *w, &st.to_json())?;
+            serde_json::to_writer_pretty(&mut *w, &json)?;
             use std::io::Write;
             writeln!(w)?;
             Ok(())

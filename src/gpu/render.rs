@@ -187,6 +187,9 @@ pub struct SampleRange {
     pub start: u32,
     pub spp: u32,
     pub time_limit: Option<f64>,
+    /// `--target-error` / `--adaptive`: passes of `Control::step` samples,
+    /// the film read back after each for the host's decision.
+    pub control: Option<glint_cpu::adaptive::Control>,
 }
 
 /// Render `spp` samples of a `width` x `height` image with kernel
@@ -204,6 +207,7 @@ pub fn render_film(
         start: 0,
         spp,
         time_limit: None,
+        control: None,
     };
     let kernel = KernelConfig {
         name: kernel_name,
@@ -221,6 +225,27 @@ fn variance_batch(params: &[u8]) -> u32 {
             .max(1)
     } else {
         1
+    }
+}
+
+/// The film of the accumulation buffer's sums (binding 7).
+fn film_of(sums: &[[f32; 4]], width: u32, height: u32, spp: u32, batch: u32) -> Film {
+    let n = width as usize * height as usize;
+    let plane = |k: usize| -> Vec<Vec3> {
+        (0..n)
+            .map(|i| Vec3::from_slice(&sums[4 * i + k][..3]))
+            .collect()
+    };
+    Film {
+        width,
+        height,
+        spp,
+        sum: plane(0),
+        sum_sq: plane(1),
+        batch,
+        batch_run: plane(2),
+        batch_sq: plane(3),
+        counts: Vec::new(),
     }
 }
 
@@ -283,7 +308,13 @@ pub fn render_film_range(
     )?;
 
     let mut bindings = vec![BufferKind::Uniform];
-    bindings.extend([BufferKind::Storage; 15]);
+    bindings.extend([BufferKind::Storage; 16]);
+    let active = Buffer::from_slice(
+        ctx,
+        &format!("active pixels ({width}x{height})"),
+        BufferKind::Storage,
+        &vec![1u32; pixels as usize],
+    )?;
     let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &kernel_cfg.options)?;
     kernel.bind(&[
         &params,
@@ -302,6 +333,7 @@ pub fn render_film_range(
         &env_texels,
         &env_dist,
         &ms_tables,
+        &active,
     ])?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 
@@ -316,7 +348,10 @@ pub fn render_film_range(
     let setup_seconds = setup_start.elapsed().as_secs_f64();
 
     let mut done = 0u32;
-    let mut batch = 1u32;
+    let batch_size = variance_batch(scene.params);
+    let mut mask = vec![1u32; pixels as usize];
+    let mut counts = Vec::new();
+    let mut batch = range.control.map_or(1, |c| c.step);
     let mut batches = Vec::new();
     let mut render_seconds = 0.0;
     let wall = Instant::now();
@@ -358,6 +393,22 @@ pub fn render_film_range(
         done += count;
         batches.push(count);
         progress(done, spp);
+        if let Some(c) = &range.control {
+            let mut film = film_of(&accum.read()?, width, height, done - count, batch_size);
+            film.counts = std::mem::take(&mut counts);
+            if c.adaptive.is_some() {
+                glint_cpu::adaptive::count_pass(&mut film, &mask, count);
+            } else {
+                film.spp = done;
+            }
+            let more = c.decide(&film, &mut mask);
+            counts = film.counts;
+            if !more {
+                break;
+            }
+            active.write(&mask)?;
+            continue;
+        }
         // Size from wall time: it is what a watchdog and a progress bar see.
         batch = next_batch(count, wall_batch, spp.saturating_sub(done).max(1));
         if let Some(limit) = range.time_limit {
@@ -373,26 +424,11 @@ pub fn render_film_range(
         render_seconds = wall.elapsed().as_secs_f64();
     }
 
-    let sums: Vec<[f32; 4]> = accum.read()?;
-    let counts: Vec<u32> = rays.read()?;
-    let n = pixels as usize;
-    let plane = |k: usize| -> Vec<Vec3> {
-        (0..n)
-            .map(|i| Vec3::from_slice(&sums[4 * i + k][..3]))
-            .collect()
-    };
-    let film = Film {
-        width,
-        height,
-        spp: done,
-        sum: plane(0),
-        sum_sq: plane(1),
-        batch: variance_batch(scene.params),
-        batch_run: plane(2),
-        batch_sq: plane(3),
-    };
+    let mut film = film_of(&accum.read()?, width, height, done, batch_size);
+    film.counts = counts;
+    let ray_counts: Vec<u32> = rays.read()?;
     let stats = RenderStats {
-        rays: counts.iter().map(|&c| c as u64).sum(),
+        rays: ray_counts.iter().map(|&c| c as u64).sum(),
         render_seconds,
     };
     Ok(FilmRender {
@@ -515,6 +551,7 @@ pub fn render_with(
         start: opts.sample_start,
         spp: opts.spp,
         time_limit: opts.time_limit,
+        control: glint_cpu::adaptive::Control::of(opts),
     };
     let spec = [features.0];
     let cfg = KernelConfig {

@@ -120,6 +120,19 @@ pub fn validate_options(scene: &Scene, opts: &RenderOptions) -> Result<(), Rende
             opts.max_depth
         ));
     }
+    for (name, v) in [
+        ("target error", opts.target_error),
+        ("adaptive", opts.adaptive),
+    ] {
+        if let Some(v) = v
+            && !(v > 0.0 && v.is_finite())
+        {
+            return bad(format!("{name} {v} (must be a positive number)"));
+        }
+    }
+    if opts.adaptive.is_some() && (opts.time_limit.is_some() || opts.sample_start != 0) {
+        return bad("adaptive sampling needs the whole sample range, without a time limit".into());
+    }
     if !scene.cameras.is_empty() && opts.camera >= scene.cameras.len() {
         return bad(format!(
             "camera {} (the scene has {})",
@@ -288,6 +301,8 @@ pub struct PathTracer<'a> {
     pub time_limit: Option<f64>,
     /// Samples per variance batch (`RenderOptions::batch`).
     pub batch: u32,
+    /// `--target-error` / `--adaptive` (None: a plain render).
+    pub control: Option<crate::adaptive::Control>,
     /// Whether traversal runs the alpha test (`Scene::textures.has_masks()`,
     /// asked once here, not per ray).
     pub masks: bool,
@@ -320,6 +335,7 @@ impl<'a> PathTracer<'a> {
             sample_start: opts.sample_start,
             time_limit: opts.time_limit,
             batch: opts.batch(),
+            control: crate::adaptive::Control::of(opts),
             masks: scene.textures.has_masks(),
         })
     }
@@ -534,6 +550,9 @@ impl<'a> PathTracer<'a> {
     /// sized to the budget, stopping at the last whole pass that fits).
     /// `progress(done, total)` counts finished tiles over all `spp`.
     pub fn render(&self, spp: u32, progress: &(dyn Fn(u32, u32) + Sync)) -> (Film, RenderStats) {
+        if let Some(c) = self.control {
+            return self.render_controlled(&c, progress);
+        }
         let start = Instant::now();
         let (w, h) = (self.camera.width, self.camera.height);
         let tiles = w.div_ceil(TILE) * h.div_ceil(TILE);
@@ -544,7 +563,7 @@ impl<'a> PathTracer<'a> {
             let pass_start = Instant::now();
             let base = film.spp * tiles;
             let total = spp.saturating_mul(tiles);
-            rays += self.render_pass(&mut film, count, &|done, _| {
+            rays += self.render_pass(&mut film, count, None, &|done, _| {
                 progress(base + done * count, total)
             });
             let Some(limit) = self.time_limit else {
@@ -565,14 +584,52 @@ impl<'a> PathTracer<'a> {
         (film, stats)
     }
 
+    /// Passes of `c.step` samples until `c` stops the render
+    /// ([`crate::adaptive`]); adaptive renders sample only the pixels
+    /// still active and keep per-pixel counts.
+    fn render_controlled(
+        &self,
+        c: &crate::adaptive::Control,
+        progress: &(dyn Fn(u32, u32) + Sync),
+    ) -> (Film, RenderStats) {
+        let start = Instant::now();
+        let (w, h) = (self.camera.width, self.camera.height);
+        let mut film = Film::with_batch(w, h, self.batch);
+        let mut active = vec![1u32; film.sum.len()];
+        let mut rays = 0u64;
+        loop {
+            let count = c.next_count(&film);
+            if count == 0 {
+                break;
+            }
+            let mask = c.adaptive.is_some().then_some(&active[..]);
+            rays += self.render_pass(&mut film, count, mask, &|_, _| {});
+            if c.adaptive.is_some() {
+                film.spp -= count;
+                crate::adaptive::count_pass(&mut film, &active, count);
+            }
+            progress(film.spp, c.cap);
+            if !c.decide(&film, &mut active) {
+                break;
+            }
+        }
+        let stats = RenderStats {
+            rays,
+            render_seconds: start.elapsed().as_secs_f64(),
+        };
+        (film, stats)
+    }
+
     /// Add `count` more samples to every pixel of `film` (the indices
     /// after the ones it holds), continuing each pixel's running sums in
-    /// sample order so that the image does not depend on the pass sizes.
+    /// sample order so that the image does not depend on the pass sizes;
+    /// with `active`, only to the pixels whose entry is not 0.
     /// Returns the rays traced.
     pub fn render_pass(
         &self,
         film: &mut Film,
         count: u32,
+        active: Option<&[u32]>,
         progress: &(dyn Fn(u32, u32) + Sync),
     ) -> u64 {
         let (w, h) = (self.camera.width, self.camera.height);
@@ -595,7 +652,12 @@ impl<'a> PathTracer<'a> {
                         let mut sum_sq = prior.sum_sq[i];
                         let mut run = prior.batch_run[i];
                         let mut sq = prior.batch_sq[i];
-                        for s in first..first + count {
+                        let n = if active.is_some_and(|a| a[i] == 0) {
+                            0
+                        } else {
+                            count
+                        };
+                        for s in first..first + n {
                             let mut l = self.sample(x, y, s, &mut rays);
                             // A NaN or infinity (a degenerate pdf somewhere)
                             // would poison the pixel for good: drop it.

@@ -1,0 +1,118 @@
+//! `--target-error` and `--adaptive` (glint_cpu::adaptive): the stopping
+//! rule, the per-pixel counts, an adaptive image against a uniform one
+//! (block z-tests), and the refusals. CPU backend, tiny images.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use glint::cpu::compare::compare_films;
+use glint::cpu::{Film, RenderOptions, Scene};
+
+fn asset(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(name)
+}
+
+fn scene(name: &str) -> Scene {
+    glint::cpu::loader::load(&asset(name)).unwrap()
+}
+
+fn render(s: &Scene, o: &RenderOptions) -> Film {
+    glint::cpu::render(s, o, &|_, _| {}).unwrap().0
+}
+
+fn opts(size: u32, spp: u32, seed: u64) -> RenderOptions {
+    RenderOptions {
+        spp,
+        seed,
+        ..RenderOptions::new(size, size)
+    }
+}
+
+#[test]
+fn target_error_meets_its_target_and_stops_earlier_for_a_larger_one() {
+    let s = scene("cornell.gltf");
+    let spp_for = |e: f64| {
+        let f = render(
+            &s,
+            &RenderOptions {
+                target_error: Some(e),
+                ..opts(16, 4096, 3)
+            },
+        );
+        let est = glint::cpu::adaptive::estimated_relmse(&f);
+        assert!(est <= e, "estimated {est} above the target {e}");
+        assert!(f.spp < 4096, "the cap, not the target, stopped it");
+        f.spp
+    };
+    let (loose, tight) = (spp_for(0.02), spp_for(0.005));
+    assert!(loose < tight, "{loose} spp for 0.02, {tight} for 0.005");
+}
+
+#[test]
+fn adaptive_is_unbiased_against_uniform_and_spends_unevenly() {
+    let s = scene("cornell.gltf");
+    let cap = 256;
+    let a = render(
+        &s,
+        &RenderOptions {
+            adaptive: Some(0.05),
+            ..opts(24, cap, 1)
+        },
+    );
+    let u = render(&s, &opts(24, cap, 2));
+    let (lo, hi) = (
+        *a.counts.iter().min().unwrap(),
+        *a.counts.iter().max().unwrap(),
+    );
+    assert_eq!(hi, cap);
+    assert!(lo < cap / 2, "every pixel sampled to {lo}..{hi}");
+    assert!(a.mean_spp() < cap as f64);
+    // Whole batches: every pixel's samples a stratified prefix.
+    let step = a.variance_batch();
+    assert!(a.counts.iter().all(|&c| c % step == 0 && c >= 4 * step));
+    let r = compare_films(&a, &u).unwrap();
+    assert!(r.pass, "adaptive against uniform: {r}");
+}
+
+#[test]
+fn bad_control_options_fail_with_one_line() {
+    let dir = std::env::temp_dir().join(format!("glint-adaptive-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("x.exr");
+    for (args, needle) in [
+        (
+            &["--target-error", "0"][..],
+            "--target-error 0 is out of range",
+        ),
+        (
+            &["--target-error", "-1"],
+            "--target-error -1 is out of range",
+        ),
+        (
+            &["--target-error", "NaN"],
+            "--target-error NaN is out of range",
+        ),
+        (&["--adaptive", "0.1", "--shard", "0/2"], "--shard cannot"),
+        (
+            &["--adaptive", "0.1", "--time-limit", "1"],
+            "--time-limit cannot",
+        ),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_glint"))
+            .arg("render")
+            .arg(asset("cornell.gltf"))
+            .args(["--width", "8", "--height", "8", "--backend", "cpu", "-o"])
+            .arg(&out)
+            .args(args)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert_eq!(err.lines().count(), 1, "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists());
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
