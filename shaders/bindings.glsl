@@ -22,6 +22,11 @@
 //   binding 14 float env_dist[]        EnvMap::marginal then EnvMap::conditional
 //   (bindings 13-14 hold one dummy element when params.env_width == 0)
 //   binding 15 float ms_tables[]       glint_cpu::bsdf::multiscatter::gpu_tables (multiscatter)
+//   With GLINT_RAY_QUERY (the kernel pathtrace_rq, --traversal hardware; src/gpu/accel.rs):
+//   binding 16 uint tri_map[]          the acceleration structure's geometries' triangles
+//                                      (ray_query.glsl); one dummy element without alpha tests
+//   binding 17 accelerationStructureEXT tlas  the scene's top-level acceleration structure
+//   (binding 2 then holds one dummy element: the BVH is not read)
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders
 // samples [sample_start, sample_start + sample_count) of every pixel, one
@@ -108,6 +113,10 @@ layout(std430, set = 0, binding = 12) readonly buffer TriangleUvBuffer { Triangl
 layout(std430, set = 0, binding = 13) readonly buffer EnvTexelBuffer { vec4 env_texels[]; };
 layout(std430, set = 0, binding = 14) readonly buffer EnvDistBuffer { float env_dist[]; };
 layout(std430, set = 0, binding = 15) readonly buffer MsTableBuffer { float ms_tables[]; };
+#ifdef GLINT_RAY_QUERY
+layout(std430, set = 0, binding = 16) readonly buffer TriMapBuffer { uint tri_map[]; };
+layout(set = 0, binding = 17) uniform accelerationStructureEXT tlas;
+#endif
 // bsdf/multiscatter.glsl reads its tables through this hook.
 #define MS_TABLE(i) ms_tables[i]
 
