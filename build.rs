@@ -1,7 +1,8 @@
 //! Compiles every `shaders/**/*.comp` to SPIR-V with shaderc and generates
 //! `$OUT_DIR/shaders.rs`, which `glint::gpu::shaders` includes: one aligned
 //! static per kernel, looked up by name (the path under `shaders/` without
-//! `.comp`, e.g. `"pathtrace"`, `"tests/bsdf_test"`).
+//! `.comp`, e.g. `"pathtrace"`, `"tests/bsdf_test"`), plus the
+//! [`VARIANTS`]: a kernel compiled again with a macro defined.
 //!
 //! `#include "x.glsl"` resolves relative to the including file first, then
 //! relative to `shaders/`; `#include <x.glsl>` only relative to `shaders/`.
@@ -11,6 +12,11 @@
 use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
+
+/// Compile-time variants: (kernel, variant name, macro defined for it).
+/// `pathtrace_rq` is pathtrace.comp with ray queries in place of the
+/// software BVH traversal (`--traversal hardware`; shaders/ray_query.glsl).
+const VARIANTS: &[(&str, &str, &str)] = &[("pathtrace", "pathtrace_rq", "GLINT_RAY_QUERY")];
 
 fn main() {
     let manifest = PathBuf::from(std::env::var_os("CARGO_MANIFEST_DIR").expect("cargo sets it"));
@@ -41,7 +47,8 @@ fn main() {
     let spv_dir = out_dir.join("spirv");
     fs::create_dir_all(&spv_dir).expect("create OUT_DIR/spirv");
 
-    for (i, path) in kernels.iter().enumerate() {
+    let mut jobs = Vec::new();
+    for path in &kernels {
         let rel = path.strip_prefix(&shader_root).expect("under shaders/");
         let name = rel
             .with_extension("")
@@ -49,6 +56,15 @@ fn main() {
             .map(|c| c.as_os_str().to_string_lossy().into_owned())
             .collect::<Vec<_>>()
             .join("/");
+        for &(base, variant, define) in VARIANTS {
+            if name == base {
+                jobs.push((variant.to_string(), path, rel, Some(define)));
+            }
+        }
+        jobs.push((name, path, rel, None));
+    }
+
+    for (i, (name, path, rel, define)) in jobs.iter().enumerate() {
         let display = format!("shaders/{}", rel.display());
         let source = match fs::read_to_string(path) {
             Ok(s) => s,
@@ -64,6 +80,9 @@ fn main() {
         );
         options.set_target_spirv(shaderc::SpirvVersion::V1_5);
         options.set_source_language(shaderc::SourceLanguage::GLSL);
+        if let Some(d) = define {
+            options.add_macro_definition(d, None);
+        }
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         let root = shader_root.clone();
         let manifest_dir = manifest.clone();

@@ -24,6 +24,11 @@
 //   binding 15 float ms_tables[]       glint_cpu::bsdf::multiscatter::gpu_tables (multiscatter)
 //   binding 16 uint active_pixels[]        1 per pixel: 0 skips the pixel (--adaptive, glint_cpu::adaptive;
 //                                      the host writes it between passes; all 1 otherwise)
+//   With GLINT_RAY_QUERY (the kernel pathtrace_rq, --traversal hardware; src/gpu/accel.rs):
+//   binding 17 uint tri_map[]          the acceleration structure's geometries' triangles
+//                                      (ray_query.glsl); one dummy element without alpha tests
+//   binding 18 accelerationStructureEXT tlas  the scene's top-level acceleration structure
+//   (binding 2 then holds one dummy element: the BVH is not read)
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders
 // samples [sample_start, sample_start + sample_count) of every pixel, one
@@ -111,6 +116,10 @@ layout(std430, set = 0, binding = 13) readonly buffer EnvTexelBuffer { vec4 env_
 layout(std430, set = 0, binding = 14) readonly buffer EnvDistBuffer { float env_dist[]; };
 layout(std430, set = 0, binding = 15) readonly buffer MsTableBuffer { float ms_tables[]; };
 layout(std430, set = 0, binding = 16) readonly buffer ActiveBuffer { uint active_pixels[]; };
+#ifdef GLINT_RAY_QUERY
+layout(std430, set = 0, binding = 17) readonly buffer TriMapBuffer { uint tri_map[]; };
+layout(set = 0, binding = 18) uniform accelerationStructureEXT tlas;
+#endif
 // bsdf/multiscatter.glsl reads its tables through this hook.
 #define MS_TABLE(i) ms_tables[i]
 

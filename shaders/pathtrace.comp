@@ -1,4 +1,8 @@
 #version 460
+#ifdef GLINT_RAY_QUERY
+// pathtrace_rq (--traversal hardware): ray_query.glsl in place of bvh.glsl.
+#extension GL_EXT_ray_query : require
+#endif
 // The GPU path tracer: PathTracer::sample of cpu/src/integrator/mod.rs,
 // step by step under the same names (read its header for the MIS, depth,
 // Russian roulette, ray offset and light-leak rules). Binding table:
@@ -17,7 +21,12 @@ bool bvh_present(uint tri, float u, float v, vec3 o, vec3 d) {
     return params.masked == 0u || alpha_pass(floatBitsToUint(triangles[tri].p0.w), tri, u, v, o, d);
 }
 #define BVH_PRESENT(tri, u, v, o, d) bvh_present(tri, u, v, o, d)
+#ifdef GLINT_RAY_QUERY
+#define RQ_MASKED (params.masked)
+#include "ray_query.glsl"
+#else
 #include "bvh.glsl"
+#endif
 #include "bsdf/bsdf.glsl"
 #include "integrator/rng.glsl"
 #include "integrator/sobol.glsl"

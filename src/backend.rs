@@ -44,7 +44,7 @@ impl Backend {
     }
 }
 
-pub use crate::gpu::render::KernelChoice;
+pub use crate::gpu::render::{KernelChoice, Traversal};
 
 /// Options only the GPU backend reads.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -53,6 +53,8 @@ pub struct GpuOptions {
     pub device: Option<String>,
     /// The kernel built for the scene's features, or the generic one.
     pub kernel: KernelChoice,
+    /// glint's BVH or Vulkan ray queries (`--traversal`).
+    pub traversal: Traversal,
     /// Keep the driver's compiled pipelines in the user's cache folder.
     pub pipeline_cache: bool,
 }
@@ -74,6 +76,8 @@ pub struct BackendRender {
     pub threads: Option<usize>,
     /// GPU: the kernel that rendered.
     pub kernel: Option<KernelChoice>,
+    /// GPU: how it traced rays.
+    pub traversal: Option<Traversal>,
     /// What the scene uses (the GPU's specialized kernel is built for it).
     pub features: Features,
 }
@@ -113,6 +117,7 @@ pub fn render(
                 driver: None,
                 threads: Some(threads),
                 kernel: None,
+                traversal: None,
                 features: Features::of(scene, opts),
             }
         }
@@ -120,6 +125,7 @@ pub fn render(
             let config = crate::gpu::render::GpuConfig {
                 device: gpu.device.as_deref(),
                 kernel: gpu.kernel,
+                traversal: gpu.traversal,
                 pipeline_cache: if gpu.pipeline_cache {
                     crate::cache::pipeline_cache_path()
                 } else {
@@ -137,6 +143,7 @@ pub fn render(
                 driver: Some(r.driver),
                 threads: None,
                 kernel: Some(r.kernel),
+                traversal: Some(r.traversal),
                 features: Features::of(scene, opts),
             }
         }

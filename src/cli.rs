@@ -151,6 +151,25 @@ impl From<KernelArg> for glint::backend::KernelChoice {
     }
 }
 
+/// `--traversal`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum TraversalArg {
+    /// glint's BVH, walked in the compute kernel.
+    Software,
+    /// Vulkan ray queries against acceleration structures built on the
+    /// device (needs VK_KHR_ray_query and VK_KHR_acceleration_structure).
+    Hardware,
+}
+
+impl From<TraversalArg> for glint::backend::Traversal {
+    fn from(t: TraversalArg) -> Self {
+        match t {
+            TraversalArg::Software => Self::Software,
+            TraversalArg::Hardware => Self::Hardware,
+        }
+    }
+}
+
 /// Render options every verb shares (all but the scene, the sample count
 /// and the outputs). `to_args` writes them back as arguments, so converge
 /// can lay a variant's options over them: an option added here must be
@@ -207,6 +226,11 @@ pub struct RenderOpts {
     /// handles every scene.
     #[arg(long, value_enum, default_value_t = KernelArg::Specialized)]
     pub kernel: KernelArg,
+
+    /// GPU: glint's BVH in the compute kernel, or Vulkan ray queries
+    /// against acceleration structures (a device without them is an error).
+    #[arg(long, value_enum, default_value_t = TraversalArg::Software)]
+    pub traversal: TraversalArg,
 
     /// Stop at the last whole sample pass that fits this many seconds of
     /// sampling (--spp, when given, caps the samples; --stats reports the
@@ -339,6 +363,7 @@ impl RenderOpts {
         );
         push("sampler", name(&|| self.sampler.to_possible_value()));
         push("kernel", name(&|| self.kernel.to_possible_value()));
+        push("traversal", name(&|| self.traversal.to_possible_value()));
         if let Some(t) = self.time_limit {
             push("time-limit", t.to_string());
         }

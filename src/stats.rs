@@ -28,6 +28,8 @@ pub struct Stats<'a> {
     pub options: &'a RenderOptions,
     /// GPU: the kernel that rendered ("specialized" or "generic").
     pub kernel: Option<&'static str>,
+    /// GPU: "software" (glint's BVH) or "hardware" (ray queries).
+    pub traversal: Option<&'static str>,
     /// What the scene uses.
     pub features: Vec<&'static str>,
 }
@@ -76,6 +78,9 @@ impl Stats<'_> {
         v["features"] = json!(self.features);
         if let Some(k) = self.kernel {
             v["kernel"] = json!(k);
+        }
+        if let Some(t) = self.traversal {
+            v["traversal"] = json!(t);
         }
         if let Some(d) = &self.driver {
             v["driver"] = json!(d);

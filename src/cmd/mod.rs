@@ -392,6 +392,7 @@ pub fn render_on(
     let gpu = GpuOptions {
         device: ro.device.clone(),
         kernel: ro.kernel.into(),
+        traversal: ro.traversal.into(),
         pipeline_cache: true,
     };
     let backend = backend.resolve(ro.device.as_deref());

@@ -172,6 +172,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             rays: r.rays,
             options: &opts,
             kernel: r.kernel.map(|k| k.name()),
+            traversal: r.traversal.map(|t| t.name()),
             features: r.features.names(),
         };
         let json = control_stats(st.to_json(), &r.film, &opts);

@@ -71,6 +71,15 @@ impl<'a> Buffer<'a> {
             BufferKind::Uniform => vk::BufferUsageFlags::UNIFORM_BUFFER,
         } | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
+        // With ray queries on, a storage buffer may also feed an
+        // acceleration structure build (the triangles' vertices).
+        let usage = if ctx.ray_query() && kind == BufferKind::Storage {
+            usage
+                | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
+                | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
+        } else {
+            usage
+        };
         let (raw, allocation) = create_raw(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
         Ok(Buffer {
             ctx,
@@ -81,6 +90,38 @@ impl<'a> Buffer<'a> {
             kind,
             name: name.to_string(),
         })
+    }
+
+    /// A buffer of `len` bytes (at least [`MIN_SIZE`]) for Vulkan's own use
+    /// (acceleration structure storage, scratch, build inputs), with
+    /// `usage` plus transfers; never bound as a descriptor, so not held to
+    /// the binding limits. Needs [`Context::ray_query`] for device
+    /// addresses.
+    pub fn with_usage(
+        ctx: &'a Context,
+        name: &str,
+        usage: vk::BufferUsageFlags,
+        len: u64,
+    ) -> Result<Self, GpuError> {
+        let size = len.max(MIN_SIZE).next_multiple_of(4);
+        let usage = usage | vk::BufferUsageFlags::TRANSFER_SRC | vk::BufferUsageFlags::TRANSFER_DST;
+        let (raw, allocation) = create_raw(ctx, name, size, usage, MemoryLocation::GpuOnly)?;
+        Ok(Buffer {
+            ctx,
+            raw,
+            allocation: Some(allocation),
+            len,
+            size,
+            kind: BufferKind::Storage,
+            name: name.to_string(),
+        })
+    }
+
+    /// The buffer's device address (its usage must include
+    /// `SHADER_DEVICE_ADDRESS`).
+    pub fn device_address(&self) -> vk::DeviceAddress {
+        let info = vk::BufferDeviceAddressInfo::default().buffer(self.raw);
+        unsafe { self.ctx.device.get_buffer_device_address(&info) }
     }
 
     /// A buffer holding `data`.

@@ -187,6 +187,9 @@ pub struct Context {
     validation_log: Option<Arc<ValidationLog>>,
     timings: ContextTimings,
     force_staging: bool,
+    /// Ray queries, acceleration structures and buffer device addresses are
+    /// enabled ([`Context::new_ray_query`]).
+    ray_query: bool,
 }
 
 fn vk_err(what: &'static str) -> impl FnOnce(vk::Result) -> GpuError {
@@ -223,6 +226,20 @@ impl Context {
     /// Create a context: load the Vulkan loader, create the instance, pick a
     /// device, create the logical device, allocator and command pool.
     pub fn new(desc: &ContextDesc<'_>) -> Result<Context, GpuError> {
+        Self::create(desc, false)
+    }
+
+    /// [`Context::new`] with `VK_KHR_acceleration_structure`,
+    /// `VK_KHR_ray_query` (and `VK_KHR_deferred_host_operations`, which the
+    /// first requires) and buffer device addresses enabled, for
+    /// `--traversal hardware`; [`GpuError::NoRayQuery`] when the device
+    /// lacks any of them. Only this constructor enables them: the software
+    /// traversal runs on devices without.
+    pub fn new_ray_query(desc: &ContextDesc<'_>) -> Result<Context, GpuError> {
+        Self::create(desc, true)
+    }
+
+    fn create(desc: &ContextDesc<'_>, ray_query: bool) -> Result<Context, GpuError> {
         let t0 = Instant::now();
         // SAFETY: loading libvulkan runs its initialisers; this is the
         // documented way to use ash without linking the loader.
@@ -368,10 +385,25 @@ impl Context {
             // only allows with this feature on.
             .vulkan_memory_model_device_scope(have12.vulkan_memory_model_device_scope == vk::TRUE)
             .host_query_reset(have12.host_query_reset == vk::TRUE);
+        let mut accel_features = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
+            .acceleration_structure(true);
+        let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+        let device_extensions = if ray_query {
+            check_ray_query(&instance, pd, &candidate.name, &have12)?;
+            features12 = features12.buffer_device_address(true);
+            RAY_QUERY_EXTENSIONS.map(CStr::as_ptr).to_vec()
+        } else {
+            Vec::new()
+        };
         let mut features = vk::PhysicalDeviceFeatures2::default()
             .features(features10)
             .push_next(&mut features11)
             .push_next(&mut features12);
+        if ray_query {
+            features = features
+                .push_next(&mut accel_features)
+                .push_next(&mut rq_features);
+        }
 
         let priorities = [1.0f32];
         let queue_infos = [vk::DeviceQueueCreateInfo::default()
@@ -379,6 +411,7 @@ impl Context {
             .queue_priorities(&priorities)];
         let device_info = vk::DeviceCreateInfo::default()
             .queue_create_infos(&queue_infos)
+            .enabled_extension_names(&device_extensions)
             .push_next(&mut features);
         let device = unsafe { instance.create_device(pd, &device_info, None) }
             .map_err(vk_err("vkCreateDevice"))?;
@@ -400,7 +433,7 @@ impl Context {
             device: device.clone(),
             physical_device: pd,
             debug_settings: Default::default(),
-            buffer_device_address: false,
+            buffer_device_address: ray_query,
             allocation_sizes: Default::default(),
         }) {
             Ok(a) => a,
@@ -463,7 +496,13 @@ impl Context {
                 device_seconds,
             },
             force_staging: false,
+            ray_query,
         })
+    }
+
+    /// Whether ray queries and acceleration structures are enabled.
+    pub fn ray_query(&self) -> bool {
+        self.ray_query
     }
 
     pub fn info(&self) -> &DeviceInfo {
@@ -553,6 +592,56 @@ impl Context {
         })();
         unsafe { self.device.free_command_buffers(self.command_pool, &[cmd]) };
         result
+    }
+}
+
+/// The device extensions `--traversal hardware` enables.
+const RAY_QUERY_EXTENSIONS: [&CStr; 3] = [
+    ash::khr::acceleration_structure::NAME,
+    ash::khr::ray_query::NAME,
+    ash::khr::deferred_host_operations::NAME,
+];
+
+/// Whether `pd` has what [`Context::new_ray_query`] enables: the
+/// extensions, the acceleration structure and ray query features and
+/// buffer device addresses.
+fn check_ray_query(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    name: &str,
+    have12: &vk::PhysicalDeviceVulkan12Features<'_>,
+) -> Result<(), GpuError> {
+    let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
+        .map_err(vk_err("vkEnumerateDeviceExtensionProperties"))?;
+    let mut missing: Vec<String> = RAY_QUERY_EXTENSIONS
+        .iter()
+        .filter(|&&want| !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(want)))
+        .map(|n| n.to_string_lossy().into_owned())
+        .collect();
+    if missing.is_empty() {
+        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+        let mut f = vk::PhysicalDeviceFeatures2::default()
+            .push_next(&mut accel)
+            .push_next(&mut rq);
+        unsafe { instance.get_physical_device_features2(pd, &mut f) };
+        if accel.acceleration_structure != vk::TRUE {
+            missing.push("accelerationStructure".into());
+        }
+        if rq.ray_query != vk::TRUE {
+            missing.push("rayQuery".into());
+        }
+    }
+    if have12.buffer_device_address != vk::TRUE {
+        missing.push("bufferDeviceAddress".into());
+    }
+    if missing.is_empty() {
+        Ok(())
+    } else {
+        Err(GpuError::NoRayQuery {
+            device: name.to_string(),
+            missing,
+        })
     }
 }
 

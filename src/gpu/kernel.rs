@@ -47,6 +47,9 @@ pub struct KernelOptions<'s> {
     pub specialization: &'s [u32],
     /// A pipeline cache to create through (null: none).
     pub cache: vk::PipelineCache,
+    /// An acceleration structure at the binding after the buffers' (null:
+    /// none), written once at creation.
+    pub acceleration_structure: vk::AccelerationStructureKHR,
 }
 
 /// Workgroups needed to cover `n` items with `local_size` per group.
@@ -132,13 +135,19 @@ impl<'a> Kernel<'a> {
             bound: false,
         };
         // `kernel`'s Drop destroys whatever was created if a step fails.
-        let layout_bindings: Vec<_> = bindings
+        let accel = options.acceleration_structure != vk::AccelerationStructureKHR::null();
+        let types: Vec<vk::DescriptorType> = bindings
+            .iter()
+            .map(|k| k.descriptor_type())
+            .chain(accel.then_some(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR))
+            .collect();
+        let layout_bindings: Vec<_> = types
             .iter()
             .enumerate()
-            .map(|(i, k)| {
+            .map(|(i, &t)| {
                 vk::DescriptorSetLayoutBinding::default()
                     .binding(i as u32)
-                    .descriptor_type(k.descriptor_type())
+                    .descriptor_type(t)
                     .descriptor_count(1)
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
@@ -197,16 +206,16 @@ impl<'a> Kernel<'a> {
         kernel.pipeline =
             pipelines.map_err(|(_, e)| GpuError::from_vk("vkCreateComputePipelines", e))?[0];
 
-        if !bindings.is_empty() {
+        if !types.is_empty() {
             let mut sizes = Vec::new();
-            for kind in [BufferKind::Storage, BufferKind::Uniform] {
-                let n = bindings.iter().filter(|&&k| k == kind).count() as u32;
+            for ty in [
+                vk::DescriptorType::STORAGE_BUFFER,
+                vk::DescriptorType::UNIFORM_BUFFER,
+                vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
+            ] {
+                let n = types.iter().filter(|&&t| t == ty).count() as u32;
                 if n > 0 {
-                    sizes.push(
-                        vk::DescriptorPoolSize::default()
-                            .ty(kind.descriptor_type())
-                            .descriptor_count(n),
-                    );
+                    sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(n));
                 }
             }
             kernel.descriptor_pool = unsafe {
@@ -227,11 +236,28 @@ impl<'a> Kernel<'a> {
             }
             .map_err(|e| GpuError::from_vk("vkAllocateDescriptorSets", e))?[0];
         }
+        if accel {
+            kernel.write_acceleration_structure(options.acceleration_structure);
+        }
         Ok(kernel)
     }
 
     pub fn name(&self) -> &str {
         &self.name
+    }
+
+    /// Point the binding after the buffers' at `structure`.
+    fn write_acceleration_structure(&self, structure: vk::AccelerationStructureKHR) {
+        let structures = [structure];
+        let mut info = vk::WriteDescriptorSetAccelerationStructureKHR::default()
+            .acceleration_structures(&structures);
+        let write = vk::WriteDescriptorSet::default()
+            .dst_set(self.set)
+            .dst_binding(self.bindings.len() as u32)
+            .descriptor_type(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR)
+            .descriptor_count(1)
+            .push_next(&mut info);
+        unsafe { self.ctx.device.update_descriptor_sets(&[write], &[]) };
     }
 
     /// Point bindings `0..N` at `buffers` (one per binding, matching kinds).

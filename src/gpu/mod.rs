@@ -6,6 +6,7 @@
 //! SPIR-V build.rs compiled) and [`render`](mod@render) (the path tracer's
 //! host side).
 
+pub mod accel;
 pub mod buffer;
 pub mod context;
 pub mod kernel;
@@ -71,6 +72,14 @@ pub enum GpuError {
     BufferTooLarge { name: String, size: u64, max: u64 },
     #[error("no compiled kernel named '{0}' (shaders/{0}.comp)")]
     UnknownKernel(String),
+    #[error(
+        "--traversal hardware needs Vulkan ray queries, which device '{device}' lacks (missing: {}); use --traversal software",
+        missing.join(", ")
+    )]
+    NoRayQuery {
+        device: String,
+        missing: Vec<String>,
+    },
     #[error("{0}")]
     Invalid(String),
     #[error("the Vulkan validation layer reported errors:\n{}", .0.join("\n"))]
@@ -105,6 +114,8 @@ pub struct GpuRender {
     pub setup_seconds: f64,
     /// Which kernel rendered, and the features it was built for.
     pub kernel: render::KernelChoice,
+    /// How the kernel traced rays (`--traversal`).
+    pub traversal: render::Traversal,
     pub features: glint_cpu::features::Features,
 }
 

@@ -27,6 +27,7 @@ use glint_cpu::features::Features;
 use glint_cpu::integrator::{GpuParams, GpuSceneData, gpu_scene_data};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
+use super::accel::Accel;
 use super::buffer::{Buffer, BufferKind};
 use super::context::{Context, ContextDesc};
 use super::kernel::{Kernel, KernelOptions, groups};
@@ -212,6 +213,7 @@ pub fn render_film(
     let kernel = KernelConfig {
         name: kernel_name,
         options: KernelOptions::default(),
+        hardware: None,
     };
     render_film_range(ctx, &kernel, scene, width, height, range, progress)
 }
@@ -254,6 +256,12 @@ fn film_of(sums: &[[f32; 4]], width: u32, height: u32, spp: u32, batch: u32) -> 
 pub struct KernelConfig<'k> {
     pub name: &'k str,
     pub options: KernelOptions<'k>,
+    /// Hardware traversal (a ray-query kernel such as `pathtrace_rq`):
+    /// whether each triangle is alpha-tested. The render then builds the
+    /// acceleration structures over the triangles and binds the tri_map
+    /// (binding 17) and the TLAS (18; shaders/bindings.glsl). `None`: the
+    /// software BVH.
+    pub hardware: Option<&'k [bool]>,
 }
 
 /// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
@@ -307,6 +315,14 @@ pub fn render_film_range(
         pixels * 4,
     )?;
 
+    let accel = match kernel_cfg.hardware {
+        Some(masked) => {
+            let count = (scene.triangles.len() / 48) as u32;
+            let alpha = |i: u32| masked.get(i as usize).copied().unwrap_or(false);
+            Some(Accel::build(ctx, &triangles, count, &alpha)?)
+        }
+        None => None,
+    };
     let mut bindings = vec![BufferKind::Uniform];
     bindings.extend([BufferKind::Storage; 16]);
     let active = Buffer::from_slice(
@@ -315,8 +331,13 @@ pub fn render_film_range(
         BufferKind::Storage,
         &vec![1u32; pixels as usize],
     )?;
-    let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &kernel_cfg.options)?;
-    kernel.bind(&[
+    let mut options = kernel_cfg.options;
+    if let Some(a) = &accel {
+        bindings.push(BufferKind::Storage);
+        options.acceleration_structure = a.tlas();
+    }
+    let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &options)?;
+    let mut buffers = vec![
         &params,
         &triangles,
         &nodes,
@@ -334,7 +355,11 @@ pub fn render_film_range(
         &env_dist,
         &ms_tables,
         &active,
-    ])?;
+    ];
+    if let Some(a) = &accel {
+        buffers.push(&a.tri_map);
+    }
+    kernel.bind(&buffers)?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 
     // Drivers compile the pipeline at its first dispatch (lavapipe: LLVM,
@@ -459,12 +484,41 @@ impl KernelChoice {
     }
 }
 
+/// How the GPU kernel finds the ray's hits (`--traversal`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Traversal {
+    /// glint's own BVH, walked in the compute kernel (shaders/bvh.glsl).
+    #[default]
+    Software,
+    /// Vulkan ray queries against acceleration structures built on the
+    /// device (the kernel `pathtrace_rq`, shaders/ray_query.glsl).
+    Hardware,
+}
+
+impl Traversal {
+    pub fn name(self) -> &'static str {
+        match self {
+            Traversal::Software => "software",
+            Traversal::Hardware => "hardware",
+        }
+    }
+
+    /// The path tracing kernel of this traversal.
+    pub fn kernel_name(self) -> &'static str {
+        match self {
+            Traversal::Software => "pathtrace",
+            Traversal::Hardware => "pathtrace_rq",
+        }
+    }
+}
+
 /// GPU-only render settings.
 #[derive(Clone, Debug, Default)]
 pub struct GpuConfig<'a> {
     /// The Vulkan device whose name contains this.
     pub device: Option<&'a str>,
     pub kernel: KernelChoice,
+    pub traversal: Traversal,
     /// A persistent pipeline cache file (none: no cache).
     pub pipeline_cache: Option<std::path::PathBuf>,
 }
@@ -480,10 +534,14 @@ pub fn render(
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
     let start = Instant::now();
-    let ctx = Context::new(&ContextDesc {
+    let desc = ContextDesc {
         device: config.device,
         ..Default::default()
-    })?;
+    };
+    let ctx = match config.traversal {
+        Traversal::Software => Context::new(&desc)?,
+        Traversal::Hardware => Context::new_ray_query(&desc)?,
+    };
     let log = ctx.validation_log();
     let context_seconds = start.elapsed().as_secs_f64();
     let r = {
@@ -494,7 +552,8 @@ pub fn render(
         let handle = cache
             .as_ref()
             .map_or(vk::PipelineCache::null(), |c| c.handle());
-        let mut r = render_with(&ctx, scene, opts, config.kernel, handle, progress)?;
+        let kernel = (config.kernel, config.traversal);
+        let mut r = render_with(&ctx, scene, opts, kernel, handle, progress)?;
         r.setup_seconds += context_seconds;
         if let Some(c) = &cache {
             c.save();
@@ -520,28 +579,55 @@ pub fn render_on(
     opts: &RenderOptions,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
+    let kernel = (KernelChoice::Specialized, Traversal::Software);
     render_with(
         ctx,
         scene,
         opts,
-        KernelChoice::Specialized,
+        kernel,
         vk::PipelineCache::null(),
         progress,
     )
 }
 
-/// [`render_on`] with a choice of kernel and a pipeline cache.
+/// Whether each of `scene`'s triangles is alpha-tested (MASK, BLEND).
+pub fn alpha_tested(scene: &Scene) -> Vec<bool> {
+    let masked: Vec<bool> = (0..scene.materials.len() as u32)
+        .map(|m| {
+            scene
+                .textures
+                .material(m)
+                .is_some_and(|t| t.has_alpha_test())
+        })
+        .collect();
+    scene
+        .triangles
+        .iter()
+        .map(|t| masked.get(t.material as usize).copied().unwrap_or(false))
+        .collect()
+}
+
+/// [`render_on`] with a choice of kernel and traversal (Hardware needs a
+/// context from [`Context::new_ray_query`]) and a pipeline cache.
 pub fn render_with(
     ctx: &Context,
     scene: &Scene,
     opts: &RenderOptions,
-    kernel: KernelChoice,
+    (kernel, traversal): (KernelChoice, Traversal),
     cache: vk::PipelineCache,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
     let start = Instant::now();
     let data = gpu_scene_data(scene, opts).map_err(|e| GpuError::Invalid(e.to_string()))?;
-    let bytes = SceneBytes::new(scene, &data);
+    let mut bytes = SceneBytes::new(scene, &data);
+    let masked = match traversal {
+        Traversal::Software => None,
+        Traversal::Hardware => {
+            // The ray-query kernel does not read the BVH.
+            bytes.bvh_nodes = &[];
+            Some(alpha_tested(scene))
+        }
+    };
     let features = match kernel {
         KernelChoice::Specialized => Features::of(scene, opts),
         KernelChoice::Generic => Features::ALL,
@@ -555,11 +641,13 @@ pub fn render_with(
     };
     let spec = [features.0];
     let cfg = KernelConfig {
-        name: "pathtrace",
+        name: traversal.kernel_name(),
         options: KernelOptions {
             specialization: &spec,
             cache,
+            ..Default::default()
         },
+        hardware: masked.as_deref(),
     };
     let r = render_film_range(ctx, &cfg, &bytes, opts.width, opts.height, range, progress)?;
     let info = ctx.info();
@@ -570,6 +658,7 @@ pub fn render_with(
         driver: info.driver.clone(),
         setup_seconds: prepare_seconds + r.setup_seconds,
         kernel,
+        traversal,
         features,
     })
 }

@@ -1,0 +1,93 @@
+// Hardware traversal (`--traversal hardware`): bvh.glsl's bvh_intersect and
+// bvh_occluded, under the same names and contracts, through Vulkan ray
+// queries (GL_EXT_ray_query) against the scene's acceleration structures
+// (src/gpu/accel.rs): one top-level instance of one bottom-level structure
+// holding every triangle. pathtrace.comp includes this file instead of
+// bvh.glsl when build.rs compiles it with GLINT_RAY_QUERY defined (the
+// kernel `pathtrace_rq`), so the BSDFs, lights, sampler and film are the
+// same source.
+//
+// Geometry: without alpha-tested materials one opaque geometry whose
+// primitive i is triangles[i]. With them (RQ_MASKED != 0) geometry 0 holds
+// the opaque triangles (flagged opaque: the traversal never stops for
+// them) and geometry 1 the alpha-tested ones (non-opaque: each candidate
+// comes back to the loop below, which runs BVH_PRESENT, the alpha test);
+// tri_map maps them back: tri_map[0] is the opaque count n, then the
+// opaque triangles' indices, then the alpha-tested ones'.
+//
+// The including kernel must, BEFORE including this file, declare
+//   - `uniform accelerationStructureEXT tlas` and a buffer array
+//     `uint tri_map[]` (`#extension GL_EXT_ray_query : require` first),
+//   - `#define RQ_MASKED <expression>`: nonzero when geometry 1 exists,
+//   - optionally `#define BVH_PRESENT(tri, u, v, o, d)` as for bvh.glsl.
+//
+// Interval: ray queries accept hits in [tmin, tmax] with tmin = 0 here;
+// bvh.glsl's is open, (0, tmax). The path tracer's rays start off the
+// surface (offset_origin) and end short of the light (shadow_tmax), so the
+// ends are never hit in either.
+#ifndef GLINT_RAY_QUERY_GLSL
+#define GLINT_RAY_QUERY_GLSL
+
+#ifndef BVH_PRESENT
+#define BVH_PRESENT(tri, u, v, o, d) true
+#endif
+
+struct Hit {
+    float t;
+    // Index into triangles[].
+    uint tri;
+    // Barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
+    float u;
+    float v;
+};
+
+#define BVH_INF uintBitsToFloat(0x7f800000u)
+#define BVH_NO_HIT 0xffffffffu
+
+// The triangles[] index of primitive `prim` of geometry `geom`.
+uint rq_triangle(uint geom, uint prim) {
+    if (RQ_MASKED == 0u) {
+        return prim;
+    }
+    return geom == 0u ? tri_map[1u + prim] : tri_map[1u + tri_map[0] + prim];
+}
+
+// Runs the alpha test on each non-opaque candidate of query q, confirming
+// those it keeps; opaque triangles commit without coming here.
+#define RQ_PROCEED(q, o, d)                                                              \
+    while (rayQueryProceedEXT(q)) {                                                      \
+        uint ctri = rq_triangle(uint(rayQueryGetIntersectionGeometryIndexEXT(q, false)), \
+                                uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false))); \
+        vec2 cb = rayQueryGetIntersectionBarycentricsEXT(q, false);                      \
+        if (BVH_PRESENT(ctri, cb.x, cb.y, o, d)) {                                       \
+            rayQueryConfirmIntersectionEXT(q);                                           \
+        }                                                                                \
+    }
+
+// Closest hit in [0, tmax].
+bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
+    hit = Hit(tmax, BVH_NO_HIT, 0.0, 0.0);
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, tlas, gl_RayFlagsNoneEXT, 0xffu, o, 0.0, d, tmax);
+    RQ_PROCEED(q, o, d)
+    if (rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionTriangleEXT) {
+        return false;
+    }
+    vec2 b = rayQueryGetIntersectionBarycentricsEXT(q, true);
+    hit.t = rayQueryGetIntersectionTEXT(q, true);
+    hit.tri = rq_triangle(uint(rayQueryGetIntersectionGeometryIndexEXT(q, true)),
+                          uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true)));
+    hit.u = b.x;
+    hit.v = b.y;
+    return true;
+}
+
+// Any hit in [0, tmax]: the first one kept ends the traversal.
+bool bvh_occluded(vec3 o, vec3 d, float tmax) {
+    rayQueryEXT q;
+    rayQueryInitializeEXT(q, tlas, gl_RayFlagsTerminateOnFirstHitEXT, 0xffu, o, 0.0, d, tmax);
+    RQ_PROCEED(q, o, d)
+    return rayQueryGetIntersectionTypeEXT(q, true) != gl_RayQueryCommittedIntersectionNoneEXT;
+}
+
+#endif

@@ -1,0 +1,301 @@
+//! `--traversal hardware`: shaders/ray_query.glsl (Vulkan ray queries
+//! against the acceleration structures of src/gpu/accel.rs) against the
+//! software traversal, under the validation layer.
+//!
+//! Per ray (`tests/ray_query_test` against `tests/bvh_test` and, with an
+//! alpha test, `tests/bvh_mask_test`): the same triangle (or an exact
+//! duplicate of it), t within 1e-5 relative, the same occlusion. The
+//! hardware's triangle test is the driver's, not glint's watertight one, so
+//! a ray within rounding of a shared edge may report the neighbour at the
+//! same distance, and a grazing ray may hit in one and miss in the other: at
+//! most 1 in 10^4 rays may differ so. Images: the same seed traces the same
+//! paths as the software kernel, and passes the statistical comparison with
+//! the CPU backend. Degenerate scenes: empty, one triangle.
+//!
+//! Skipped (with a line on stderr) where the device has no ray queries.
+
+mod common;
+#[path = "../cpu/tests/support/geometry.rs"]
+mod geometry;
+
+use std::path::Path;
+
+use glint::cpu::compare::compare_films;
+use glint::cpu::{Bvh, Bvh4, Film, Ray, RenderOptions, Scene, Triangle};
+use glint::gpu::accel::Accel;
+use glint::gpu::render::{KernelChoice, Traversal, render_with};
+use glint::gpu::{Buffer, BufferKind, Context, ContextDesc, GpuError, Kernel, KernelOptions};
+use glint::gpu::{ValidationLog, groups};
+
+use geometry::{Rng, asset_triangles, bunny, random_rays};
+
+/// A ray-query context under validation, or `None` (skip) where the device
+/// lacks ray queries.
+fn rq_context() -> Option<(Context, Option<std::sync::Arc<ValidationLog>>)> {
+    let desc = ContextDesc {
+        device: None,
+        validation: common::validation(),
+        loader: None,
+    };
+    match Context::new_ray_query(&desc) {
+        Ok(ctx) => {
+            let log = ctx.validation_log();
+            Some((ctx, log))
+        }
+        Err(e @ GpuError::NoRayQuery { .. }) => {
+            eprintln!("skipped: {e}");
+            None
+        }
+        Err(e) => panic!("cannot create a Vulkan context: {e}"),
+    }
+}
+
+/// Drop the context and assert the layer said nothing.
+fn finish(ctx: Context, log: Option<std::sync::Arc<ValidationLog>>) {
+    drop(ctx);
+    if let Some(log) = log {
+        let m = log.messages();
+        assert!(m.is_empty(), "validation: {m:?}");
+    }
+}
+
+/// Every third triangle is alpha-tested (shaders/tests/mask_test.glsl).
+fn test_masked(tri: u32) -> bool {
+    tri % 3 == 0
+}
+
+/// (t, tri, u, v) per ray and the occlusion flags.
+struct Traced {
+    hits: Vec<[u32; 4]>,
+    occluded: Vec<u32>,
+}
+
+fn pack(rays: &[Ray]) -> Vec<[f32; 8]> {
+    rays.iter()
+        .map(|r| [r.o.x, r.o.y, r.o.z, r.tmax, r.d.x, r.d.y, r.d.z, 0.0])
+        .collect()
+}
+
+/// The hardware traversal of `rays` against `tris`, alpha-tested or not.
+fn run_hardware(ctx: &Context, tris: &[Triangle], rays: &[Ray], masked: bool) -> Traced {
+    let storage = |name: &str, bytes: &[u8]| {
+        Buffer::from_slice(ctx, name, BufferKind::Storage, bytes).expect("buffer")
+    };
+    let tri_buf = storage("triangles", bytemuck::cast_slice(tris));
+    let rule = |i: u32| masked && test_masked(i);
+    let accel = Accel::build(ctx, &tri_buf, tris.len() as u32, &rule).expect("acceleration");
+    let ray_buf = storage("rays", bytemuck::cast_slice(&pack(rays)));
+    let hits = storage("hits", &vec![0u8; rays.len() * 16]);
+    let occluded = storage("occluded", &vec![7u8; rays.len() * 4]);
+    let options = KernelOptions {
+        acceleration_structure: accel.tlas(),
+        ..Default::default()
+    };
+    let kinds = [BufferKind::Storage; 5];
+    let mut k = Kernel::with_options(ctx, "tests/ray_query_test", &kinds, 12, &options)
+        .expect("ray query kernel");
+    k.bind(&[&accel.tri_map, &tri_buf, &ray_buf, &hits, &occluded])
+        .expect("bind");
+    let push = [rays.len() as u32, masked as u32, 3];
+    k.dispatch(
+        bytemuck::bytes_of(&push),
+        [groups(rays.len() as u32, 64), 1, 1],
+    )
+    .expect("dispatch");
+    Traced {
+        hits: hits.read().expect("read"),
+        occluded: occluded.read().expect("read"),
+    }
+}
+
+/// The software traversal (the 4-wide BVH, as renders use), with the test's
+/// alpha test when `masked`.
+fn run_software(
+    ctx: &Context,
+    wide: &Bvh4,
+    tris: &[Triangle],
+    rays: &[Ray],
+    masked: bool,
+) -> Traced {
+    let mut hits = vec![[0u32; 4]; rays.len()];
+    let mut occluded = vec![7u32; rays.len()];
+    let kernel = if masked {
+        "tests/bvh_mask_test"
+    } else {
+        "tests/bvh_test"
+    };
+    let push = [rays.len() as u32, wide.nodes.len() as u32, 3];
+    ctx.run_kernel(
+        kernel,
+        &[
+            bytemuck::cast_slice(&wide.nodes),
+            bytemuck::cast_slice(tris),
+            bytemuck::cast_slice(&pack(rays)),
+        ],
+        &mut [
+            bytemuck::cast_slice_mut(&mut hits),
+            bytemuck::cast_slice_mut(&mut occluded),
+        ],
+        bytemuck::bytes_of(&push),
+        [groups(rays.len() as u32, 64), 1, 1],
+    )
+    .expect("bvh kernel");
+    Traced { hits, occluded }
+}
+
+/// Hardware against software per ray, with the tolerance the module
+/// comment explains; returns the rays that hit.
+fn compare(name: &str, tris: &[Triangle], hw: &Traced, sw: &Traced) -> usize {
+    let (mut hit, mut differ, mut occl) = (0, 0, 0);
+    for i in 0..hw.hits.len() {
+        let (h, s) = (hw.hits[i], sw.hits[i]);
+        let (th, ts) = (f32::from_bits(h[0]), f32::from_bits(s[0]));
+        let same_t = (th - ts).abs() <= 1e-5 * ts;
+        match (h[1], s[1]) {
+            (u32::MAX, u32::MAX) => {}
+            (a, b) if a == b || tris[a as usize].vertices() == tris[b as usize].vertices() => {
+                assert!(same_t, "{name} ray {i}: hardware {h:?} software {s:?}");
+                hit += 1;
+            }
+            _ => differ += 1,
+        }
+        assert!(hw.occluded[i] <= 1, "{name} ray {i}: occlusion not written");
+        if hw.occluded[i] != sw.occluded[i] {
+            occl += 1;
+        }
+    }
+    let n = hw.hits.len();
+    eprintln!("{name}: {n} rays, {hit} same hits, {differ} differ, {occl} occlusion differs");
+    let allowed = n / 10_000;
+    assert!(
+        differ <= allowed && occl <= allowed,
+        "{name}: more than {allowed} rays differ"
+    );
+    hit
+}
+
+/// 10^5 random rays against the bunny and the Cornell box, opaque and with
+/// every third triangle alpha-tested.
+#[test]
+fn hardware_traversal_matches_software_per_ray() {
+    let Some((ctx, log)) = rq_context() else {
+        return;
+    };
+    let mut rng = Rng(0x0a5e);
+    for (name, mesh) in [
+        ("bunny", bunny()),
+        ("cornell", asset_triangles("cornell.gltf")),
+    ] {
+        let (bin, order) = Bvh::build(&mesh);
+        let wide = Bvh4::collapse(&bin);
+        let tris: Vec<Triangle> = order.iter().map(|&i| mesh[i as usize]).collect();
+        let rays = random_rays(&tris, 100_000, &mut rng);
+        for masked in [false, true] {
+            let hw = run_hardware(&ctx, &tris, &rays, masked);
+            let sw = run_software(&ctx, &wide, &tris, &rays, masked);
+            let what = format!("{name}{}", if masked { " alpha-tested" } else { "" });
+            let hit = compare(&what, &tris, &hw, &sw);
+            assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
+        }
+    }
+    finish(ctx, log);
+}
+
+/// An empty scene misses everything; one triangle is hit where it is.
+#[test]
+fn hardware_traversal_degenerate_scenes() {
+    let Some((ctx, log)) = rq_context() else {
+        return;
+    };
+    let ray = |o: [f32; 3], d: [f32; 3]| Ray {
+        o: o.into(),
+        d: d.into(),
+        tmax: f32::INFINITY,
+    };
+    let rays = vec![ray([0.2, 0.2, 0.0], [0.0, 0.0, 1.0]); 70];
+    let empty = run_hardware(&ctx, &[], &rays, false);
+    assert!(empty.hits.iter().all(|h| h[1] == u32::MAX));
+    assert!(empty.occluded.iter().all(|&o| o == 0));
+    let one = [Triangle {
+        p0: [0.0, 0.0, 1.0],
+        p1: [1.0, 0.0, 1.0],
+        p2: [0.0, 1.0, 1.0],
+        ..Default::default()
+    }];
+    let rays = [
+        ray([0.2, 0.3, 0.0], [0.0, 0.0, 1.0]),
+        ray([0.2, 0.3, 3.0], [0.0, 0.0, -1.0]),
+        ray([0.8, 0.8, 0.0], [0.0, 0.0, 1.0]),
+        Ray {
+            tmax: 0.5,
+            ..ray([0.2, 0.3, 0.0], [0.0, 0.0, 1.0])
+        },
+    ];
+    let r = run_hardware(&ctx, &one, &rays, false);
+    let t: Vec<f32> = r.hits.iter().map(|h| f32::from_bits(h[0])).collect();
+    assert_eq!([r.hits[0][1], r.hits[1][1]], [0, 0]);
+    assert!(
+        (t[0] - 1.0).abs() < 1e-6 && (t[1] - 2.0).abs() < 1e-6,
+        "{t:?}"
+    );
+    let (u, v) = (f32::from_bits(r.hits[0][2]), f32::from_bits(r.hits[0][3]));
+    assert!(
+        (u - 0.2).abs() < 1e-5 && (v - 0.3).abs() < 1e-5,
+        "({u}, {v})"
+    );
+    assert_eq!([r.hits[2][1], r.hits[3][1]], [u32::MAX, u32::MAX]);
+    assert_eq!(r.occluded, [1, 1, 0, 0]);
+    finish(ctx, log);
+}
+
+fn load(name: &str) -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("assets")
+        .join(name);
+    glint::cpu::loader::load(&path).unwrap()
+}
+
+fn gpu_film(ctx: &Context, scene: &Scene, opts: &RenderOptions, t: Traversal) -> Film {
+    let kernel = (KernelChoice::Generic, t);
+    let cache = ash::vk::PipelineCache::null();
+    render_with(ctx, scene, opts, kernel, cache, &|_, _| {})
+        .unwrap()
+        .film
+}
+
+/// The Cornell box and the alpha-masked textured scene: the hardware
+/// traversal traces the software kernel's paths with the same seed, and
+/// agrees statistically with the CPU backend.
+#[test]
+fn hardware_traversal_images() {
+    let Some((ctx, log)) = rq_context() else {
+        return;
+    };
+    for name in ["cornell.gltf", "textured.gltf"] {
+        let scene = load(name);
+        let opts = RenderOptions {
+            spp: 16,
+            seed: 3,
+            variance_batch: 4,
+            ..RenderOptions::new(32, 24)
+        };
+        let hw = gpu_film(&ctx, &scene, &opts, Traversal::Hardware);
+        let sw = gpu_film(&ctx, &scene, &opts, Traversal::Software);
+        let near = |a: glam::Vec3, b: glam::Vec3| {
+            (a - b).abs().max_element() <= 1e-3 * a.abs().max(b.abs()).max_element().max(1e-3)
+        };
+        let same = (0..hw.sum.len())
+            .filter(|&i| near(hw.sum[i], sw.sum[i]))
+            .count();
+        assert!(
+            same as f64 >= 0.98 * hw.sum.len() as f64,
+            "{name}: only {same} of {} pixels trace the software kernel's paths",
+            hw.sum.len()
+        );
+        let (cpu, _) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
+        let r = compare_films(&hw, &cpu).unwrap();
+        assert!(r.pass, "{name}: hardware traversal against the CPU: {r}");
+        eprintln!("{name}: {same} of {} pixels as software; {r}", hw.sum.len());
+    }
+    finish(ctx, log);
+}
