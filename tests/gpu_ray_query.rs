@@ -255,8 +255,11 @@ fn load(name: &str) -> Scene {
     glint::cpu::loader::load(&path).unwrap()
 }
 
+/// The kernel specialised to the scene, as renders use by default: the
+/// software one is compiled (and cached on disk by Mesa) by other tests
+/// too, where the generic kernels cost minutes of cold LLVM compilation.
 fn gpu_film(ctx: &Context, scene: &Scene, opts: &RenderOptions, t: Traversal) -> Film {
-    let kernel = (KernelChoice::Generic, t);
+    let kernel = (KernelChoice::Specialized, t);
     let cache = ash::vk::PipelineCache::null();
     render_with(ctx, scene, opts, kernel, cache, &|_, _| {})
         .unwrap()
