@@ -18,7 +18,7 @@ use std::path::{Path, PathBuf};
 use ash::vk;
 use glint::cpu::features::Features;
 use glint::cpu::{Film, RenderOptions, Scene};
-use glint::gpu::render::{KernelChoice, render_with};
+use glint::gpu::render::{KernelChoice, Traversal, render_with};
 
 fn asset(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -27,7 +27,15 @@ fn asset(name: &str) -> PathBuf {
 }
 
 fn render(ctx: &common::ValidatedContext, s: &Scene, o: &RenderOptions, k: KernelChoice) -> Film {
-    let r = render_with(ctx, s, o, k, vk::PipelineCache::null(), &|_, _| {}).unwrap();
+    let r = render_with(
+        ctx,
+        s,
+        o,
+        (k, Traversal::Software),
+        vk::PipelineCache::null(),
+        &|_, _| {},
+    )
+    .unwrap();
     assert_eq!(r.kernel, k);
     assert_eq!(
         r.features,
