@@ -26,21 +26,10 @@
 
 #include "bvh_types.glsl"
 
-struct Hit {
-    float t;
-    // Index into triangles[].
-    uint tri;
-    // Barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
-    float u;
-    float v;
-};
-
 // Entries of the traversal stack: glint_cpu::bvh::STACK_SIZE. The builder
 // keeps every leaf at depth <= MAX_DEPTH (48) and front-to-back traversal
 // pushes at most one node per level, so it cannot overflow.
 #define BVH_STACK_SIZE 64
-#define BVH_INF uintBitsToFloat(0x7f800000u)
-#define BVH_NO_HIT 0xffffffffu
 // glint_cpu::bvh::SLAB_PAD = 1 + 2 gamma(3) rounded to f32: 1 + 3 * 2^-23
 // (Ize 2013, "Robust BVH ray traversal"; pbrt-v3's Bounds3::IntersectP).
 #define BVH_SLAB_PAD uintBitsToFloat(0x3f800003u)

@@ -41,4 +41,18 @@ struct Triangle {
     vec4 p2;
 };
 
+// A traversal's closest hit, as both traversals (bvh.glsl, ray_query.glsl)
+// return it; glint_cpu::bvh::Hit.
+struct Hit {
+    float t;
+    // Index into triangles[].
+    uint tri;
+    // Barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
+    float u;
+    float v;
+};
+
+#define BVH_INF uintBitsToFloat(0x7f800000u)
+#define BVH_NO_HIT 0xffffffffu
+
 #endif

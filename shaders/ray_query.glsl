@@ -32,17 +32,7 @@
 #define BVH_PRESENT(tri, u, v, o, d) true
 #endif
 
-struct Hit {
-    float t;
-    // Index into triangles[].
-    uint tri;
-    // Barycentrics: p = (1 - u - v) p0 + u p1 + v p2.
-    float u;
-    float v;
-};
-
-#define BVH_INF uintBitsToFloat(0x7f800000u)
-#define BVH_NO_HIT 0xffffffffu
+#include "bvh_types.glsl"
 
 // The triangles[] index of primitive `prim` of geometry `geom`.
 uint rq_triangle(uint geom, uint prim) {

@@ -4,7 +4,10 @@
 //!
 //! Per ray (`tests/ray_query_test` against `tests/bvh_test` and, with an
 //! alpha test, `tests/bvh_mask_test`): the same triangle (or an exact
-//! duplicate of it), t within 1e-5 relative, the same occlusion. The
+//! duplicate of it), each hit point within rounding of the triangle's plane
+//! (not t within a relative bound: a grazing ray's t is ill-conditioned, and
+//! on such rays both traversals' t stray 1e-4 from the exact one while their
+//! points stay on the plane), the same occlusion. The
 //! hardware's triangle test is the driver's, not glint's watertight one, so
 //! a ray within rounding of a shared edge may report the neighbour at the
 //! same distance, and a grazing ray may hit in one and miss in the other: at
@@ -28,6 +31,11 @@ use glint::gpu::{Buffer, BufferKind, Context, ContextDesc, GpuError, Kernel, Ker
 use glint::gpu::{ValidationLog, groups};
 
 use geometry::{Rng, asset_triangles, bunny, random_rays};
+
+/// A hit point's distance from its triangle's plane over the size of the
+/// coordinates ([`off_plane`]): 16 float32 ulps (lavapipe measured 1.9,
+/// glint's watertight test 3.5, on 4 x 10^5 rays).
+const ON_PLANE: f64 = 16.0 * f32::EPSILON as f64;
 
 /// A ray-query context under validation, or `None` (skip) where the device
 /// lacks ray queries.
@@ -143,18 +151,44 @@ fn run_software(
     Traced { hits, occluded }
 }
 
+/// How far (in f64) the point at `t` along `ray` lies from the plane of
+/// `tri`, over the size of the coordinates involved: a few float ulps
+/// where a traversal rounds correctly. A grazing ray's t is ill-conditioned
+/// (an error across the plane becomes 1 / cos larger along the ray), so the
+/// test holds the point to the plane, not t to t.
+fn off_plane(tri: &Triangle, ray: &Ray, t: f32) -> f64 {
+    let [a, b, c] = tri.vertices().map(|v| v.as_dvec3());
+    let n = (b - a).cross(c - a).normalize();
+    let (o, d) = (ray.o.as_dvec3(), ray.d.as_dvec3());
+    let p = o + d * t as f64;
+    let size = [a, b, c, o, p]
+        .iter()
+        .map(|v| v.abs().max_element())
+        .fold(f64::MIN_POSITIVE, f64::max);
+    (p - a).dot(n).abs() / size
+}
+
 /// Hardware against software per ray, with the tolerance the module
-/// comment explains; returns the rays that hit.
-fn compare(name: &str, tris: &[Triangle], hw: &Traced, sw: &Traced) -> usize {
+/// comment explains; returns the rays that hit. Where both hit the same
+/// triangle, each point is held to the triangle's plane ([`off_plane`]):
+/// within [`ON_PLANE`]; the worst of each is printed.
+fn compare(name: &str, tris: &[Triangle], rays: &[Ray], hw: &Traced, sw: &Traced) -> usize {
     let (mut hit, mut differ, mut occl) = (0, 0, 0);
+    let (mut worst_hw, mut worst_sw) = (0f64, 0f64);
     for i in 0..hw.hits.len() {
         let (h, s) = (hw.hits[i], sw.hits[i]);
         let (th, ts) = (f32::from_bits(h[0]), f32::from_bits(s[0]));
-        let same_t = (th - ts).abs() <= 1e-5 * ts;
         match (h[1], s[1]) {
             (u32::MAX, u32::MAX) => {}
             (a, b) if a == b || tris[a as usize].vertices() == tris[b as usize].vertices() => {
-                assert!(same_t, "{name} ray {i}: hardware {h:?} software {s:?}");
+                let tri = &tris[b as usize];
+                let (eh, es) = (off_plane(tri, &rays[i], th), off_plane(tri, &rays[i], ts));
+                worst_hw = worst_hw.max(eh);
+                worst_sw = worst_sw.max(es);
+                assert!(
+                    es <= ON_PLANE && eh <= ON_PLANE,
+                    "{name} ray {i}: off the plane by {eh:.2e} (hardware {h:?}), {es:.2e} (software {s:?})"
+                );
                 hit += 1;
             }
             _ => differ += 1,
@@ -165,7 +199,11 @@ fn compare(name: &str, tris: &[Triangle], hw: &Traced, sw: &Traced) -> usize {
         }
     }
     let n = hw.hits.len();
-    eprintln!("{name}: {n} rays, {hit} same hits, {differ} differ, {occl} occlusion differs");
+    eprintln!(
+        "{name}: {n} rays, {hit} same hits, {differ} differ, {occl} occlusion differs; \
+         worst distance from the plane over the coordinates' size: hardware {worst_hw:.2e}, \
+         software {worst_sw:.2e}"
+    );
     let allowed = n / 10_000;
     assert!(
         differ <= allowed && occl <= allowed,
@@ -177,7 +215,6 @@ fn compare(name: &str, tris: &[Triangle], hw: &Traced, sw: &Traced) -> usize {
 /// 10^5 random rays against the bunny and the Cornell box, opaque and with
 /// every third triangle alpha-tested.
 #[test]
-#[ignore = "FAILS on lavapipe (first run, 2026-12-02, cause not yet found): cargo test --test gpu_ray_query -- --ignored"]
 fn hardware_traversal_matches_software_per_ray() {
     let Some((ctx, log)) = rq_context() else {
         return;
@@ -195,7 +232,7 @@ fn hardware_traversal_matches_software_per_ray() {
             let hw = run_hardware(&ctx, &tris, &rays, masked);
             let sw = run_software(&ctx, &wide, &tris, &rays, masked);
             let what = format!("{name}{}", if masked { " alpha-tested" } else { "" });
-            let hit = compare(&what, &tris, &hw, &sw);
+            let hit = compare(&what, &tris, &rays, &hw, &sw);
             assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
         }
     }
@@ -267,16 +304,29 @@ fn gpu_film(ctx: &Context, scene: &Scene, opts: &RenderOptions, t: Traversal) ->
         .film
 }
 
-/// The Cornell box and the alpha-masked textured scene: the hardware
-/// traversal traces the software kernel's paths with the same seed, and
-/// agrees statistically with the CPU backend.
+/// The Cornell box: the hardware traversal traces the software kernel's
+/// paths with the same seed (768 of 768 pixels, 2026-12-02), and agrees
+/// statistically with the CPU backend.
 #[test]
-#[ignore = "not yet seen to finish (over 8 minutes of cold LLVM compiles on the loaded 2-core VM): cargo test --test gpu_ray_query -- --ignored"]
 fn hardware_traversal_images() {
+    images(&["cornell.gltf"]);
+}
+
+/// The textured scene too (alpha masks, texture reads in the ray-query
+/// kernel): 7.8 minutes here, almost all of it Mesa's cold LLVM compile of
+/// the textured ray-query kernel on the 2-core VM (passed 2026-12-02, 768
+/// of 768 pixels as the software kernel's), too long for CI's budget.
+#[test]
+#[ignore = "7.8 min of cold shader compilation on 2 cores: cargo test --test gpu_ray_query -- --ignored"]
+fn hardware_traversal_images_textured() {
+    images(&["textured.gltf"]);
+}
+
+fn images(names: &[&str]) {
     let Some((ctx, log)) = rq_context() else {
         return;
     };
-    for name in ["cornell.gltf", "textured.gltf"] {
+    for &name in names {
         let scene = load(name);
         let opts = RenderOptions {
             spp: 16,
