@@ -21,20 +21,133 @@
 //! the change suffices; the global count test only adds power). Where the
 //! reference does not exist yet (`--update`), V_ref is what a reference of
 //! [`REF_FACTOR`] x N spp will hold: s^2 / (REF_FACTOR N).
+//!
+//! One material. A change confined to one material moves only the pixels
+//! that see it, so the uniform rule under-sizes it (a 2% change of a floor's
+//! dark tiles is a small part of 2% of any block that holds light tiles
+//! too). Every non-emitting material that covers at least
+//! [`MATERIAL_SHARE`] of the image (by primary hit) is a change of its own
+//! ([`material_changes`]): from [`SHARE_SPP`] path samples per pixel, split
+//! by the material their camera ray hits first, pixel i moves by delta x
+//! L_i,k (the mean over the pixel's samples of the radiance of those whose
+//! first hit is material k), so a block's shift is delta times the block
+//! mean of L_i,k. That is a lower bound of the true shift when what the
+//! material reflects is scaled by 1 +- delta (every such path scales so,
+//! paths that meet the material later add more, and a light's material,
+//! whose pixels show emission, is left out), so the N it gives is enough.
+//! The rule takes, per change, the smallest N over blocks and channels, and
+//! the largest over the changes: every one of them is caught with
+//! probability at least [`POWER`].
 
-use glam::DVec3;
+use glam::{DVec3, Vec3};
 use glint::cpu::compare::normal_quantile;
 use glint::cpu::exr_file::RadianceImage;
+use glint::cpu::integrator::PathTracer;
+use glint::cpu::sobol::PathSampler;
+use glint::cpu::{RenderOptions, Scene};
+use rayon::prelude::*;
 
-/// The detection probability the chosen spp guarantees.
-pub const POWER: f64 = 0.9;
+/// The detection probability the rule aims at: 0.95, above the 0.9 the
+/// suite promises, because its inputs (the pilot's variance, the material's
+/// radiance L_i,k) are themselves estimates.
+pub const POWER: f64 = 0.95;
 /// References take this many times the tests' samples.
 pub const REF_FACTOR: u32 = 4;
 /// compare's finest block edge.
 const BLOCK: u32 = 8;
+/// A material covering at least this share of the image is sized for.
+pub const MATERIAL_SHARE: f64 = 0.1;
+/// Path samples per pixel behind the material changes.
+pub const SHARE_SPP: u32 = 16;
 
-/// Per block level, per block: (mean, per-sample variance of the mean).
-fn levels(img: &RadianceImage, pilot_spp: u32) -> Vec<Vec<(DVec3, DVec3)>> {
+/// A change `detect` sizes the spp for: one material.
+#[derive(Clone, Debug)]
+pub struct Change {
+    /// Names it in the report: `material NAME (S% of the image)`.
+    pub label: String,
+    /// Per pixel, L_i,k: the radiance a relative change of the material
+    /// moves by that relative amount (module notes).
+    pub moved: Vec<Vec3>,
+}
+
+/// The non-emitting materials that cover at least [`MATERIAL_SHARE`] of
+/// the image `opts` renders, each as a [`Change`] (module notes).
+pub fn material_changes(scene: &Scene, opts: &RenderOptions) -> anyhow::Result<Vec<Change>> {
+    let opts = RenderOptions {
+        spp: SHARE_SPP,
+        ..opts.clone()
+    };
+    let pt = PathTracer::new(scene, &opts)?;
+    let (w, h) = (opts.width, opts.height);
+    // Per pixel: (material, rays, radiance) of the samples by first hit.
+    let pixels: Vec<Vec<(u32, u32, Vec3)>> = (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let (x, y) = (i % w, i / w);
+            let mut by: Vec<(u32, u32, Vec3)> = Vec::new();
+            let mut rays = 0u64;
+            for s in 0..SHARE_SPP {
+                let sample = opts.sample_start + s;
+                // The camera ray `sample` traces first (the sampler's
+                // first draw is the pixel position).
+                let u = PathSampler::new(pt.sampler, pt.key, i, sample).pixel_2d();
+                let Some(hit) = scene.intersect(&pt.camera.ray(x, y, u)) else {
+                    continue;
+                };
+                let m = scene.triangles[hit.tri as usize].material;
+                let l = pt.sample(x, y, sample, &mut rays);
+                let l = if l.is_finite() { l } else { Vec3::ZERO };
+                match by.iter_mut().find(|e| e.0 == m) {
+                    Some(e) => {
+                        e.1 += 1;
+                        e.2 += l;
+                    }
+                    None => by.push((m, 1, l)),
+                }
+            }
+            by
+        })
+        .collect();
+    // Shares first: at most 1 / MATERIAL_SHARE materials qualify, so only
+    // theirs get a per-pixel image (a file may hold thousands).
+    let mut rays = vec![0u64; scene.materials.len()];
+    for &(m, n, _) in pixels.iter().flatten() {
+        if let Some(r) = rays.get_mut(m as usize) {
+            *r += n as u64;
+        }
+    }
+    let total = (w as u64 * h as u64 * SHARE_SPP as u64).max(1) as f64;
+    let mut changes = Vec::new();
+    for (m, material) in scene.materials.iter().enumerate() {
+        let share = rays[m] as f64 / total;
+        if share < MATERIAL_SHARE || material.emission != Vec3::ZERO {
+            continue;
+        }
+        let moved = pixels
+            .iter()
+            .map(|by| {
+                by.iter()
+                    .find(|e| e.0 as usize == m)
+                    .map_or(Vec3::ZERO, |e| e.2 / SHARE_SPP as f32)
+            })
+            .collect();
+        let name = if material.name.is_empty() {
+            format!("#{m}")
+        } else {
+            material.name.clone()
+        };
+        changes.push(Change {
+            label: format!("material {name} ({:.0}% of the image)", 100.0 * share),
+            moved,
+        });
+    }
+    Ok(changes)
+}
+
+/// Per block level, per block: (mean of what moves, per-sample variance of
+/// the mean); what moves is `moved` (a change's L_i,k), or the whole pixel
+/// mean when `None`.
+fn levels(img: &RadianceImage, pilot_spp: u32, moved: Option<&[Vec3]>) -> Vec<Vec<(DVec3, DVec3)>> {
     let var = img.variance.as_deref().unwrap_or(&[]);
     let mut out = Vec::new();
     let mut edge = BLOCK;
@@ -46,7 +159,10 @@ fn levels(img: &RadianceImage, pilot_spp: u32) -> Vec<Vec<(DVec3, DVec3)>> {
             for x in 0..img.width {
                 let i = (y * img.width + x) as usize;
                 let b = &mut acc[((y / edge) * bx + x / edge) as usize];
-                b.0 += img.mean[i].as_dvec3();
+                b.0 += match moved {
+                    Some(mv) => mv.get(i).copied().unwrap_or(Vec3::ZERO).as_dvec3(),
+                    None => img.mean[i].as_dvec3(),
+                };
                 b.1 += var.get(i).map_or(DVec3::ZERO, |v| v.as_dvec3());
                 b.2 += 1;
             }
@@ -67,10 +183,12 @@ fn levels(img: &RadianceImage, pilot_spp: u32) -> Vec<Vec<(DVec3, DVec3)>> {
     }
 }
 
-/// The spp at which a relative change `delta` is caught with probability
-/// [`POWER`] at `alpha` (module notes), at most `cap`. `pilot` holds
-/// variance from a render of `pilot_spp` samples; `reference`, when given,
-/// is the reference the test will diff against (same size).
+/// The spp at which a relative change `delta` of the whole image, and of
+/// each of `changes`, is caught with probability [`POWER`] at `alpha`
+/// (module notes), at most `cap`; and the label of the change that set it
+/// (`None`: the whole image). `pilot` holds variance from a render of
+/// `pilot_spp` samples; `reference`, when given, is the reference the test
+/// will diff against (same size).
 pub fn required_spp(
     pilot: &RadianceImage,
     pilot_spp: u32,
@@ -78,22 +196,51 @@ pub fn required_spp(
     delta: f64,
     alpha: f64,
     cap: u32,
-) -> u32 {
-    let lv = levels(pilot, pilot_spp);
-    let tests: usize = lv.iter().map(|l| 3 * l.len()).sum();
+    changes: &[Change],
+) -> (u32, Option<String>) {
+    let uniform = levels(pilot, pilot_spp, None);
+    let tests: usize = uniform.iter().map(|l| 3 * l.len()).sum();
     let a_local = 1.0 - (1.0 - alpha / 2.0).powf(1.0 / tests.max(1) as f64);
     let z = normal_quantile(1.0 - a_local / 2.0) + normal_quantile(POWER);
-    let ref_var: Option<Vec<Vec<(DVec3, DVec3)>>> = reference.map(|r| levels(r, 1));
+    let ref_var: Option<Vec<Vec<(DVec3, DVec3)>>> = reference.map(|r| levels(r, 1, None));
+    let mut need = needed(&uniform, &uniform, ref_var.as_deref(), delta, z);
+    let mut by = None;
+    for c in changes {
+        let shifted = levels(pilot, pilot_spp, Some(&c.moved));
+        let n = needed(&shifted, &uniform, ref_var.as_deref(), delta, z);
+        if n > need {
+            need = n;
+            by = Some(c.label.clone());
+        }
+    }
+    let n = if need.is_finite() {
+        (need.ceil() as u32).clamp(1, cap)
+    } else {
+        cap
+    };
+    (n, by)
+}
+
+/// The smallest N over blocks and channels at which a block whose mean
+/// moves by delta x `shifted`'s mean reaches expected z `z`; `var` gives
+/// the blocks' variances, `ref_var` the reference's.
+fn needed(
+    shifted: &[Vec<(DVec3, DVec3)>],
+    var: &[Vec<(DVec3, DVec3)>],
+    ref_var: Option<&[Vec<(DVec3, DVec3)>]>,
+    delta: f64,
+    z: f64,
+) -> f64 {
     let mut best = f64::INFINITY;
-    for (li, level) in lv.iter().enumerate() {
-        for (bi, &(m, s2)) in level.iter().enumerate() {
+    for (li, level) in shifted.iter().enumerate() {
+        for (bi, &(m, _)) in level.iter().enumerate() {
+            let s2 = var[li][bi].1;
             for c in 0..3 {
                 let shift2 = (delta * m[c]).powi(2) / (z * z);
-                let n = match &ref_var {
+                let n = match ref_var {
                     // V_ref known: N >= s^2 / (shift^2 / z^2 - V_ref).
                     Some(r) => {
-                        let v_ref = r[li][bi].1[c];
-                        let room = shift2 - v_ref;
+                        let room = shift2 - r[li][bi].1[c];
                         if room > 0.0 {
                             s2[c] / room
                         } else {
@@ -109,17 +256,12 @@ pub fn required_spp(
             }
         }
     }
-    if best.is_finite() {
-        (best.ceil() as u32).clamp(1, cap)
-    } else {
-        cap
-    }
+    best
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use glam::Vec3;
 
     fn image(size: u32, mean: f32, var: f32) -> RadianceImage {
         let n = (size * size) as usize;
@@ -136,14 +278,14 @@ mod tests {
     fn noisier_needs_more_and_smaller_changes_need_more() {
         let quiet = image(16, 1.0, 1e-3);
         let noisy = image(16, 1.0, 4e-3);
-        let a = required_spp(&quiet, 16, None, 0.02, 1e-3, 1 << 20);
-        let b = required_spp(&noisy, 16, None, 0.02, 1e-3, 1 << 20);
+        let a = required_spp(&quiet, 16, None, 0.02, 1e-3, 1 << 20, &[]).0;
+        let b = required_spp(&noisy, 16, None, 0.02, 1e-3, 1 << 20, &[]).0;
         assert!(b > 3 * a && b < 5 * a, "{a} {b}");
-        let c = required_spp(&quiet, 16, None, 0.01, 1e-3, 1 << 20);
+        let c = required_spp(&quiet, 16, None, 0.01, 1e-3, 1 << 20, &[]).0;
         assert!(c > 3 * a && c < 5 * a, "{a} {c}");
         // The cap wins where the rule asks for more.
         assert!(b > 10, "{b}");
-        assert_eq!(required_spp(&noisy, 16, None, 0.02, 1e-3, 10), 10);
+        assert_eq!(required_spp(&noisy, 16, None, 0.02, 1e-3, 10, &[]).0, 10);
     }
 
     #[test]
@@ -155,12 +297,47 @@ mod tests {
         let z = normal_quantile(1.0 - a_local / 2.0) + normal_quantile(POWER);
         let s2 = 0.01f32 as f64 * 16.0 / 64.0;
         let want = (s2 * 1.25 * z * z / (delta * 2.0f64).powi(2)).ceil() as u32;
-        assert_eq!(required_spp(&img, 16, None, delta, alpha, 1 << 20), want);
+        assert_eq!(
+            required_spp(&img, 16, None, delta, alpha, 1 << 20, &[]).0,
+            want
+        );
         // A reference noisier than the REF_FACTOR x N spp one the rule
         // assumes leaves less room: more samples (its block variance
         // 0.02 / 64 against the assumed s^2 / (4 x 8)).
         let reference = image(8, 2.0, 0.02);
-        let with_ref = required_spp(&img, 16, Some(&reference), delta, alpha, 1 << 20);
+        let with_ref = required_spp(&img, 16, Some(&reference), delta, alpha, 1 << 20, &[]).0;
         assert!(with_ref > want, "{with_ref} {want}");
+    }
+
+    #[test]
+    fn a_material_on_one_block_is_sized_for_that_block_alone() {
+        // 16x16: four 8x8 blocks and the whole image (5 blocks, 15 tests).
+        // A material filling the top-left block moves only it; the rule
+        // must size N for that block's variance (4x the whole image's).
+        let img = image(16, 1.0, 0.01);
+        let (delta, alpha) = (0.05, 1e-3);
+        // The pixel means are 1, so what moves is 1 on the block.
+        let moved: Vec<Vec3> = (0..256)
+            .map(|i| Vec3::splat(if i % 16 < 8 && i / 16 < 8 { 1.0 } else { 0.0 }))
+            .collect();
+        let change = Change {
+            label: "material m".into(),
+            moved,
+        };
+        let (uniform, by) = required_spp(&img, 16, None, delta, alpha, 1 << 20, &[]);
+        assert_eq!(by, None);
+        let (n, by) = required_spp(&img, 16, None, delta, alpha, 1 << 20, &[change]);
+        assert_eq!(by.as_deref(), Some("material m"));
+        let a_local = 1.0 - (1.0 - alpha / 2.0f64).powf(1.0 / 15.0);
+        let z = normal_quantile(1.0 - a_local / 2.0) + normal_quantile(POWER);
+        let s2 = 0.01f32 as f64 * 16.0 / 64.0;
+        let want = (s2 * 1.25 * z * z / delta.powi(2)).ceil() as u32;
+        assert_eq!(n, want);
+        // The whole image (variance s^2 / 4) catches a uniform change at a
+        // quarter of that.
+        assert_eq!(
+            uniform,
+            (s2 / 4.0 * 1.25 * z * z / delta.powi(2)).ceil() as u32
+        );
     }
 }

@@ -82,6 +82,14 @@ fn properties(o: &Outcome) -> Vec<(String, String)> {
     }
     if let Some(d) = o.case.detect {
         p.push(("detect".into(), d.to_string()));
+        let by = o.detect_by.as_deref().unwrap_or("the whole image");
+        p.push(("detect_by".into(), by.to_string()));
+        if o.detect_capped {
+            p.push(("detect_capped".into(), "true".into()));
+        }
+        if !o.detect_materials.is_empty() {
+            p.push(("detect_materials".into(), o.detect_materials.join("; ")));
+        }
     }
     if let Some(m) = &o.metrics {
         for k in ["relmse", "rmse", "flip", "verdict"] {
