@@ -432,6 +432,18 @@ pub struct RenderArgs {
     #[arg(long, value_name = "I/N")]
     pub shard: Option<crate::cmd::shard::Shard>,
 
+    #[command(flatten)]
+    pub control: ControlOpts,
+
+    /// No progress bar and no success line.
+    #[arg(long)]
+    pub quiet: bool,
+}
+
+/// `--target-error` and `--adaptive`: what decides when a render stops
+/// (render's, and a converge variant's).
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ControlOpts {
     /// Render whole passes until the image's estimated relMSE (each
     /// pixel's variance of the mean in place of its squared error) is at
     /// most E; --spp is then the cap.
@@ -444,10 +456,6 @@ pub struct RenderArgs {
     /// `samples` channel.
     #[arg(long, value_name = "T", allow_negative_numbers = true)]
     pub adaptive: Option<f64>,
-
-    /// No progress bar and no success line.
-    #[arg(long)]
-    pub quiet: bool,
 }
 
 #[derive(clap::Args, Debug)]
@@ -595,6 +603,11 @@ pub struct VariantCli {
 
     #[command(flatten)]
     pub opts: RenderOpts,
+
+    /// --target-error / --adaptive as render's: the variant stops on its
+    /// error, each --spp budget its cap (not with --time).
+    #[command(flatten)]
+    pub control: ControlOpts,
 }
 
 #[derive(clap::Args, Debug)]

@@ -310,3 +310,92 @@ fn time_limit_stops_at_whole_passes_and_reports_the_spp_reached() {
     assert!(one_error_line(&o).contains("--time-limit"));
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// `--variant` with `--adaptive` and `--target-error` (issue 23): each
+/// `--spp` budget is the cap; the CSV reports the spp reached (an adaptive
+/// render's mean over pixels, below the cap; a target-error render's whole
+/// passes, fewer for the looser target), and the error falls with the cap.
+/// With `--time` budgets, or a bad threshold, one line and no DIR.
+#[test]
+fn adaptive_and_target_error_variants_report_the_spp_reached() {
+    let dir = scratch("control");
+    let scene = asset("cornell.gltf");
+    let out = dir.join("out");
+    let o = glint(&dir)
+        .args(["converge", scene.to_str().unwrap(), "-o"])
+        .arg(&out)
+        .args([
+            "--width",
+            "16",
+            "--spp",
+            "64,256",
+            "--reference-spp",
+            "1024",
+        ])
+        .args(["--variant", "adaptive=--backend cpu --adaptive 0.1"])
+        .args(["--variant", "tight=--backend cpu --target-error 0.001"])
+        .args(["--variant", "loose=--backend cpu --target-error 0.05"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("converge.csv")).unwrap();
+    let rows: Vec<(String, f64, f64)> = csv
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            (
+                f[0].to_string(),
+                f[2].parse().unwrap(),
+                f[4].parse().unwrap(),
+            )
+        })
+        .collect();
+    let of = |v: &str| -> Vec<(f64, f64)> {
+        rows.iter()
+            .filter(|r| r.0 == v)
+            .map(|r| (r.1, r.2))
+            .collect()
+    };
+    let (ad, tight, loose) = (of("adaptive"), of("tight"), of("loose"));
+    assert_eq!((ad.len(), tight.len(), loose.len()), (2, 2, 2), "{csv}");
+    for (i, cap) in [64.0, 256.0].into_iter().enumerate() {
+        assert!(ad[i].0 > 0.0 && ad[i].0 <= cap, "adaptive spp {csv}");
+        assert!(loose[i].0 <= tight[i].0 && tight[i].0 <= cap, "{csv}");
+    }
+    // At the larger cap the adaptive render stops pixels early and its
+    // error is smaller than at the smaller cap.
+    assert!(ad[1].0 < 256.0 && ad[1].1 < ad[0].1, "{csv}");
+    assert!(
+        loose[1].0 < 256.0,
+        "the loose target stops before the cap: {csv}"
+    );
+
+    for (variant, budget) in [
+        ("a=--backend cpu --adaptive 0.1", ["--time", "0.5"]),
+        ("a=--backend cpu --adaptive 0", ["--spp", "8"]),
+        ("a=--backend cpu --target-error NaN", ["--spp", "8"]),
+    ] {
+        let bad = dir.join("bad");
+        let o = glint(&dir)
+            .args(["converge", scene.to_str().unwrap(), "-o"])
+            .arg(&bad)
+            .args([
+                "--width",
+                "8",
+                "--reference-spp",
+                "16",
+                "--variant",
+                variant,
+            ])
+            .args(budget)
+            .output()
+            .unwrap();
+        let line = one_error_line(&o);
+        assert!(
+            line.contains("--adaptive") || line.contains("--target-error"),
+            "{variant}: {line}"
+        );
+        assert!(!bad.join("converge.csv").exists());
+    }
+}

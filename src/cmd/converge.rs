@@ -19,7 +19,7 @@ use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 
 use super::outputs::Outputs;
 use super::{TIME_LIMIT_MAX_SPP, check_opts, encode, render_on, render_options};
-use crate::cli::{ConvergeArgs, RenderOpts, VariantCli};
+use crate::cli::{ControlOpts, ConvergeArgs, RenderOpts, VariantCli};
 
 /// The reference's seed: independent of every variant's stream.
 const REFERENCE_SEED_XOR: u64 = 0x5851_f42d_4c95_7f2d;
@@ -30,6 +30,8 @@ pub struct Variant {
     pub name: String,
     pub backend: Backend,
     pub opts: RenderOpts,
+    /// `--target-error` / `--adaptive`: each `--spp` budget is the cap.
+    pub control: ControlOpts,
 }
 
 /// Parse `NAME=OPTIONS` with OPTIONS laid over the shared options.
@@ -59,10 +61,13 @@ pub fn parse_variant(spec: &str, shared: &RenderOpts) -> Result<Variant> {
     if v.opts.time_limit.is_some() {
         bail!("--variant '{spec}': --time-limit is converge's own (use --time)");
     }
+    super::render::check_control(&v.control, false, false)
+        .map_err(|e| anyhow!("--variant '{spec}': {e}"))?;
     Ok(Variant {
         name: name.to_string(),
         backend: v.backend,
         opts: v.opts,
+        control: v.control,
     })
 }
 
@@ -87,7 +92,9 @@ impl Budget {
 pub struct Row {
     pub variant: String,
     pub backend: Backend,
-    pub spp: u32,
+    /// Samples per pixel reached: the mean over pixels (an adaptive render
+    /// stops pixels early; a target-error one stops at a whole pass).
+    pub spp: f64,
     pub seconds: f64,
     pub metrics: Metrics,
 }
@@ -464,6 +471,17 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
             };
             let mut opts = render_options(&scene, &args.scene, spp, &v.opts)?;
             opts.time_limit = time_limit;
+            if time_limit.is_some()
+                && (v.control.target_error.is_some() || v.control.adaptive.is_some())
+            {
+                bail!(
+                    "variant {}: --target-error and --adaptive stop on the error, not the clock: \
+                     give --spp budgets (each the cap), not --time",
+                    v.name
+                );
+            }
+            opts.target_error = v.control.target_error;
+            opts.adaptive = v.control.adaptive;
             if (opts.width, opts.height) != (rw, rh) {
                 bail!(
                     "{ref_name} is {rw}x{rh} but variant {} renders {}x{} (set --width/--height to match)",
@@ -478,13 +496,16 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
             let m = metrics::compute(&img, &reference_img)?;
             eprintln!(
                 "glint: converge: {} {} spp: relMSE {:.3e} in {:.3} s",
-                v.name, r.film.spp, m.relmse, r.render_seconds
+                v.name,
+                r.film.mean_spp(),
+                m.relmse,
+                r.render_seconds
             );
             devices.push((r.backend, r.device.clone()));
             rows.push(Row {
                 variant: v.name.clone(),
                 backend: r.backend,
-                spp: r.film.spp,
+                spp: r.film.mean_spp(),
                 seconds: r.render_seconds,
                 metrics: m,
             });

@@ -11,27 +11,27 @@ use super::{
     check_params, check_scene_path, encode, load_with_inputs, render_on, render_options, same_file,
     spp_of,
 };
-use crate::cli::RenderArgs;
+use crate::cli::{ControlOpts, RenderArgs};
 use crate::stats::Stats;
 
 /// `--target-error` and `--adaptive`: positive numbers, and neither with
 /// `--shard` or `--time-limit` (one line each saying why).
-fn check_control(args: &RenderArgs) -> Result<()> {
+pub fn check_control(c: &ControlOpts, shard: bool, time_limit: bool) -> Result<()> {
     for (name, v) in [
-        ("--target-error", args.target_error),
-        ("--adaptive", args.adaptive),
+        ("--target-error", c.target_error),
+        ("--adaptive", c.adaptive),
     ] {
         let Some(v) = v else { continue };
         let refuse = |m: String| Err(super::BadInput(m).into());
         if !(v > 0.0 && v.is_finite()) {
             return refuse(format!("{name} {v} is out of range (a positive number)"));
         }
-        if args.shard.is_some() {
+        if shard {
             return refuse(format!(
                 "{name} and --shard cannot be combined (a shard cannot stop on the whole render's error: its samples are fixed in advance)"
             ));
         }
-        if args.scene.opts.time_limit.is_some() {
+        if time_limit {
             return refuse(format!(
                 "{name} and --time-limit cannot be combined (the error, not the clock, decides when it stops)"
             ));
@@ -101,7 +101,11 @@ pub fn run(args: &RenderArgs) -> Result<()> {
             "--shard and --time-limit cannot be combined (a shard's samples are fixed in advance)"
         );
     }
-    check_control(args)?;
+    check_control(
+        &args.control,
+        args.shard.is_some(),
+        args.scene.opts.time_limit.is_some(),
+    )?;
     if args.variance && !formats.contains(&OutputFormat::Exr) {
         eprintln!("glint: warning: --variance: no .exr output to hold it");
     }
@@ -132,8 +136,8 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.shard.is_some() {
         shard::apply(&mut opts, shard)?;
     }
-    opts.target_error = args.target_error;
-    opts.adaptive = args.adaptive;
+    opts.target_error = args.control.target_error;
+    opts.adaptive = args.control.adaptive;
     let load_seconds = start.elapsed().as_secs_f64();
     let r = render_on(
         args.backend,
