@@ -37,6 +37,11 @@ fn main() -> ExitCode {
             .map(|s| s.to_string())
             .or_else(|| info.payload().downcast_ref::<String>().cloned())
             .unwrap_or_else(|| "unknown panic".into());
+        // Rust ignores SIGPIPE, so a closed stdout makes print! panic: end
+        // as a filter does, not as a bug.
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            cmd::outputs::on_broken_pipe();
+        }
         let at = info
             .location()
             .map(|l| format!(" at {}:{}", l.file(), l.line()))

@@ -701,3 +701,28 @@ fn envmap_file_renders_like_the_same_constant_background() {
     let out = render(&["--envmap", "missing.exr"], "missing.exr");
     assert_one_line_error(&out, "missing.exr");
 }
+
+/// A closed standard output (`glint info scene | head -1`) ends glint as it
+/// ends a Unix filter: quietly, status 141 (128 + SIGPIPE), not as an
+/// internal error.
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell.gltf");
+    let mut child = glint()
+        .arg("info")
+        .arg(&scene)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Closed before glint has loaded the scene, so its first write fails.
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("internal error"), "{err}");
+    assert!(
+        matches!(out.status.code(), Some(141) | Some(0)),
+        "{:?}: {err}",
+        out.status
+    );
+}

@@ -31,6 +31,16 @@ pub fn on_signal(name: &str, number: i32) -> ! {
     std::process::exit(128 + number)
 }
 
+/// Standard output was closed under us (`glint diff ... | head -1`): what a
+/// Unix filter does on SIGPIPE, quietly. Temporaries are removed (no output
+/// is presented as complete) and the exit status is 128 + SIGPIPE.
+pub fn on_broken_pipe() -> ! {
+    for t in pending().drain(..) {
+        let _ = std::fs::remove_file(&t);
+    }
+    std::process::exit(128 + 13)
+}
+
 /// Output files in two phases: temporaries beside each final path are
 /// created up front (so an unwritable destination fails before any
 /// rendering), filled at the end, then renamed. Dropping the set without
