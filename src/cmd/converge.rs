@@ -428,6 +428,43 @@ pub fn run(args: &ConvergeArgs) -> Result<()> {
     result
 }
 
+/// The render options of variant `v` at budget `b`: a sample count, or a
+/// time budget (not with `--target-error` / `--adaptive`, which stop on the
+/// error); the image must be the reference's size.
+fn variant_options(
+    scene: &Scene,
+    path: &Path,
+    v: &Variant,
+    b: Budget,
+    (rw, rh): (u32, u32),
+    ref_name: &str,
+) -> Result<RenderOptions> {
+    let (spp, time_limit) = match b {
+        Budget::Spp(n) => (n, None),
+        Budget::Seconds(t) => (TIME_LIMIT_MAX_SPP, Some(t)),
+    };
+    if time_limit.is_some() && (v.control.target_error.is_some() || v.control.adaptive.is_some()) {
+        bail!(
+            "variant {}: --target-error and --adaptive stop on the error, not the clock: \
+             give --spp budgets (each the cap), not --time",
+            v.name
+        );
+    }
+    let mut opts = render_options(scene, path, spp, &v.opts)?;
+    opts.time_limit = time_limit;
+    opts.target_error = v.control.target_error;
+    opts.adaptive = v.control.adaptive;
+    if (opts.width, opts.height) != (rw, rh) {
+        bail!(
+            "{ref_name} is {rw}x{rh} but variant {} renders {}x{} (set --width/--height to match)",
+            v.name,
+            opts.width,
+            opts.height
+        );
+    }
+    Ok(opts)
+}
+
 fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &Path) -> Result<()> {
     let mut outputs = Outputs::new();
     let csv_slot = outputs.reserve(&dir.join("converge.csv"))?;
@@ -465,31 +502,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     let mut films: Vec<(Film, RenderMeta)> = Vec::new();
     for v in variants {
         for &b in budgets {
-            let (spp, time_limit) = match b {
-                Budget::Spp(n) => (n, None),
-                Budget::Seconds(t) => (TIME_LIMIT_MAX_SPP, Some(t)),
-            };
-            let mut opts = render_options(&scene, &args.scene, spp, &v.opts)?;
-            opts.time_limit = time_limit;
-            if time_limit.is_some()
-                && (v.control.target_error.is_some() || v.control.adaptive.is_some())
-            {
-                bail!(
-                    "variant {}: --target-error and --adaptive stop on the error, not the clock: \
-                     give --spp budgets (each the cap), not --time",
-                    v.name
-                );
-            }
-            opts.target_error = v.control.target_error;
-            opts.adaptive = v.control.adaptive;
-            if (opts.width, opts.height) != (rw, rh) {
-                bail!(
-                    "{ref_name} is {rw}x{rh} but variant {} renders {}x{} (set --width/--height to match)",
-                    v.name,
-                    opts.width,
-                    opts.height
-                );
-            }
+            let opts = variant_options(&scene, &args.scene, v, b, (rw, rh), &ref_name)?;
             let r: BackendRender = render_on(v.backend, &args.scene, &v.opts, &scene, &opts)?;
             let means = r.film.means();
             let img = ImageRef::new(opts.width, opts.height, &means)?;
