@@ -144,43 +144,57 @@ pub fn material_changes(scene: &Scene, opts: &RenderOptions) -> anyhow::Result<V
     Ok(changes)
 }
 
-/// Per block level, per block: (mean of what moves, per-sample variance of
-/// the mean); what moves is `moved` (a change's L_i,k), or the whole pixel
-/// mean when `None`.
-fn levels(img: &RadianceImage, pilot_spp: u32, moved: Option<&[Vec3]>) -> Vec<Vec<(DVec3, DVec3)>> {
-    let var = img.variance.as_deref().unwrap_or(&[]);
+/// Per block level (8x8, then doubling up to the whole image, as `compare`
+/// tiles it), per non-empty block: the sum of `value(i)` over its pixels
+/// and their count.
+fn block_sums(w: u32, h: u32, value: impl Fn(usize) -> DVec3) -> Vec<Vec<(DVec3, f64)>> {
     let mut out = Vec::new();
     let mut edge = BLOCK;
     loop {
-        let bx = img.width.div_ceil(edge);
-        let by = img.height.div_ceil(edge);
-        let mut acc = vec![(DVec3::ZERO, DVec3::ZERO, 0u32); (bx * by) as usize];
-        for y in 0..img.height {
-            for x in 0..img.width {
-                let i = (y * img.width + x) as usize;
+        let bx = w.div_ceil(edge);
+        let by = h.div_ceil(edge);
+        let mut acc = vec![(DVec3::ZERO, 0.0); (bx * by) as usize];
+        for y in 0..h {
+            for x in 0..w {
                 let b = &mut acc[((y / edge) * bx + x / edge) as usize];
-                b.0 += match moved {
-                    Some(mv) => mv.get(i).copied().unwrap_or(Vec3::ZERO).as_dvec3(),
-                    None => img.mean[i].as_dvec3(),
-                };
-                b.1 += var.get(i).map_or(DVec3::ZERO, |v| v.as_dvec3());
-                b.2 += 1;
+                b.0 += value((y * w + x) as usize);
+                b.1 += 1.0;
             }
         }
-        out.push(
-            acc.into_iter()
-                .filter(|a| a.2 > 0)
-                .map(|(s, v, n)| {
-                    let n = n as f64;
-                    (s / n, v * pilot_spp as f64 / (n * n))
-                })
-                .collect(),
-        );
+        out.push(acc.into_iter().filter(|a| a.1 > 0.0).collect());
         if bx * by <= 1 {
             return out;
         }
         edge *= 2;
     }
+}
+
+/// Per block level, per block: the mean of the pixel means, or of a
+/// change's L_i,k when `moved` is given.
+fn block_means(img: &RadianceImage, moved: Option<&[Vec3]>) -> Vec<Vec<DVec3>> {
+    let value = |i: usize| match moved {
+        Some(mv) => mv.get(i).copied().unwrap_or(Vec3::ZERO).as_dvec3(),
+        None => img.mean[i].as_dvec3(),
+    };
+    block_sums(img.width, img.height, value)
+        .into_iter()
+        .map(|l| l.into_iter().map(|(s, n)| s / n).collect())
+        .collect()
+}
+
+/// Per block level, per block: the variance of the block mean for one
+/// sample per pixel, from `img`'s variance of a `spp`-sample render.
+fn block_variances(img: &RadianceImage, spp: u32) -> Vec<Vec<DVec3>> {
+    let var = img.variance.as_deref().unwrap_or(&[]);
+    let value = |i: usize| var.get(i).map_or(DVec3::ZERO, |v| v.as_dvec3());
+    block_sums(img.width, img.height, value)
+        .into_iter()
+        .map(|l| {
+            l.into_iter()
+                .map(|(v, n)| v * spp as f64 / (n * n))
+                .collect()
+        })
+        .collect()
 }
 
 /// The spp at which a relative change `delta` of the whole image, and of
@@ -198,16 +212,17 @@ pub fn required_spp(
     cap: u32,
     changes: &[Change],
 ) -> (u32, Option<String>) {
-    let uniform = levels(pilot, pilot_spp, None);
-    let tests: usize = uniform.iter().map(|l| 3 * l.len()).sum();
+    let var = block_variances(pilot, pilot_spp);
+    let tests: usize = var.iter().map(|l| 3 * l.len()).sum();
     let a_local = 1.0 - (1.0 - alpha / 2.0).powf(1.0 / tests.max(1) as f64);
     let z = normal_quantile(1.0 - a_local / 2.0) + normal_quantile(POWER);
-    let ref_var: Option<Vec<Vec<(DVec3, DVec3)>>> = reference.map(|r| levels(r, 1, None));
-    let mut need = needed(&uniform, &uniform, ref_var.as_deref(), delta, z);
+    let ref_var = reference.map(|r| block_variances(r, 1));
+    let uniform = block_means(pilot, None);
+    let mut need = needed(&uniform, &var, ref_var.as_deref(), delta, z);
     let mut by = None;
     for c in changes {
-        let shifted = levels(pilot, pilot_spp, Some(&c.moved));
-        let n = needed(&shifted, &uniform, ref_var.as_deref(), delta, z);
+        let shifted = block_means(pilot, Some(&c.moved));
+        let n = needed(&shifted, &var, ref_var.as_deref(), delta, z);
         if n > need {
             need = n;
             by = Some(c.label.clone());
@@ -222,25 +237,25 @@ pub fn required_spp(
 }
 
 /// The smallest N over blocks and channels at which a block whose mean
-/// moves by delta x `shifted`'s mean reaches expected z `z`; `var` gives
-/// the blocks' variances, `ref_var` the reference's.
+/// moves by delta x `shifted` reaches expected z `z`; `var` gives the
+/// blocks' one-sample variances, `ref_var` the reference's.
 fn needed(
-    shifted: &[Vec<(DVec3, DVec3)>],
-    var: &[Vec<(DVec3, DVec3)>],
-    ref_var: Option<&[Vec<(DVec3, DVec3)>]>,
+    shifted: &[Vec<DVec3>],
+    var: &[Vec<DVec3>],
+    ref_var: Option<&[Vec<DVec3>]>,
     delta: f64,
     z: f64,
 ) -> f64 {
     let mut best = f64::INFINITY;
     for (li, level) in shifted.iter().enumerate() {
-        for (bi, &(m, _)) in level.iter().enumerate() {
-            let s2 = var[li][bi].1;
+        for (bi, &m) in level.iter().enumerate() {
+            let s2 = var[li][bi];
             for c in 0..3 {
                 let shift2 = (delta * m[c]).powi(2) / (z * z);
                 let n = match ref_var {
                     // V_ref known: N >= s^2 / (shift^2 / z^2 - V_ref).
                     Some(r) => {
-                        let room = shift2 - r[li][bi].1[c];
+                        let room = shift2 - r[li][bi][c];
                         if room > 0.0 {
                             s2[c] / room
                         } else {
