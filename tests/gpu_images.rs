@@ -133,6 +133,25 @@ fn compare_scene(
     report
 }
 
+/// Every diffuse material made a smooth non-metal under a rough clear
+/// coat (KHR_materials_clearcoat, roughness 0.5): the kernel needs its
+/// rough code for the coat although the material under it is smooth.
+fn rough_clearcoat(scene: &mut Scene) {
+    for m in &mut scene.materials {
+        if let Bsdf::Diffuse { reflectance } = m.bsdf {
+            m.bsdf = Bsdf::Coated {
+                base: reflectance,
+                coat: glint::cpu::bsdf::coated::CoatParams {
+                    clearcoat: 0.8,
+                    clearcoat_alpha: 0.25,
+                    ..glint::cpu::bsdf::coated::CoatParams::GLTF_DEFAULT
+                },
+                roughness: glint::cpu::bsdf::Roughness::SMOOTH,
+            };
+        }
+    }
+}
+
 macro_rules! scene_tests {
     ($($test:ident => $file:literal, $prepare:expr;)*) => {
         $(
@@ -171,6 +190,7 @@ scene_tests! {
     materials => "materials.gltf", as_is;
     textured_envmap => "textured.gltf", with_envmap;
     dielectric_absorbing => "dielectric.gltf", absorbing_glass;
+    diffuse_rough_clearcoat => "diffuse.gltf", rough_clearcoat;
 }
 
 /// A procedural sky (a blue gradient with a small bright sun) as an

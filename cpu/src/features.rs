@@ -112,6 +112,14 @@ impl Features {
                 Shadowing::Separable => Self::SMITH_SEPARABLE,
             };
         };
+        // A rough clear coat needs the rough code whatever the material
+        // under it is (its GGX lobe is `cc_smooth` without it). Textures
+        // only scale its roughness factor down, so the factor decides.
+        let clearcoat_rough = |c: &crate::bsdf::coated::CoatParams, f: &mut u32| {
+            if c.clearcoat > 0.0 && c.clearcoat_alpha >= crate::bsdf::SMOOTH_ALPHA_THRESHOLD {
+                *f |= Self::ROUGH | Self::SMITH_CORRELATED;
+            }
+        };
         for (i, (m, _)) in scene
             .materials
             .iter()
@@ -136,9 +144,12 @@ impl Features {
                     rough(&p.roughness, &mut f);
                 }
                 Bsdf::ThinDielectric { .. } => f |= Self::THIN_DIELECTRIC,
-                Bsdf::Coated { roughness, .. } => {
+                Bsdf::Coated {
+                    roughness, coat, ..
+                } => {
                     f |= Self::COATED;
                     rough(roughness, &mut f);
+                    clearcoat_rough(coat, &mut f);
                 }
                 Bsdf::Conductor(c) => {
                     f |= Self::CONDUCTOR;
@@ -151,9 +162,12 @@ impl Features {
                         rough(roughness, &mut f);
                     }
                 }
-                Bsdf::Metallic { conductor, .. } => {
+                Bsdf::Metallic {
+                    conductor, coat, ..
+                } => {
                     f |= Self::METALLIC;
                     rough(&conductor.roughness, &mut f);
+                    clearcoat_rough(coat, &mut f);
                 }
             }
         }
@@ -431,6 +445,35 @@ mod tests {
         lamp.emission = Vec3::ONE;
         let f = Features::of(&scene(vec![lamp], vec![], Vec3::ZERO), &opts());
         assert!(f.has(Features::AREA_LIGHTS) && f.has(Features::NEE));
+
+        // A rough clear coat over a smooth non-metal: the rough code, for
+        // the coat's lobe.
+        let coat = crate::bsdf::coated::CoatParams {
+            clearcoat: 0.8,
+            clearcoat_alpha: 0.25,
+            ..crate::bsdf::coated::CoatParams::GLTF_DEFAULT
+        };
+        let plastic = material(Bsdf::Coated {
+            base: Vec3::ZERO,
+            coat,
+            roughness: Roughness::SMOOTH,
+        });
+        let f = Features::of(&scene(vec![plastic], vec![], Vec3::ZERO), &opts());
+        assert!(
+            f.has(Features::COATED) && f.has(Features::ROUGH),
+            "{:?}",
+            f.names()
+        );
+        let smooth_coat = material(Bsdf::Coated {
+            base: Vec3::ZERO,
+            coat: crate::bsdf::coated::CoatParams {
+                clearcoat_alpha: 0.0,
+                ..coat
+            },
+            roughness: Roughness::SMOOTH,
+        });
+        let f = Features::of(&scene(vec![smooth_coat], vec![], Vec3::ZERO), &opts());
+        assert!(!f.has(Features::ROUGH), "{:?}", f.names());
 
         // A material no triangle uses adds nothing.
         let mut s = scene(vec![diffuse.clone()], vec![], Vec3::ZERO);
