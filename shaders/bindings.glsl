@@ -15,7 +15,7 @@
 //   binding 8  uint ray_counts[]       1 per pixel; ADDED to
 //   binding 9  uint texels[]           glint_cpu::texture::SceneTextures::texels (RGBA8)
 //   binding 10 Texture textures[]      glint_cpu::texture::GpuTexture (16 B)
-//   binding 11 MaterialTextures material_textures[]  glint_cpu::texture::MaterialTextures (240 B)
+//   binding 11 MaterialTextures material_textures[]  glint_cpu::texture::MaterialTextures (512 B)
 //   binding 12 TriangleUv triangle_uvs[]  glint_cpu::texture::TriangleUv (64 B), triangle order
 //   (bindings 9-12 hold one dummy element when params.textured == 0)
 //   binding 13 vec4 env_texels[]       glint_cpu::envmap::EnvMap::texels (radiance, row 0 the top)

@@ -162,6 +162,33 @@ void conductor_from_f0(inout Material g, vec3 f0, float alpha, uint multiscatter
     g.shadowing = SHADOWING_CORRELATED | multiscatter;
 }
 
+// texture::textured_coat on the record's coat (coat.xyz the specular
+// scale, extra.xyz transmission, clear coat weight and alpha): only the
+// textured parameters are replaced.
+void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, float v) {
+    if (mt.transmission.texture != NO_TEXTURE) {
+        r.extra.x = mt.mr_factor.z * texture_lookup(mt.transmission, tri, u, v, false).x;
+    }
+    if (mt.clearcoat.texture != NO_TEXTURE) {
+        r.extra.y = mt.coat_factor.x * texture_lookup(mt.clearcoat, tri, u, v, false).x;
+    }
+    if (mt.clearcoat_roughness.texture != NO_TEXTURE) {
+        float cr = mt.coat_factor.y * texture_lookup(mt.clearcoat_roughness, tri, u, v, false).y;
+        r.extra.z = cr * cr;
+    }
+    if (mt.specular.texture != NO_TEXTURE || mt.specular_color.texture != NO_TEXTURE) {
+        float factor = mt.coat_factor.z;
+        if (mt.specular.texture != NO_TEXTURE) {
+            factor *= texture_lookup(mt.specular, tri, u, v, false).w;
+        }
+        vec3 color = mt.specular_color_factor.xyz;
+        if (mt.specular_color.texture != NO_TEXTURE) {
+            color *= texture_lookup(mt.specular_color, tri, u, v, true).xyz;
+        }
+        r.coat.xyz = min(factor * color, vec3(1.0));
+    }
+}
+
 // texture::textured_bsdf, on the GPU material record. The glTF mapping is
 // always the metallic blend (metallic 0 and 1 its ends), so that one kernel
 // path serves every texel; the record's coat and `multiscatter` bit stay.
@@ -187,6 +214,7 @@ Material textured_bsdf(MaterialTextures mt, Material g, uint tri, float u, float
             r.coat = vec4(1.0, 1.0, 1.0, 1.5);
             r.extra = vec4(0.0);
         }
+        textured_coat(mt, r, tri, u, v);
         // A solid (KHR_materials_volume) transmissive material stays the
         // dielectric; thin-walled transmission rides in the coat (extra.x).
         if (g.kind == KIND_DIELECTRIC) {

@@ -34,10 +34,17 @@ struct MaterialTextures {
     uint blend;          // 1: alphaMode BLEND (stochastic transparency)
     vec4 base_factor;
     vec4 mr_factor;      // metallic, roughness, transmission, ior
+    vec4 coat_factor;    // clearcoat, clearcoat roughness, specular, unused
+    vec4 specular_color_factor;
     TexRef base_color;
     TexRef metallic_roughness;
     TexRef normal;
     TexRef emissive;
+    TexRef transmission;         // .r x transmission factor
+    TexRef clearcoat;            // .r x clearcoat factor
+    TexRef clearcoat_roughness;  // .g x clearcoat roughness factor
+    TexRef specular;             // .a x specular factor
+    TexRef specular_color;       // sRGB rgb x specular colour factor
 };
 
 struct TriangleUv {

@@ -33,6 +33,8 @@ struct GpuResult {
     reflectance: [f32; 4],
     k_alpha: [f32; 4],
     flags: [u32; 4],
+    coat: [f32; 4],
+    extra: [f32; 4],
 }
 
 struct Rng(u64);
@@ -102,6 +104,28 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
             texture: (k * 5 + 1) % 18,
             ..TexRef::default()
         };
+        // The coat's textures (transmission, clear coat, specular) on
+        // k = 2..5, each on its own image and UV set; k = 5 has only the
+        // specular colour (the specular factor stays untextured).
+        if k >= 2 {
+            let tex = |j: u32| TexRef {
+                texture: (k * 7 + j * 3 + 2) % 18,
+                tex_coord: (k + j) % 2,
+                ..TexRef::default()
+            };
+            mt.mr_factor[2] = 0.7;
+            mt.coat_factor = [0.8, 0.6, 0.9, 0.0];
+            mt.specular_color_factor = [1.2, 0.5, 0.9, 1.0];
+            mt.specular_color = tex(4);
+            if k < 5 {
+                mt.transmission = tex(0);
+                mt.clearcoat = tex(1);
+                mt.clearcoat_roughness = tex(2);
+                mt.specular = tex(3);
+                mt.specular
+                    .set_transform(Vec2::new(-0.1, 0.2), 0.3, Vec2::new(2.0, 0.5));
+            }
+        }
         st.materials.push(mt);
     }
     for _ in 0..32 {
@@ -208,6 +232,16 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
             )
         {
             failures.push(format!("textured_bsdf {q:?}: cpu {gm:?} gpu {g:?}"));
+        }
+        // The textured coat (textured_coat): specular scale and IOR,
+        // transmission, clear-coat weight and alpha.
+        if !close(Vec4::from_array(gm.coat), g.coat, 2e-4)
+            || !close(Vec4::from_array(gm.extra), g.extra, 2e-4)
+        {
+            failures.push(format!(
+                "textured_coat {q:?}: cpu coat {:?} extra {:?} gpu coat {:?} extra {:?}",
+                gm.coat, gm.extra, g.coat, g.extra
+            ));
         }
     }
     assert!(

@@ -118,7 +118,7 @@ pub const MAP_GLTF: u32 = 1;
 /// conductor's `specular_reflectance`.
 pub const MAP_EXTRAS: u32 = 2;
 
-/// One material's textures and the factors they multiply (std430, 240 B).
+/// One material's textures and the factors they multiply (std430, 512 B).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MaterialTextures {
@@ -136,12 +136,27 @@ pub struct MaterialTextures {
     pub base_factor: [f32; 4],
     /// metallicFactor, roughnessFactor, transmissionFactor, ior (MAP_GLTF).
     pub mr_factor: [f32; 4],
+    /// clearcoatFactor, clearcoatRoughnessFactor, specularFactor, unused
+    /// (MAP_GLTF; the factors the coat textures multiply).
+    pub coat_factor: [f32; 4],
+    /// specularColorFactor rgb (MAP_GLTF).
+    pub specular_color_factor: [f32; 4],
     pub base_color: TexRef,
     pub metallic_roughness: TexRef,
     pub normal: TexRef,
     pub emissive: TexRef,
+    /// `transmissionTexture` (R x transmissionFactor).
+    pub transmission: TexRef,
+    /// `clearcoatTexture` (R x clearcoatFactor).
+    pub clearcoat: TexRef,
+    /// `clearcoatRoughnessTexture` (G x clearcoatRoughnessFactor).
+    pub clearcoat_roughness: TexRef,
+    /// `specularTexture` (A x specularFactor).
+    pub specular: TexRef,
+    /// `specularColorTexture` (sRGB rgb x specularColorFactor).
+    pub specular_color: TexRef,
 }
-const _: () = assert!(size_of::<MaterialTextures>() == 240);
+const _: () = assert!(size_of::<MaterialTextures>() == 512);
 
 impl Default for MaterialTextures {
     fn default() -> Self {
@@ -152,10 +167,17 @@ impl Default for MaterialTextures {
             blend: 0,
             base_factor: [1.0; 4],
             mr_factor: [0.0, 1.0, 0.0, 1.5],
+            coat_factor: [0.0, 0.0, 1.0, 0.0],
+            specular_color_factor: [1.0; 4],
             base_color: TexRef::default(),
             metallic_roughness: TexRef::default(),
             normal: TexRef::default(),
             emissive: TexRef::default(),
+            transmission: TexRef::default(),
+            clearcoat: TexRef::default(),
+            clearcoat_roughness: TexRef::default(),
+            specular: TexRef::default(),
+            specular_color: TexRef::default(),
         }
     }
 }
@@ -178,6 +200,19 @@ impl MaterialTextures {
     /// Whether traversal must run this material's alpha test.
     pub fn has_alpha_test(&self) -> bool {
         self.is_masked() || self.is_blended()
+    }
+    /// Whether a texture modulates the coat (transmission, clear coat,
+    /// specular): the glTF mapping is then recomputed per hit.
+    pub fn has_coat_textures(&self) -> bool {
+        [
+            &self.transmission,
+            &self.clearcoat,
+            &self.clearcoat_roughness,
+            &self.specular,
+            &self.specular_color,
+        ]
+        .iter()
+        .any(|r| r.is_some())
     }
 }
 
@@ -443,8 +478,8 @@ pub fn textured_bsdf(
             }
             let alpha = roughness * roughness;
             // The factors' model carries what no texture changes: the
-            // coat and `--multiscatter`.
-            let (coat, multiscatter) = match bsdf {
+            // coat's IOR and `--multiscatter`.
+            let (mut coat, multiscatter) = match bsdf {
                 Bsdf::Coated {
                     coat, roughness, ..
                 } => (*coat, roughness.multiscatter),
@@ -460,6 +495,7 @@ pub fn textured_bsdf(
                 | Bsdf::RoughPlastic(_)
                 | Bsdf::ThinDielectric { .. } => (CoatParams::GLTF_DEFAULT, false),
             };
+            textured_coat(st, mt, &mut coat, tri, u, v);
             let rough = Roughness {
                 alpha_u: alpha,
                 alpha_v: alpha,
@@ -504,6 +540,43 @@ pub fn textured_bsdf(
             other => other,
         },
         _ => *bsdf,
+    }
+}
+
+/// The coat's textured parameters (glTF MAP_GLTF): transmissionTexture.R,
+/// clearcoatTexture.R, clearcoatRoughnessTexture.G, specularTexture.A and
+/// specularColorTexture (sRGB) times their factors. Only the parameters
+/// with a texture are replaced, so an untextured one keeps the loader's
+/// value to the bit. The specular scale is clamped to 1 per channel, as
+/// the loader clamps the factors (energy conservation).
+pub fn textured_coat(
+    st: &SceneTextures,
+    mt: &MaterialTextures,
+    coat: &mut CoatParams,
+    tri: u32,
+    u: f32,
+    v: f32,
+) {
+    if mt.transmission.is_some() {
+        coat.transmission = mt.mr_factor[2] * st.lookup(&mt.transmission, tri, u, v, false).x;
+    }
+    if mt.clearcoat.is_some() {
+        coat.clearcoat = mt.coat_factor[0] * st.lookup(&mt.clearcoat, tri, u, v, false).x;
+    }
+    if mt.clearcoat_roughness.is_some() {
+        let r = mt.coat_factor[1] * st.lookup(&mt.clearcoat_roughness, tri, u, v, false).y;
+        coat.clearcoat_alpha = r * r;
+    }
+    if mt.specular.is_some() || mt.specular_color.is_some() {
+        let mut factor = mt.coat_factor[2];
+        if mt.specular.is_some() {
+            factor *= st.lookup(&mt.specular, tri, u, v, false).w;
+        }
+        let mut color = Vec3::from_slice(&mt.specular_color_factor[..3]);
+        if mt.specular_color.is_some() {
+            color *= st.lookup(&mt.specular_color, tri, u, v, true).truncate();
+        }
+        coat.specular = (factor * color).min(Vec3::ONE);
     }
 }
 

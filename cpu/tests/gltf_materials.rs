@@ -11,7 +11,10 @@
 //! - thin-walled `KHR_materials_transmission` shows R' + (1 - R') baseColor
 //!   (the sky through the slab, tinted), R' = 2 F0 / (1 + F0);
 //! - a smooth clear coat of weight c adds c F0 and dims what is under it by
-//!   (1 - c F0)^2 (glint's layering, `bsdf/clearcoat.rs`).
+//!   (1 - c F0)^2 (glint's layering, `bsdf/clearcoat.rs`);
+//! - each extension's texture multiplies its factor from the channel glTF
+//!   names (transmission R, clearcoat R, clearcoatRoughness G, specular A,
+//!   specularColor sRGB rgb), per hit (`texture::textured_coat`).
 
 #[path = "fixtures/gltf_builder.rs"]
 mod builder;
@@ -25,11 +28,31 @@ use serde_json::{Value, json};
 /// The plate's mean radiance, `material` its glTF material (a 1x1
 /// metallicRoughness texture of (_, G, B) when `mr_texel` is given).
 fn plate(test: &str, material: Value, mr_texel: Option<[u8; 3]>) -> Vec3 {
+    let textures: Vec<(&str, &str, [u8; 4])> = match mr_texel {
+        Some(t) => vec![(
+            "pbrMetallicRoughness",
+            "metallicRoughnessTexture",
+            [t[0], t[1], t[2], 255],
+        )],
+        None => Vec::new(),
+    };
+    textured_plate(test, material, &textures)
+}
+
+/// [`plate`] with 1x1 textures: each (object, slot, texel) puts a texture
+/// of that RGBA texel in `material[object][slot]`, the object a key of
+/// the material (`pbrMetallicRoughness`) or of its `extensions`.
+fn textured_plate(test: &str, material: Value, textures: &[(&str, &str, [u8; 4])]) -> Vec3 {
     let mut d = Doc::new();
     let mut material = material;
-    if let Some(t) = mr_texel {
-        let tex = d.png_texture(1, 1, &[t[0], t[1], t[2], 255], Value::Null);
-        material["pbrMetallicRoughness"]["metallicRoughnessTexture"] = json!({ "index": tex });
+    for (object, slot, t) in textures {
+        let tex = d.png_texture(1, 1, t, Value::Null);
+        let obj = if *object == "pbrMetallicRoughness" {
+            &mut material[*object]
+        } else {
+            &mut material["extensions"][*object]
+        };
+        obj[*slot] = json!({ "index": tex });
     }
     let m = d.material(material);
     let q = d.uv_quad(1.0, 0.0, Some(m));
@@ -176,5 +199,97 @@ fn clearcoat_adds_its_reflection_and_dims_the_rest() {
         want,
         2e-3,
         "clear-coated smooth metal",
+    );
+}
+
+/// An 8-bit texel value as the texture reads it.
+fn unorm(x: u8) -> f32 {
+    x as f32 / 255.0
+}
+
+#[test]
+fn coat_textures_multiply_their_factors() {
+    let f = f0(1.5);
+    // clearcoatTexture R (G, B, A at 255 would give a different weight if
+    // read instead) over a black smooth non-metal.
+    let mut black = pbr([0.0; 3], 0.0, 0.0);
+    black["extensions"] = json!({ "KHR_materials_clearcoat": {
+        "clearcoatFactor": 0.9, "clearcoatRoughnessFactor": 1 } });
+    let c = 0.9 * unorm(128);
+    let w = 1.0 - c * f;
+    // clearcoatRoughnessTexture G = 0 makes roughness factor 1 smooth; its
+    // R and A (255) would leave it rough.
+    let got = textured_plate(
+        "cc_tex",
+        black,
+        &[
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatTexture",
+                [128, 255, 255, 255],
+            ),
+            (
+                "KHR_materials_clearcoat",
+                "clearcoatRoughnessTexture",
+                [255, 0, 255, 255],
+            ),
+        ],
+    );
+    assert_near(
+        got,
+        Vec3::splat(c * f + w * w * f),
+        1e-4,
+        "clearcoat textures",
+    );
+
+    // specularTexture A x specularFactor, specularColorTexture sRGB rgb x
+    // specularColorFactor: the black non-metal shows their product x F0.
+    let mut black = pbr([0.0; 3], 0.0, 0.0);
+    black["extensions"] = json!({ "KHR_materials_specular": {
+        "specularFactor": 0.8, "specularColorFactor": [1, 0.5, 1] } });
+    let got = textured_plate(
+        "spec_tex",
+        black,
+        &[
+            (
+                "KHR_materials_specular",
+                "specularTexture",
+                [255, 255, 255, 128],
+            ),
+            (
+                "KHR_materials_specular",
+                "specularColorTexture",
+                [255, 128, 0, 255],
+            ),
+        ],
+    );
+    let srgb_128 = glint_cpu::texture::srgb_to_linear(unorm(128));
+    let want = 0.8 * unorm(128) * Vec3::new(1.0, 0.5 * srgb_128, 0.0) * f;
+    assert_near(got, want, 1e-4, "specular textures");
+
+    // transmissionTexture R x transmissionFactor: that share of the thin
+    // slab, the rest the opaque smooth non-metal (F0 + (1 - F0) tint, as
+    // its white base reflects 1).
+    let tint = Vec3::new(1.0, 0.5, 0.25);
+    let mut m = pbr(tint.to_array(), 0.0, 0.0);
+    m["extensions"] = json!({ "KHR_materials_transmission": { "transmissionFactor": 0.9 } });
+    let got = textured_plate(
+        "trans_tex",
+        m,
+        &[(
+            "KHR_materials_transmission",
+            "transmissionTexture",
+            [64, 255, 255, 255],
+        )],
+    );
+    let r = 2.0 * f / (1.0 + f);
+    let thin = Vec3::splat(r) + (1.0 - r) * tint;
+    let opaque = Vec3::splat(f) + (1.0 - f) * tint;
+    let t = 0.9 * unorm(64);
+    assert_near(
+        got,
+        t * thin + (1.0 - t) * opaque,
+        0.01,
+        "transmission texture",
     );
 }

@@ -29,6 +29,8 @@ struct Result {
     vec4 reflectance;  // textured_bsdf(...).reflectance (w: metallic)
     vec4 k_alpha;      // textured_bsdf(...).k.xyz, alpha_u
     uvec4 flags;       // x: alpha_pass, y: textured kind, z: blend_random's bits
+    vec4 coat;         // textured_bsdf(...).coat (specular scale, ior)
+    vec4 extra;        // textured_bsdf(...).extra (transmission, clear coat)
 };
 
 layout(std430, set = 0, binding = 4) readonly buffer Queries { Query queries[]; };
@@ -61,6 +63,8 @@ void main() {
     Material t = textured_bsdf(mt, m, q.ids.z, q.bary.x, q.bary.y);
     r.reflectance = t.reflectance;
     r.k_alpha = vec4(t.k.xyz, t.alpha_u);
+    r.coat = t.coat;
+    r.extra = t.extra;
     vec3 ro = vec3(q.uv_srgb.xy, q.bary.z);
     vec3 rd = vec3(q.bary.xy, q.bary.w);
     r.flags = uvec4(alpha_pass(q.ids.y, q.ids.z, q.bary.x, q.bary.y, ro, rd) ? 1u : 0u, t.kind,

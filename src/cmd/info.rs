@@ -82,8 +82,42 @@ fn gltf_channels(mt: &MaterialTextures) -> String {
         ),
     ];
     parts.push(format!("coat ior {ior:.4}"));
-    if transmission > 0.0 {
-        parts.push(format!("transmission {transmission:.4}"));
+    if transmission > 0.0 || mt.transmission.is_some() {
+        parts.push(channel(
+            "transmission",
+            &mt.transmission,
+            ".R",
+            format!("{transmission:.4}"),
+        ));
+    }
+    let [clearcoat, clearcoat_roughness, specular, _] = mt.coat_factor;
+    if clearcoat > 0.0 {
+        parts.push(channel(
+            "clearcoat",
+            &mt.clearcoat,
+            ".R",
+            format!("{clearcoat:.4}"),
+        ));
+        parts.push(channel(
+            "clearcoatRoughness",
+            &mt.clearcoat_roughness,
+            ".G",
+            format!("{clearcoat_roughness:.4}"),
+        ));
+    }
+    if mt.specular.is_some() || mt.specular_color.is_some() {
+        parts.push(channel(
+            "specular",
+            &mt.specular,
+            ".A",
+            format!("{specular:.4}"),
+        ));
+        parts.push(channel(
+            "specularColor",
+            &mt.specular_color,
+            "",
+            rgb(glam::Vec3::from_slice(&mt.specular_color_factor[..3])),
+        ));
     }
     format!(
         "glTF per texel: metal/coated non-metal blend, {}",
@@ -341,7 +375,10 @@ pub fn describe(path: &str, s: &Scene) -> String {
         ("lights", s.lights.len() * size_of::<GpuLight>()),
         ("texels", t.texels.len() * 4),
         ("texture table", t.table.len() * 16),
-        ("material textures", t.materials.len() * 240),
+        (
+            "material textures",
+            t.materials.len() * size_of::<MaterialTextures>(),
+        ),
         ("triangle uvs", t.uvs.len() * 64),
     ];
     let total: usize = rows.iter().map(|r| r.1).sum();

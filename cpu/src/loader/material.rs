@@ -153,6 +153,8 @@ fn check_unit(x: f32, what: &str) -> Result<f32, String> {
 /// against air taken as 1.0) and `KHR_materials_specular` (specularFactor
 /// x specularColorFactor scales the coat's Fresnel term; clamped to 1 per
 /// channel so the base term stays energy conserving, with a warning).
+/// These are the factors; their textures (and transmissionTexture) are
+/// applied per hit by `texture::textured_coat`.
 pub fn gltf_coat(
     m: &gltf::Material,
     raw: &Value,
@@ -181,23 +183,11 @@ pub fn gltf_coat(
             ));
             specular = specular.min(Vec3::ONE);
         }
-        if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
-            warnings.push(format!(
-                "{label}: KHR_materials_specular textures are not supported; their factors are used"
-            ));
-        }
     }
     let transmission = match m.transmission() {
         Some(t) => check_unit(t.transmission_factor(), "transmissionFactor")?,
         None => 0.0,
     };
-    if m.transmission()
-        .is_some_and(|t| t.transmission_texture().is_some())
-    {
-        warnings.push(format!(
-            "{label}: transmissionTexture is not supported yet; transmissionFactor is used"
-        ));
-    }
     let (clearcoat, clearcoat_alpha) = gltf_clearcoat(raw, warnings, label)?;
     Ok(CoatParams {
         eta,
@@ -209,7 +199,7 @@ pub fn gltf_coat(
 }
 
 /// `KHR_materials_clearcoat`: (clearcoatFactor, clearcoatRoughnessFactor^2).
-/// Its textures and normal texture are not read yet (a warning).
+/// Its normal texture is not read yet (a warning).
 fn gltf_clearcoat(
     raw: &Value,
     warnings: &mut Vec<String>,
@@ -236,19 +226,12 @@ fn gltf_clearcoat(
         num("clearcoatRoughnessFactor")?,
         "KHR_materials_clearcoat clearcoatRoughnessFactor",
     )?;
-    let textured = [
-        "clearcoatTexture",
-        "clearcoatRoughnessTexture",
-        "clearcoatNormalTexture",
-    ]
-    .iter()
-    .filter(|k| cc.get(**k).is_some())
-    .copied()
-    .collect::<Vec<_>>();
-    if !textured.is_empty() {
+    // Its textures are read per hit (`texture::textured_coat`); its own
+    // normal map is not yet: the clear coat follows the base's shading
+    // normal.
+    if cc.get("clearcoatNormalTexture").is_some() {
         warnings.push(format!(
-            "{label}: KHR_materials_clearcoat {} not supported yet; the factors are used",
-            textured.join(", ")
+            "{label}: KHR_materials_clearcoat clearcoatNormalTexture is not supported yet; the clear coat uses the base's shading normal"
         ));
     }
     Ok((factor, rough * rough))

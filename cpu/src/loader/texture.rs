@@ -59,6 +59,25 @@ pub fn collect(
             mt.normal.scale = m["normalTexture"]["scale"].as_f64().unwrap_or(1.0) as f32;
         }
         mt.emissive = slot(&m["emissiveTexture"], "emissiveTexture", &mut out)?;
+        let ext = &m["extensions"];
+        if !has_extras_bsdf {
+            let tr = &ext["KHR_materials_transmission"];
+            mt.transmission = slot(&tr["transmissionTexture"], "transmissionTexture", &mut out)?;
+            let cc = &ext["KHR_materials_clearcoat"];
+            mt.clearcoat = slot(&cc["clearcoatTexture"], "clearcoatTexture", &mut out)?;
+            mt.clearcoat_roughness = slot(
+                &cc["clearcoatRoughnessTexture"],
+                "clearcoatRoughnessTexture",
+                &mut out,
+            )?;
+            let sp = &ext["KHR_materials_specular"];
+            mt.specular = slot(&sp["specularTexture"], "specularTexture", &mut out)?;
+            mt.specular_color = slot(
+                &sp["specularColorTexture"],
+                "specularColorTexture",
+                &mut out,
+            )?;
+        }
         let factor = pbr["baseColorFactor"].as_array();
         let f = |k: usize| {
             factor
@@ -73,11 +92,28 @@ pub fn collect(
             num(&pbr["metallicFactor"], 1.0),
             num(&pbr["roughnessFactor"], 1.0),
             num(
-                &m["extensions"]["KHR_materials_transmission"]["transmissionFactor"],
+                &ext["KHR_materials_transmission"]["transmissionFactor"],
                 0.0,
             ),
-            num(&m["extensions"]["KHR_materials_ior"]["ior"], 1.5),
+            num(&ext["KHR_materials_ior"]["ior"], 1.5),
         ];
+        // The loader (`material::gltf_coat`) has checked these ranges.
+        let cc = &ext["KHR_materials_clearcoat"];
+        let sp = &ext["KHR_materials_specular"];
+        mt.coat_factor = [
+            num(&cc["clearcoatFactor"], 0.0),
+            num(&cc["clearcoatRoughnessFactor"], 0.0),
+            num(&sp["specularFactor"], 1.0),
+            0.0,
+        ];
+        let color = sp["specularColorFactor"].as_array();
+        let c = |k: usize| {
+            color
+                .and_then(|a| a.get(k))
+                .and_then(Value::as_f64)
+                .unwrap_or(1.0) as f32
+        };
+        mt.specular_color_factor = [c(0), c(1), c(2), 1.0];
         match m["alphaMode"].as_str() {
             Some("MASK") => {
                 let c = num(&m["alphaCutoff"], 0.5);
@@ -93,7 +129,8 @@ pub fn collect(
             Some("BLEND") => mt.blend = 1,
             _ => {}
         }
-        let textured_base = mt.base_color.is_some() || mt.metallic_roughness.is_some();
+        let textured_base =
+            mt.base_color.is_some() || mt.metallic_roughness.is_some() || mt.has_coat_textures();
         mt.mode = if !textured_base {
             MAP_NONE
         } else if has_extras_bsdf {
