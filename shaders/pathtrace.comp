@@ -140,12 +140,19 @@ void apply_textures(uint material, uint tri, float u, float v, vec3 wo, inout Su
     if (!material_textures_used(mt)) {
         return;
     }
+    Frame unmapped = sf.frame;
     vec3 ns = normal_mapped(mt, tri, u, v, sf.ng, wo, sf.frame.s, sf.frame.t, sf.frame.n);
     if (ns != sf.ns) {
         sf.frame = frame_from_normal_tangent(ns, sf.frame.s);
         sf.ns = ns;
     }
     m = textured_bsdf(mt, m, tri, u, v);
+    // The clear coat's own normal, where a normal map tilts either.
+    if ((m.kind == KIND_COATED || m.kind == KIND_METALLIC) && m.extra.y > 0.0
+        && (mt.normal.texture != NO_TEXTURE || mt.clearcoat_normal.texture != NO_TEXTURE)) {
+        m.extra.w = clearcoat_normal_code(mt, tri, u, v, sf.ng, unmapped.s, unmapped.t, unmapped.n,
+                                          sf.frame.s, sf.frame.t, sf.frame.n);
+    }
 }
 
 // The shadow ray toward a light sample, from the offset origin to just

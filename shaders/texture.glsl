@@ -144,7 +144,8 @@ bool alpha_pass(uint material, uint tri, float u, float v, vec3 o, vec3 d) {
 
 bool material_textures_used(MaterialTextures m) {
     return m.mode != MAP_NONE || m.alpha_cutoff >= 0.0 || m.blend != 0u
-        || m.normal.texture != NO_TEXTURE || m.emissive.texture != NO_TEXTURE;
+        || m.normal.texture != NO_TEXTURE || m.emissive.texture != NO_TEXTURE
+        || m.clearcoat_normal.texture != NO_TEXTURE;
 }
 
 // glint_cpu::loader::conductor_from_f0 (MAX_F0 = 0.999); the roughness
@@ -289,6 +290,34 @@ vec3 normal_mapped(MaterialTextures mt, uint tri, float u, float v, vec3 ng, vec
     float sign_b = triangle_uvs[tri].extra.x;
     vec3 n = perturb_normal(c, mt.normal.scale, fn, fs, ft * sign_b);
     return dot(n, ng) > 0.0 ? valid_reflection_normal(ng, wo, n) : fn;
+}
+
+// bsdf::clearcoat::encode_coat_normal: 0, or 1 + qx 4095 + qy with
+// q = floor((x + 1) 2047 + 1/2), an integer an f32 holds exactly.
+float encode_coat_normal(vec2 xy) {
+    if (xy == vec2(0.0)) {
+        return 0.0;
+    }
+    uvec2 q = uvec2(floor((clamp(xy, vec2(-1.0), vec2(1.0)) + 1.0) * 2047.0 + 0.5));
+    return float(1u + q.x * 4095u + q.y);
+}
+
+// texture::clearcoat_normal, encoded for Material.extra.w: the coat's
+// normal (clearcoatNormalTexture on the unmapped frame (us, ut, un), else
+// un) in the shading frame (fs, ft, fn).
+float clearcoat_normal_code(MaterialTextures mt, uint tri, float u, float v, vec3 ng,
+                            vec3 us, vec3 ut, vec3 un, vec3 fs, vec3 ft, vec3 fn) {
+    vec3 n = un;
+    if (mt.clearcoat_normal.texture != NO_TEXTURE) {
+        vec3 c = texture_lookup(mt.clearcoat_normal, tri, u, v, false).xyz;
+        float sign_b = triangle_uvs[tri].extra.x;
+        n = perturb_normal(c, mt.clearcoat_normal.scale, un, us, ut * sign_b);
+    }
+    vec3 local = vec3(dot(n, fs), dot(n, ft), dot(n, fn));
+    if (dot(n, ng) <= 0.0 || local.z <= 0.0 || n == fn) {
+        return 0.0;
+    }
+    return encode_coat_normal(local.xy);
 }
 
 // texture::emission_factor.

@@ -45,6 +45,7 @@ struct MaterialTextures {
     TexRef clearcoat_roughness;  // .g x clearcoat roughness factor
     TexRef specular;             // .a x specular factor
     TexRef specular_color;       // sRGB rgb x specular colour factor
+    TexRef clearcoat_normal;     // on the unmapped frame (texture::clearcoat_normal)
 };
 
 struct TriangleUv {

@@ -16,6 +16,7 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use glint::gpu::groups;
+use glint_cpu::bsdf::clearcoat::{decode_coat_normal, encode_coat_normal};
 use glint_cpu::bsdf::coated::CoatParams;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::{GpuMaterial, Material};
@@ -74,6 +75,13 @@ fn materials() -> Vec<(u32, Bsdf)> {
             &[(false, false), (true, false)]
         };
         let cc_ok = au == 0.0 || f32::min(au, av) >= 0.01;
+        // The clear coat's normal: untilted, or tilted by ~20 degrees
+        // (on the grid the GPU record carries).
+        let tilt = |j: usize| match j % 3 {
+            0 => glam::Vec2::ZERO,
+            1 => decode_coat_normal(encode_coat_normal(glam::Vec2::new(0.3, -0.2))),
+            _ => decode_coat_normal(encode_coat_normal(glam::Vec2::new(-0.1, 0.35))),
+        };
         for &(sep, ms) in forms {
             let r = Roughness {
                 multiscatter: ms,
@@ -113,6 +121,9 @@ fn materials() -> Vec<(u32, Bsdf)> {
                             0.0
                         },
                         clearcoat_alpha: [0.0, 0.09, 0.0004][i % 3],
+                        // Tilted clear-coat normals on some
+                        // (clearcoatNormalTexture).
+                        clearcoat_normal: tilt(i),
                     },
                     roughness: r,
                 },
@@ -130,6 +141,7 @@ fn materials() -> Vec<(u32, Bsdf)> {
                             transmission: if ms { 0.3 } else { 0.0 },
                             clearcoat: if sep && cc_ok { 0.8 } else { 0.0 },
                             clearcoat_alpha: 0.04,
+                            clearcoat_normal: tilt(i + 1),
                         },
                     },
                 ));

@@ -152,6 +152,34 @@ fn rough_clearcoat(scene: &mut Scene) {
     }
 }
 
+/// Clear coats on the textured scene: a smooth one over "bumps" (its
+/// normal map tilts the base, not the coat, which keeps the unmapped
+/// normal) and a rough one over the floor, tilted by the bumps' normal
+/// texture as its clearcoatNormalTexture.
+fn clearcoat_normals(scene: &mut Scene) {
+    let index = |scene: &Scene, name: &str| {
+        scene
+            .materials
+            .iter()
+            .position(|m| m.name == name)
+            .unwrap_or_else(|| panic!("no material {name}"))
+    };
+    let bumps = index(scene, "bumps");
+    let floor = index(scene, "checker floor");
+    let normal = scene.textures.materials[bumps].normal;
+    assert!(normal.is_some(), "bumps has a normal texture");
+    for (i, c, a) in [(bumps, 0.8, 0.0), (floor, 1.0, 0.09)] {
+        match &mut scene.materials[i].bsdf {
+            Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } => {
+                coat.clearcoat = c;
+                coat.clearcoat_alpha = a;
+            }
+            other => panic!("{other:?} has no coat"),
+        }
+    }
+    scene.textures.materials[floor].clearcoat_normal = normal;
+}
+
 macro_rules! scene_tests {
     ($($test:ident => $file:literal, $prepare:expr;)*) => {
         $(
@@ -191,6 +219,7 @@ scene_tests! {
     textured_envmap => "textured.gltf", with_envmap;
     dielectric_absorbing => "dielectric.gltf", absorbing_glass;
     diffuse_rough_clearcoat => "diffuse.gltf", rough_clearcoat;
+    textured_clearcoat_normals => "textured.gltf", clearcoat_normals;
 }
 
 /// A procedural sky (a blue gradient with a small bright sun) as an

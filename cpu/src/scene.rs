@@ -10,6 +10,7 @@ use std::mem::{offset_of, size_of};
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use crate::bsdf::clearcoat::encode_coat_normal;
 use crate::bsdf::{Bsdf, ConductorParams, Shadowing};
 use crate::bvh::Bvh4;
 
@@ -131,7 +132,8 @@ pub struct GpuMaterial {
     /// The non-metal's `.x` = thin-walled transmission probability
     /// (`KHR_materials_transmission`); `.y` clear coat weight, `.z` its
     /// alpha (`KHR_materials_clearcoat`, over the coated and metallic
-    /// kinds); `.w` reserved.
+    /// kinds); `.w` its normal (`bsdf::clearcoat::encode_coat_normal`, 0:
+    /// the shading normal).
     pub extra: [f32; 4],
 }
 const _: () = assert!(size_of::<GpuMaterial>() == 128);
@@ -233,7 +235,12 @@ impl From<&Material> for GpuMaterial {
                 g.kind = Self::KIND_COATED;
                 g.reflectance = vec4(*base, 0.0);
                 g.coat = vec4(coat.specular, coat.eta);
-                g.extra = [coat.transmission, coat.clearcoat, coat.clearcoat_alpha, 0.0];
+                g.extra = [
+                    coat.transmission,
+                    coat.clearcoat,
+                    coat.clearcoat_alpha,
+                    encode_coat_normal(coat.clearcoat_normal),
+                ];
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);
@@ -247,7 +254,12 @@ impl From<&Material> for GpuMaterial {
                 g.kind = Self::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
                 g.coat = vec4(coat.specular, coat.eta);
-                g.extra = [coat.transmission, coat.clearcoat, coat.clearcoat_alpha, 0.0];
+                g.extra = [
+                    coat.transmission,
+                    coat.clearcoat,
+                    coat.clearcoat_alpha,
+                    encode_coat_normal(coat.clearcoat_normal),
+                ];
                 conductor(&mut g, c);
             }
         }

@@ -118,7 +118,7 @@ pub const MAP_GLTF: u32 = 1;
 /// conductor's `specular_reflectance`.
 pub const MAP_EXTRAS: u32 = 2;
 
-/// One material's textures and the factors they multiply (std430, 512 B).
+/// One material's textures and the factors they multiply (std430, 560 B).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct MaterialTextures {
@@ -155,8 +155,11 @@ pub struct MaterialTextures {
     pub specular: TexRef,
     /// `specularColorTexture` (sRGB rgb x specularColorFactor).
     pub specular_color: TexRef,
+    /// `clearcoatNormalTexture` (its `scale` in the TexRef), on the
+    /// unmapped shading frame ([`clearcoat_normal`]).
+    pub clearcoat_normal: TexRef,
 }
-const _: () = assert!(size_of::<MaterialTextures>() == 512);
+const _: () = assert!(size_of::<MaterialTextures>() == 560);
 
 impl Default for MaterialTextures {
     fn default() -> Self {
@@ -178,6 +181,7 @@ impl Default for MaterialTextures {
             clearcoat_roughness: TexRef::default(),
             specular: TexRef::default(),
             specular_color: TexRef::default(),
+            clearcoat_normal: TexRef::default(),
         }
     }
 }
@@ -190,6 +194,7 @@ impl MaterialTextures {
             || self.is_blended()
             || self.normal.is_some()
             || self.emissive.is_some()
+            || self.clearcoat_normal.is_some()
     }
     pub fn is_masked(&self) -> bool {
         self.alpha_cutoff >= 0.0
@@ -602,14 +607,52 @@ pub fn normal_mapped(
     if !mt.normal.is_some() {
         return frame.n;
     }
-    let c = st.lookup(&mt.normal, tri, u, v, false).truncate();
-    let sign = st.uvs[tri as usize].extra[0];
-    let n = perturb_normal(c, mt.normal.scale, frame.n, frame.s, frame.t * sign);
+    let n = mapped_normal(st, &mt.normal, tri, u, v, frame);
     if n.dot(ng) > 0.0 {
         valid_reflection_normal(ng, wo, n)
     } else {
         frame.n
     }
+}
+
+/// The tangent-space normal map `r` applied to `frame` (its bitangent
+/// signed by the triangle's handedness).
+fn mapped_normal(st: &SceneTextures, r: &TexRef, tri: u32, u: f32, v: f32, frame: &Frame) -> Vec3 {
+    let c = st.lookup(r, tri, u, v, false).truncate();
+    let sign = st.uvs[tri as usize].extra[0];
+    perturb_normal(c, r.scale, frame.n, frame.s, frame.t * sign)
+}
+
+/// The clear coat's normal at a hit, in the shading frame `frame` (after
+/// the base's normal map), as [`crate::bsdf::coated::CoatParams`] carries
+/// it: glTF's `clearcoatNormalTexture` applied to the unmapped frame
+/// `unmapped`, or without one the unmapped normal itself (glTF: the base's
+/// normal map does not tilt the coat). ZERO (the shading normal) when
+/// nothing tilts it, or when the coat's normal would face away from `ng`
+/// or lie below the shading surface. On the grid of
+/// [`crate::bsdf::clearcoat::decode_coat_normal`], as the GPU record holds it.
+#[allow(clippy::too_many_arguments)]
+pub fn clearcoat_normal(
+    st: &SceneTextures,
+    mt: &MaterialTextures,
+    tri: u32,
+    u: f32,
+    v: f32,
+    ng: Vec3,
+    unmapped: &Frame,
+    frame: &Frame,
+) -> Vec2 {
+    use crate::bsdf::clearcoat::{decode_coat_normal, encode_coat_normal};
+    let n = if mt.clearcoat_normal.is_some() {
+        mapped_normal(st, &mt.clearcoat_normal, tri, u, v, unmapped)
+    } else {
+        unmapped.n
+    };
+    let local = frame.to_local(n);
+    if n.dot(ng) <= 0.0 || local.z <= 0.0 || n == frame.n {
+        return Vec2::ZERO;
+    }
+    decode_coat_normal(encode_coat_normal(local.truncate()))
 }
 
 /// Cycles' `ensure_valid_specular_reflection` (Blender's

@@ -39,6 +39,7 @@ fn coated(base: Vec3, eta: f32, specular: Vec3, alpha: f32) -> Bsdf {
             transmission: 0.0,
             clearcoat: 0.0,
             clearcoat_alpha: 0.0,
+            clearcoat_normal: glam::Vec2::ZERO,
         },
         roughness: rough(alpha, alpha, Shadowing::Correlated),
     }

@@ -68,6 +68,7 @@ fn property_cases() -> Vec<(String, Bsdf)> {
                         transmission: if sh == Shadowing::Separable { 0.4 } else { 0.0 },
                         clearcoat: 0.0,
                         clearcoat_alpha: 0.0,
+                        clearcoat_normal: glam::Vec2::ZERO,
                     },
                     roughness: r,
                 },
@@ -82,6 +83,33 @@ fn property_cases() -> Vec<(String, Bsdf)> {
                 },
             ));
         }
+    }
+    // KHR_materials_clearcoat (rough and smooth) over the rough non-metal
+    // and the blend.
+    for (ca, cc) in [(0.09f32, 1.0f32), (0.0, 0.7)] {
+        let coat = glint_cpu::bsdf::coated::CoatParams {
+            clearcoat: cc,
+            clearcoat_alpha: ca,
+            ..glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT
+        };
+        let r = rough(0.3, 0.3, Shadowing::Correlated);
+        v.push((
+            format!("clearcoat {cc} a={ca} over coated"),
+            Bsdf::Coated {
+                base: Vec3::new(0.8, 0.7, 0.6),
+                coat,
+                roughness: r,
+            },
+        ));
+        v.push((
+            format!("clearcoat {cc} a={ca} over metallic"),
+            Bsdf::Metallic {
+                metallic: 0.6,
+                base: Vec3::new(0.8, 0.7, 0.6),
+                conductor: gold(r),
+                coat,
+            },
+        ));
     }
     v.push((
         "conductor smooth".into(),
@@ -132,6 +160,44 @@ fn property_cases() -> Vec<(String, Bsdf)> {
             coat: glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT,
         },
     ));
+    v
+}
+
+/// Models that are not reciprocal by design, for the other properties: a
+/// clear coat tilted by its own normal map (its lobe carries the coat's
+/// cosine, `bsdf/clearcoat.rs`), rough and smooth, over a white non-metal
+/// (the furnace's worst case) and over the blend.
+fn nonreciprocal_cases() -> Vec<(String, Bsdf)> {
+    let mut v = Vec::new();
+    for (n, ca) in [
+        (glam::Vec2::new(0.35, -0.2), 0.09f32),
+        (glam::Vec2::new(-0.5, 0.3), 0.3),
+        (glam::Vec2::new(0.2, 0.45), 0.0),
+    ] {
+        let coat = glint_cpu::bsdf::coated::CoatParams {
+            clearcoat: 1.0,
+            clearcoat_alpha: ca,
+            clearcoat_normal: n,
+            ..glint_cpu::bsdf::coated::CoatParams::GLTF_DEFAULT
+        };
+        v.push((
+            format!("tilted clearcoat n={n} a={ca} over white coated"),
+            Bsdf::Coated {
+                base: Vec3::ONE,
+                coat,
+                roughness: rough(0.2, 0.2, Shadowing::Correlated),
+            },
+        ));
+        v.push((
+            format!("tilted clearcoat n={n} a={ca} over metallic"),
+            Bsdf::Metallic {
+                metallic: 0.5,
+                base: Vec3::new(0.8, 0.7, 0.6),
+                conductor: gold(rough(0.4, 0.4, Shadowing::Correlated)),
+                coat,
+            },
+        ));
+    }
     v
 }
 
@@ -326,7 +392,8 @@ fn reciprocity() {
 
 #[test]
 fn sample_weight_and_pdf_match_eval() {
-    let cases = property_cases();
+    let mut cases = property_cases();
+    cases.extend(nonreciprocal_cases());
     let results: Vec<(Vec<String>, usize, usize)> = cases
         .par_iter()
         .enumerate()
@@ -470,7 +537,8 @@ fn albedo(bsdf: &Bsdf, wo: Vec3, n: usize, seed: u64) -> (f64, f64) {
 
 #[test]
 fn energy_conservation() {
-    let cases = property_cases();
+    let mut cases = property_cases();
+    cases.extend(nonreciprocal_cases());
     let failures: Vec<String> = cases
         .par_iter()
         .enumerate()

@@ -14,7 +14,11 @@
 //!   (1 - c F0)^2 (glint's layering, `bsdf/clearcoat.rs`);
 //! - each extension's texture multiplies its factor from the channel glTF
 //!   names (transmission R, clearcoat R, clearcoatRoughness G, specular A,
-//!   specularColor sRGB rgb), per hit (`texture::textured_coat`).
+//!   specularColor sRGB rgb), per hit (`texture::textured_coat`);
+//! - a smooth clear coat over a surface that reflects nothing (black,
+//!   specularFactor 0) shows c F(cos t), t the angle between its normal and
+//!   the view: tilted by clearcoatNormalTexture, untilted (c F0) under the
+//!   base's normal map alone.
 
 #[path = "fixtures/gltf_builder.rs"]
 mod builder;
@@ -41,13 +45,16 @@ fn plate(test: &str, material: Value, mr_texel: Option<[u8; 3]>) -> Vec3 {
 
 /// [`plate`] with 1x1 textures: each (object, slot, texel) puts a texture
 /// of that RGBA texel in `material[object][slot]`, the object a key of
-/// the material (`pbrMetallicRoughness`) or of its `extensions`.
+/// the material (`pbrMetallicRoughness`), of its `extensions`, or "" for
+/// the material itself.
 fn textured_plate(test: &str, material: Value, textures: &[(&str, &str, [u8; 4])]) -> Vec3 {
     let mut d = Doc::new();
     let mut material = material;
     for (object, slot, t) in textures {
         let tex = d.png_texture(1, 1, t, Value::Null);
-        let obj = if *object == "pbrMetallicRoughness" {
+        let obj = if object.is_empty() {
+            &mut material
+        } else if *object == "pbrMetallicRoughness" {
             &mut material[*object]
         } else {
             &mut material["extensions"][*object]
@@ -291,5 +298,42 @@ fn coat_textures_multiply_their_factors() {
         t * thin + (1.0 - t) * opaque,
         0.01,
         "transmission texture",
+    );
+}
+
+#[test]
+fn clearcoat_normal_texture_tilts_the_coat_and_the_base_map_does_not() {
+    // Black, specularFactor 0: only the smooth clear coat (c = 1) reflects,
+    // the white sky in its mirror direction, so the plate shows F(cos t).
+    let mut m = pbr([0.0; 3], 0.0, 0.0);
+    m["extensions"] = json!({
+        "KHR_materials_clearcoat": { "clearcoatFactor": 1, "clearcoatRoughnessFactor": 0 },
+        "KHR_materials_specular": { "specularFactor": 0 } });
+    // A normal texel tilted ~40 degrees along the tangent: the mirror
+    // direction of the head-on view stays above the plate.
+    let texel = [210u8, 128, 225, 255];
+    let n = Vec3::new(
+        2.0 * unorm(texel[0]) - 1.0,
+        2.0 * unorm(texel[1]) - 1.0,
+        2.0 * unorm(texel[2]) - 1.0,
+    )
+    .normalize();
+    let f = |cos: f32| glint_cpu::bsdf::fresnel::fresnel_dielectric(cos, 1.5);
+    let untilted = plate("ccn_none", m.clone(), None);
+    assert_near(untilted, Vec3::splat(f0(1.5)), 1e-4, "untilted clear coat");
+    let tilted = textured_plate(
+        "ccn_tilted",
+        m.clone(),
+        &[("KHR_materials_clearcoat", "clearcoatNormalTexture", texel)],
+    );
+    assert!((f(n.z) - f0(1.5)) > 4e-3, "the tilt must show: {}", f(n.z));
+    assert_near(tilted, Vec3::splat(f(n.z)), 5e-4, "clearcoatNormalTexture");
+    // The base's normal map alone leaves the coat on the unmapped normal.
+    let base_mapped = textured_plate("ccn_base", m, &[("", "normalTexture", texel)]);
+    assert_near(
+        base_mapped,
+        Vec3::splat(f0(1.5)),
+        5e-4,
+        "normalTexture only",
     );
 }

@@ -14,6 +14,7 @@
 #include "bsdf/microfacet.glsl"
 #include "bsdf/warp.glsl"
 #include "bsdf/multiscatter.glsl"
+#include "integrator/frame.glsl"
 
 #define GLINT_INV_PI 0.31830988618379067154
 
@@ -464,8 +465,10 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
 
 // --------------------------------------------------------------- clearcoat
 // clearcoat.rs: a GGX coat (IOR 1.5) of weight c = m.extra.y, alpha
-// m.extra.z, over the coated and metallic kinds:
-// f = c f_cc + w(mu_o) w(mu_i) f_inner, w(mu) = 1 - c E_cc(mu).
+// m.extra.z, normal m.extra.w (encode_coat_normal; 0: the shading normal),
+// over the coated and metallic kinds:
+// f = c f_cc + w(mu_o) w(mu_i) f_inner, w(mu) = 1 - c E_cc(mu), the coat's
+// terms about its own normal, its lobe carrying the coat's cosine.
 
 #define CLEARCOAT_IOR 1.5
 
@@ -473,39 +476,98 @@ bool cc_smooth(Material m) {
     return !HAS(F_ROUGH) || m.extra.z < SMOOTH_ALPHA_THRESHOLD;
 }
 
-float cc_through(Material m, float mu) {
-    return 1.0 - m.extra.y * coat_albedo(abs(mu), max(m.extra.z, MIN_ALPHA), CLEARCOAT_IOR, cc_smooth(m));
+// bsdf::clearcoat::decode_coat_normal.
+vec2 decode_coat_normal(float e) {
+    if (e < 1.0) {
+        return vec2(0.0);
+    }
+    uint k = uint(e) - 1u;
+    return vec2(float(k / 4095u), float(k % 4095u)) / 2047.0 - 1.0;
+}
+
+bool cc_tilted(Material m) {
+    return m.extra.w >= 1.0;
+}
+
+Frame cc_frame(Material m) {
+    vec2 xy = decode_coat_normal(m.extra.w);
+    return frame_from_normal(vec3(xy, sqrt(max(1.0 - dot(xy, xy), 0.0))));
+}
+
+// Clearcoat::local / world: front-side shading directions in the coat's
+// frame and back.
+vec3 cc_local(Material m, vec3 w) {
+    return cc_tilted(m) ? frame_to_local(cc_frame(m), w) : w;
+}
+
+vec3 cc_world(Material m, vec3 w) {
+    return cc_tilted(m) ? frame_to_world(cc_frame(m), w) : w;
+}
+
+vec3 cc_front(vec3 w, float side) {
+    return vec3(w.x, w.y, w.z * side);
+}
+
+float cc_side(vec3 wo) {
+    return wo.z < 0.0 ? -1.0 : 1.0;
+}
+
+// Clearcoat::shading_value.
+float cc_shading_value(Material m, float f, vec3 wi_c, float wi_z) {
+    if (!cc_tilted(m)) {
+        return f;
+    }
+    return wi_z == 0.0 ? 0.0 : f * (abs(wi_c.z) / abs(wi_z));
+}
+
+// w(mu) for `w`, wo on the side `side`.
+float cc_through(Material m, vec3 w, float side) {
+    float mu = abs(cc_local(m, cc_front(w, side)).z);
+    return 1.0 - m.extra.y * coat_albedo(mu, max(m.extra.z, MIN_ALPHA), CLEARCOAT_IOR, cc_smooth(m));
+}
+
+float cc_p_coat(Material m, vec3 wo) {
+    return clamp(1.0 - cc_through(m, wo, cc_side(wo)), 0.0, 1.0);
 }
 
 float cc_coat_eval(Material m, vec3 wo, vec3 wi) {
-    if (cc_smooth(m) || wo.z * wi.z <= 0.0) {
+    if (cc_smooth(m) || wo.z == 0.0) {
         return 0.0;
     }
-    wo.z = abs(wo.z);
-    wi.z = abs(wi.z);
+    float side = cc_side(wo);
+    vec3 wo_c = cc_local(m, cc_front(wo, side));
+    vec3 wi_c = cc_local(m, cc_front(wi, side));
+    if (wo_c.z <= 0.0 || wi_c.z <= 0.0) {
+        return 0.0;
+    }
     float a = max(m.extra.z, MIN_ALPHA);
-    vec3 h = normalize(wo + wi);
-    float d = dot(wo, h);
+    vec3 h = normalize(wo_c + wi_c);
+    float d = dot(wo_c, h);
     if (d <= 0.0) {
         return 0.0;
     }
-    return m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(h, a, a)
-        * ggx_visibility(wo, wi, a, a, false);
+    float f = m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(h, a, a)
+        * ggx_visibility(wo_c, wi_c, a, a, false);
+    return cc_shading_value(m, f, wi_c, wi.z);
 }
 
 float cc_coat_pdf(Material m, vec3 wo, vec3 wi) {
-    if (cc_smooth(m) || wo.z * wi.z <= 0.0) {
+    if (cc_smooth(m) || wo.z == 0.0) {
         return 0.0;
     }
-    wo.z = abs(wo.z);
-    wi.z = abs(wi.z);
+    float side = cc_side(wo);
+    vec3 wo_c = cc_local(m, cc_front(wo, side));
+    vec3 wi_c = cc_local(m, cc_front(wi, side));
+    if (wo_c.z <= 0.0 || wi_c.z <= 0.0) {
+        return 0.0;
+    }
     float a = max(m.extra.z, MIN_ALPHA);
-    vec3 h = normalize(wo + wi);
-    float d = dot(wo, h);
+    vec3 h = normalize(wo_c + wi_c);
+    float d = dot(wo_c, h);
     if (d <= 0.0) {
         return 0.0;
     }
-    return ggx_pdf_visible(wo, h, a, a) / (4.0 * d);
+    return ggx_pdf_visible(wo_c, h, a, a) / (4.0 * d);
 }
 
 // The glTF material under its clear coat.
@@ -531,7 +593,8 @@ vec3 gltf_eval(Material m, vec3 wo, vec3 wi) {
     if (m.extra.y <= 0.0) {
         return inner;
     }
-    return vec3(cc_coat_eval(m, wo, wi)) + inner * (cc_through(m, wo.z) * cc_through(m, wi.z));
+    float side = cc_side(wo);
+    return vec3(cc_coat_eval(m, wo, wi)) + inner * (cc_through(m, wo, side) * cc_through(m, wi, side));
 }
 
 float gltf_pdf(Material m, vec3 wo, vec3 wi) {
@@ -539,7 +602,7 @@ float gltf_pdf(Material m, vec3 wo, vec3 wi) {
     if (m.extra.y <= 0.0) {
         return inner;
     }
-    float p = clamp(1.0 - cc_through(m, wo.z), 0.0, 1.0);
+    float p = cc_p_coat(m, wo);
     return p * cc_coat_pdf(m, wo, wi) + (1.0 - p) * inner;
 }
 
@@ -551,40 +614,43 @@ bool gltf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
     if (wo.z == 0.0) {
         return false;
     }
-    float p = clamp(1.0 - cc_through(m, wo.z), 0.0, 1.0);
-    float w_o = cc_through(m, wo.z);
+    float side = cc_side(wo);
+    float p = cc_p_coat(m, wo);
+    float w_o = cc_through(m, wo, side);
     if (uc < p) {
+        // In the coat's frame, on the front side.
+        vec3 up = cc_local(m, cc_front(wo, side));
+        if (up.z <= 0.0) {
+            return false;
+        }
         if (cc_smooth(m)) {
-            float f = m.extra.y * fresnel_dielectric(abs(wo.z), CLEARCOAT_IOR);
-            s = BsdfSample(vec3(-wo.x, -wo.y, wo.z), p, vec3(f / p), 1.0, true);
+            float f = m.extra.y * fresnel_dielectric(up.z, CLEARCOAT_IOR);
+            s = BsdfSample(cc_front(cc_world(m, vec3(-up.x, -up.y, up.z)), side), p, vec3(f / p), 1.0, true);
             return true;
         }
-        vec3 up = vec3(wo.x, wo.y, abs(wo.z));
         float a = max(m.extra.z, MIN_ALPHA);
         vec3 wm = ggx_sample_visible(up, a, a, u);
         float d = dot(up, wm);
-        vec3 wi = reflect_dir(up, wm);
-        if (wi.z <= 0.0 || d <= 0.0 || !(ggx_g1(up, a, a) > 0.0)) {
+        vec3 wi_c = reflect_dir(up, wm);
+        if (wi_c.z <= 0.0 || d <= 0.0 || !(ggx_g1(up, a, a) > 0.0)) {
             return false;
         }
         float pdf_c = ggx_pdf_visible(up, wm, a, a) / (4.0 * d);
-        float f_c = m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(wm, a, a)
-            * ggx_g2(up, wi, a, a, false) / (4.0 * up.z * wi.z);
-        if (wo.z < 0.0) {
-            wi.z = -wi.z;
-        }
+        vec3 wi = cc_front(cc_world(m, wi_c), side);
+        float f_c = cc_shading_value(m, m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(wm, a, a)
+            * ggx_g2(up, wi_c, a, a, false) / (4.0 * up.z * wi_c.z), wi_c, wi.z);
         float pdf = p * pdf_c + (1.0 - p) * gltf_inner_pdf(m, wo, wi);
         if (!(pdf > 0.0) || isinf(pdf)) {
             return false;
         }
-        vec3 f = vec3(f_c) + gltf_inner_eval(m, wo, wi) * (w_o * cc_through(m, wi.z));
+        vec3 f = vec3(f_c) + gltf_inner_eval(m, wo, wi) * (w_o * cc_through(m, wi, side));
         s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
         return true;
     }
     if (!gltf_inner_sample(m, wo, clamp((uc - p) / (1.0 - p), 0.0, ONE_MINUS_EPS), u, s)) {
         return false;
     }
-    float w_i = cc_through(m, s.wi.z);
+    float w_i = cc_through(m, s.wi, side);
     if (s.delta) {
         s.weight *= w_o * w_i / (1.0 - p);
         s.pdf *= 1.0 - p;

@@ -105,6 +105,7 @@ fn gltf_channels(mt: &MaterialTextures) -> String {
             format!("{clearcoat_roughness:.4}"),
         ));
     }
+
     if mt.specular.is_some() || mt.specular_color.is_some() {
         parts.push(channel(
             "specular",
@@ -270,6 +271,12 @@ pub fn describe(path: &str, s: &Scene) -> String {
                 extra.push(format!(
                     "normal texture {} x scale {}",
                     mt.normal.texture, mt.normal.scale
+                ));
+            }
+            if mt.clearcoat_normal.is_some() {
+                extra.push(format!(
+                    "clear-coat normal texture {} x scale {}",
+                    mt.clearcoat_normal.texture, mt.clearcoat_normal.scale
                 ));
             }
             if mt.is_masked() {

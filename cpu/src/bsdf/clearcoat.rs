@@ -12,6 +12,14 @@
 //! out; light reflected back down by the coat's underside is not returned
 //! (a small loss, the price of a closed form). Sampling: the coat with
 //! probability c E_cc(mu_o), else the inner material.
+//!
+//! `clearcoatNormalTexture` tilts the coat's normal away from the shading
+//! normal ([`Clearcoat::normal`]): the coat's lobe and its albedo weights
+//! are then taken about the coat's own normal, and its lobe is returned
+//! with the coat's cosine in place of the shading one (f_cc |wi . n_c| /
+//! |wi . n|), as Cycles weighs each closure by its own normal's cosine. The
+//! albedo stays c E_cc(mu_o') + w(mu_o') x (inner albedo) <= 1 (mu_o' about
+//! the coat's normal); reciprocity holds only for an untilted coat.
 
 use glam::{Vec2, Vec3};
 
@@ -22,15 +30,31 @@ use super::microfacet::{
     reflect_dir,
 };
 use super::{BsdfSample, SMOOTH_ALPHA_THRESHOLD};
+use crate::frame::Frame;
 
 /// The clear coat's IOR (glTF: fixed at 1.5).
 pub const CLEARCOAT_IOR: f32 = 1.5;
 
-/// A clear coat: weight (clearcoatFactor) and GGX alpha.
+/// A clear coat: weight (clearcoatFactor), GGX alpha and normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Clearcoat {
     pub weight: f32,
     pub alpha: f32,
+    /// The coat's normal in the shading frame, as its (x, y) (z =
+    /// sqrt(1 - x^2 - y^2) > 0, on the front side); ZERO: the shading
+    /// normal itself.
+    pub normal: Vec2,
+}
+
+/// `w` with z multiplied by `side` (+-1): a direction on wo's side of the
+/// surface seen as on the front side.
+fn front(w: Vec3, side: f32) -> Vec3 {
+    Vec3::new(w.x, w.y, w.z * side)
+}
+
+/// The side of the surface `wo` is on.
+fn side_of(wo: Vec3) -> f32 {
+    if wo.z < 0.0 { -1.0 } else { 1.0 }
 }
 
 impl Clearcoat {
@@ -40,58 +64,123 @@ impl Clearcoat {
     fn a(&self) -> f32 {
         self.alpha.max(MIN_ALPHA)
     }
-    /// w(mu) = 1 - c E_cc(mu).
-    pub fn through(&self, mu: f32) -> f32 {
-        1.0 - self.weight * coat_albedo(mu.abs(), self.a(), CLEARCOAT_IOR, self.smooth())
+    /// The frame about the coat's normal, in shading coordinates; None when
+    /// it is the shading normal.
+    fn frame(&self) -> Option<Frame> {
+        (self.normal != Vec2::ZERO).then(|| Frame::from_normal(coat_normal(self.normal)))
     }
-    fn p_coat(&self, mu_o: f32) -> f32 {
-        (1.0 - self.through(mu_o)).clamp(0.0, 1.0)
+    /// A front-side shading direction in the coat's frame.
+    fn local(&self, w: Vec3) -> Vec3 {
+        self.frame().map_or(w, |f| f.to_local(w))
+    }
+    /// A direction in the coat's frame back in front-side shading terms.
+    fn world(&self, w: Vec3) -> Vec3 {
+        self.frame().map_or(w, |f| f.to_world(w))
+    }
+    /// The coat's lobe value `f` (about the coat's normal, at `wi_c` in its
+    /// frame) as the shading-frame BSDF returns it: times the coat's
+    /// cosine over the shading one (`wi_z`); `f` itself for an untilted coat.
+    fn shading_value(&self, f: f32, wi_c: Vec3, wi_z: f32) -> f32 {
+        if self.normal == Vec2::ZERO {
+            f
+        } else if wi_z == 0.0 {
+            0.0
+        } else {
+            f * (wi_c.z.abs() / wi_z.abs())
+        }
+    }
+    /// w(mu) = 1 - c E_cc(mu), mu = |cos| about the coat's normal of the
+    /// front-side direction `w_front`.
+    fn through_front(&self, w_front: Vec3) -> f32 {
+        let mu = self.local(w_front).z.abs();
+        1.0 - self.weight * coat_albedo(mu, self.a(), CLEARCOAT_IOR, self.smooth())
+    }
+    /// w(mu) for `w` with `wo` on the side `side`.
+    pub fn through(&self, w: Vec3, side: f32) -> f32 {
+        self.through_front(front(w, side))
+    }
+    fn p_coat(&self, wo: Vec3) -> f32 {
+        (1.0 - self.through(wo, side_of(wo))).clamp(0.0, 1.0)
     }
 }
 
-/// c f_cc for wo, wi on the same side (0 otherwise, and for a smooth coat).
-fn coat_eval(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
-    if cc.smooth() || wo.z * wi.z <= 0.0 {
+/// The unit normal whose (x, y) is `xy`, on +z.
+pub fn coat_normal(xy: Vec2) -> Vec3 {
+    Vec3::new(xy.x, xy.y, (1.0 - xy.length_squared()).max(0.0).sqrt())
+}
+
+/// `clearcoat_normal` encoding of the GPU record (`GpuMaterial::extra.w`):
+/// 0 for no tilt, else 1 + qx 4095 + qy, q = floor((x + 1) 2047 + 1/2) in
+/// [0, 4094]: an integer below 2^24, exact in an f32 on every device (no
+/// NaN or denormal bit patterns to lose). The step (1/2047) is finer than
+/// an 8-bit normal map's (1/127.5).
+pub fn encode_coat_normal(xy: Vec2) -> f32 {
+    if xy == Vec2::ZERO {
         return 0.0;
     }
-    let (wo, wi) = (
-        Vec3::new(wo.x, wo.y, wo.z.abs()),
-        Vec3::new(wi.x, wi.y, wi.z.abs()),
-    );
+    let q = |x: f32| ((x.clamp(-1.0, 1.0) + 1.0) * 2047.0 + 0.5).floor() as u32;
+    (1 + q(xy.x) * 4095 + q(xy.y)) as f32
+}
+
+/// The inverse of [`encode_coat_normal`] (the grid's values): what the CPU
+/// stores, so both backends shade with the same normal.
+pub fn decode_coat_normal(e: f32) -> Vec2 {
+    if e < 1.0 {
+        return Vec2::ZERO;
+    }
+    let e = e as u32 - 1;
+    let d = |q: u32| q as f32 / 2047.0 - 1.0;
+    Vec2::new(d(e / 4095), d(e % 4095))
+}
+
+/// c f_cc for wo, wi on the same side of the coat (0 otherwise, and for a
+/// smooth coat), as the shading-frame BSDF returns it.
+fn coat_eval(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
+    if cc.smooth() || wo.z == 0.0 {
+        return 0.0;
+    }
+    let side = side_of(wo);
+    let (wo_c, wi_c) = (cc.local(front(wo, side)), cc.local(front(wi, side)));
+    if wo_c.z <= 0.0 || wi_c.z <= 0.0 {
+        return 0.0;
+    }
     let a = cc.a();
-    let h = (wo + wi).normalize();
-    let dot = wo.dot(h);
+    let h = (wo_c + wi_c).normalize();
+    let dot = wo_c.dot(h);
     if dot <= 0.0 {
         return 0.0;
     }
-    cc.weight
+    let f = cc.weight
         * fresnel_dielectric(dot, CLEARCOAT_IOR)
         * ggx_d(h, a, a)
-        * ggx_visibility(wo, wi, a, a, false)
+        * ggx_visibility(wo_c, wi_c, a, a, false);
+    cc.shading_value(f, wi_c, wi.z)
 }
 
 fn coat_pdf(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
-    if cc.smooth() || wo.z * wi.z <= 0.0 {
+    if cc.smooth() || wo.z == 0.0 {
         return 0.0;
     }
-    let (wo, wi) = (
-        Vec3::new(wo.x, wo.y, wo.z.abs()),
-        Vec3::new(wi.x, wi.y, wi.z.abs()),
-    );
-    let h = (wo + wi).normalize();
-    let dot = wo.dot(h);
+    let side = side_of(wo);
+    let (wo_c, wi_c) = (cc.local(front(wo, side)), cc.local(front(wi, side)));
+    if wo_c.z <= 0.0 || wi_c.z <= 0.0 {
+        return 0.0;
+    }
+    let h = (wo_c + wi_c).normalize();
+    let dot = wo_c.dot(h);
     if dot <= 0.0 {
         return 0.0;
     }
-    ggx_pdf_visible(wo, h, cc.a(), cc.a()) / (4.0 * dot)
+    ggx_pdf_visible(wo_c, h, cc.a(), cc.a()) / (4.0 * dot)
 }
 
 pub fn clearcoat_eval(cc: &Clearcoat, inner: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
-    Vec3::splat(coat_eval(cc, wo, wi)) + inner * (cc.through(wo.z) * cc.through(wi.z))
+    let side = side_of(wo);
+    Vec3::splat(coat_eval(cc, wo, wi)) + inner * (cc.through(wo, side) * cc.through(wi, side))
 }
 
 pub fn clearcoat_pdf(cc: &Clearcoat, inner_pdf: f32, wo: Vec3, wi: Vec3) -> f32 {
-    let p = cc.p_coat(wo.z);
+    let p = cc.p_coat(wo);
     p * coat_pdf(cc, wo, wi) + (1.0 - p) * inner_pdf
 }
 
@@ -109,43 +198,50 @@ pub fn clearcoat_sample(
     if wo.z == 0.0 {
         return None;
     }
-    let p = cc.p_coat(wo.z);
-    let w_o = cc.through(wo.z);
+    let side = side_of(wo);
+    let p = cc.p_coat(wo);
+    let w_o = cc.through(wo, side);
     if uc < p {
+        // In the coat's frame, on the front side.
+        let up = cc.local(front(wo, side));
+        if up.z <= 0.0 {
+            return None;
+        }
         if cc.smooth() {
             // The coat's mirror, c F delta / |cos|, picked with probability
             // c F (= p for the smooth coat).
-            let f = cc.weight * fresnel_dielectric(wo.z.abs(), CLEARCOAT_IOR);
+            let f = cc.weight * fresnel_dielectric(up.z, CLEARCOAT_IOR);
             return Some(BsdfSample {
-                wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                wi: front(cc.world(Vec3::new(-up.x, -up.y, up.z)), side),
                 weight: Vec3::splat(f / p),
                 pdf: p,
                 delta: true,
                 eta: 1.0,
             });
         }
-        let up = Vec3::new(wo.x, wo.y, wo.z.abs());
         let a = cc.a();
         let wm = ggx_sample_visible(up, a, a, u);
         let dot = up.dot(wm);
-        let mut wi = reflect_dir(up, wm);
-        if wi.z <= 0.0 || dot <= 0.0 || !(ggx_g1(up, a, a) > 0.0) {
+        let wi_c = reflect_dir(up, wm);
+        if wi_c.z <= 0.0 || dot <= 0.0 || !(ggx_g1(up, a, a) > 0.0) {
             return None;
         }
         let pdf_c = ggx_pdf_visible(up, wm, a, a) / (4.0 * dot);
-        let f_c = cc.weight
-            * fresnel_dielectric(dot, CLEARCOAT_IOR)
-            * ggx_d(wm, a, a)
-            * ggx_g2(up, wi, a, a, false)
-            / (4.0 * up.z * wi.z);
-        if wo.z < 0.0 {
-            wi.z = -wi.z;
-        }
+        let wi = front(cc.world(wi_c), side);
+        let f_c = cc.shading_value(
+            cc.weight
+                * fresnel_dielectric(dot, CLEARCOAT_IOR)
+                * ggx_d(wm, a, a)
+                * ggx_g2(up, wi_c, a, a, false)
+                / (4.0 * up.z * wi_c.z),
+            wi_c,
+            wi.z,
+        );
         let pdf = p * pdf_c + (1.0 - p) * inner_pdf(wi);
         if !(pdf > 0.0) || !pdf.is_finite() {
             return None;
         }
-        let f = Vec3::splat(f_c) + inner_eval(wi) * (w_o * cc.through(wi.z));
+        let f = Vec3::splat(f_c) + inner_eval(wi) * (w_o * cc.through(wi, side));
         return Some(BsdfSample {
             wi,
             weight: f * (wi.z.abs() / pdf),
@@ -155,7 +251,7 @@ pub fn clearcoat_sample(
         });
     }
     let s = inner_sample(((uc - p) / (1.0 - p)).clamp(0.0, ONE_MINUS_EPS))?;
-    let w_i = cc.through(s.wi.z);
+    let w_i = cc.through(s.wi, side);
     if s.delta {
         return Some(BsdfSample {
             weight: s.weight * (w_o * w_i / (1.0 - p)),
@@ -178,3 +274,36 @@ pub fn clearcoat_sample(
 
 /// The largest f32 below 1: a rescaled random number stays in [0, 1).
 const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn coat_normal_codes_round_trip_exactly() {
+        assert_eq!(encode_coat_normal(Vec2::ZERO), 0.0);
+        assert_eq!(decode_coat_normal(0.0), Vec2::ZERO);
+        // The largest code is an integer an f32 holds exactly.
+        let top = encode_coat_normal(Vec2::ONE);
+        assert!(top < (1u32 << 24) as f32 && top.fract() == 0.0, "{top}");
+        assert_eq!(decode_coat_normal(top), Vec2::ONE);
+        assert_eq!(
+            decode_coat_normal(encode_coat_normal(-Vec2::ONE)),
+            -Vec2::ONE
+        );
+        for k in 0..2000 {
+            let xy = Vec2::new(
+                (k as f32 * 0.618_034).fract() * 1.6 - 0.8,
+                (k as f32 * 0.414_214).fract() * 1.6 - 0.8,
+            );
+            let e = encode_coat_normal(xy);
+            let d = decode_coat_normal(e);
+            assert!(
+                (d - xy).abs().max_element() <= 0.5 / 2047.0 + 1e-6,
+                "{xy} {d}"
+            );
+            // What the CPU stores encodes to the same code.
+            assert_eq!(encode_coat_normal(d), e, "{xy}");
+        }
+    }
+}

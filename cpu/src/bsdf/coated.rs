@@ -69,6 +69,11 @@ pub struct CoatParams {
     /// (`clearcoat.rs`).
     pub clearcoat: f32,
     pub clearcoat_alpha: f32,
+    /// The clear coat's normal (`clearcoatNormalTexture`) in the shading
+    /// frame, as its (x, y) on the grid of
+    /// [`super::clearcoat::decode_coat_normal`]; ZERO: the shading normal.
+    /// Set per hit by the integrator.
+    pub clearcoat_normal: Vec2,
 }
 
 impl CoatParams {
@@ -79,6 +84,7 @@ impl CoatParams {
         transmission: 0.0,
         clearcoat: 0.0,
         clearcoat_alpha: 0.0,
+        clearcoat_normal: Vec2::ZERO,
     };
 
     /// The clear coat, if any.
@@ -86,6 +92,7 @@ impl CoatParams {
         (self.clearcoat > 0.0).then_some(super::clearcoat::Clearcoat {
             weight: self.clearcoat,
             alpha: self.clearcoat_alpha,
+            normal: self.clearcoat_normal,
         })
     }
 }

@@ -68,7 +68,7 @@ use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::PathSampler;
-use crate::texture::{MaterialTextures, normal_mapped, textured_bsdf};
+use crate::texture::{MaterialTextures, clearcoat_normal, normal_mapped, textured_bsdf};
 
 /// Mitsuba's default `rr_depth`.
 pub const RR_DEPTH: u32 = 5;
@@ -382,12 +382,22 @@ impl<'a> PathTracer<'a> {
         bsdf: &mut Bsdf,
     ) {
         let st = &self.scene.textures;
+        let unmapped = sf.frame;
         let ns = normal_mapped(st, mt, tri, u, v, sf.ng, wo, &sf.frame);
         if ns != sf.ns {
             sf.frame = Frame::from_normal_tangent(ns, sf.frame.s);
             sf.ns = ns;
         }
         *bsdf = textured_bsdf(st, mt, bsdf, tri, u, v);
+        // The clear coat's own normal (clearcoatNormalTexture, else the
+        // unmapped one), where a normal map tilts either.
+        if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = bsdf
+            && coat.clearcoat > 0.0
+            && (mt.normal.is_some() || mt.clearcoat_normal.is_some())
+        {
+            coat.clearcoat_normal =
+                clearcoat_normal(st, mt, tri, u, v, sf.ng, &unmapped, &sf.frame);
+        }
     }
 
     /// The shadow ray from `p` (error bound `err`, geometric normal `ng`)

@@ -188,23 +188,19 @@ pub fn gltf_coat(
         Some(t) => check_unit(t.transmission_factor(), "transmissionFactor")?,
         None => 0.0,
     };
-    let (clearcoat, clearcoat_alpha) = gltf_clearcoat(raw, warnings, label)?;
+    let (clearcoat, clearcoat_alpha) = gltf_clearcoat(raw)?;
     Ok(CoatParams {
         eta,
         specular,
         transmission,
         clearcoat,
         clearcoat_alpha,
+        clearcoat_normal: glam::Vec2::ZERO,
     })
 }
 
 /// `KHR_materials_clearcoat`: (clearcoatFactor, clearcoatRoughnessFactor^2).
-/// Its normal texture is not read yet (a warning).
-fn gltf_clearcoat(
-    raw: &Value,
-    warnings: &mut Vec<String>,
-    label: &str,
-) -> Result<(f32, f32), String> {
+fn gltf_clearcoat(raw: &Value) -> Result<(f32, f32), String> {
     let cc = &raw["extensions"]["KHR_materials_clearcoat"];
     if cc.is_null() {
         return Ok((0.0, 0.0));
@@ -226,14 +222,8 @@ fn gltf_clearcoat(
         num("clearcoatRoughnessFactor")?,
         "KHR_materials_clearcoat clearcoatRoughnessFactor",
     )?;
-    // Its textures are read per hit (`texture::textured_coat`); its own
-    // normal map is not yet: the clear coat follows the base's shading
-    // normal.
-    if cc.get("clearcoatNormalTexture").is_some() {
-        warnings.push(format!(
-            "{label}: KHR_materials_clearcoat clearcoatNormalTexture is not supported yet; the clear coat uses the base's shading normal"
-        ));
-    }
+    // Its textures are read per hit (`texture::textured_coat`), its
+    // normal texture by the integrator (`texture::clearcoat_normal`).
     Ok((factor, rough * rough))
 }
 

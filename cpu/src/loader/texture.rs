@@ -65,6 +65,16 @@ pub fn collect(
             mt.transmission = slot(&tr["transmissionTexture"], "transmissionTexture", &mut out)?;
             let cc = &ext["KHR_materials_clearcoat"];
             mt.clearcoat = slot(&cc["clearcoatTexture"], "clearcoatTexture", &mut out)?;
+            mt.clearcoat_normal = slot(
+                &cc["clearcoatNormalTexture"],
+                "clearcoatNormalTexture",
+                &mut out,
+            )?;
+            if mt.clearcoat_normal.is_some() {
+                mt.clearcoat_normal.scale = cc["clearcoatNormalTexture"]["scale"]
+                    .as_f64()
+                    .unwrap_or(1.0) as f32;
+            }
             mt.clearcoat_roughness = slot(
                 &cc["clearcoatRoughnessTexture"],
                 "clearcoatRoughnessTexture",

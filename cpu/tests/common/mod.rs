@@ -572,6 +572,7 @@ pub fn chi2_cases() -> Vec<Case> {
             transmission: 0.0,
             clearcoat: 0.0,
             clearcoat_alpha: 0.0,
+            clearcoat_normal: glam::Vec2::ZERO,
         },
         roughness: r,
     };
@@ -632,21 +633,31 @@ pub fn chi2_cases() -> Vec<Case> {
                     transmission: t,
                     clearcoat: 0.0,
                     clearcoat_alpha: 0.0,
+                    clearcoat_normal: glam::Vec2::ZERO,
                 },
                 roughness: rough(a, a, Shadowing::Correlated),
             },
             wo: dir_cos(c, PHI_O),
         });
     }
-    // KHR_materials_clearcoat over the non-metal and over the blend.
-    for &(a, cc, ca, c) in &[(0.3, 1.0, 0.05, 0.7), (0.5, 0.6, 0.3, -0.4)] {
+    // KHR_materials_clearcoat over the non-metal and over the blend, its
+    // normal the shading normal or tilted (clearcoatNormalTexture).
+    let tilt_a = glam::Vec2::new(0.3, -0.25);
+    let tilt_b = glam::Vec2::new(-0.2, 0.35);
+    for &(a, cc, ca, c, n) in &[
+        (0.3, 1.0, 0.05, 0.7, glam::Vec2::ZERO),
+        (0.5, 0.6, 0.3, -0.4, glam::Vec2::ZERO),
+        (0.3, 0.8, 0.1, 0.5, tilt_a),
+        (0.4, 1.0, 0.2, -0.6, tilt_b),
+    ] {
         let coat = CoatParams {
             clearcoat: cc,
             clearcoat_alpha: ca,
+            clearcoat_normal: n,
             ..CoatParams::GLTF_DEFAULT
         };
         v.push(Case {
-            name: format!("clearcoat {cc} a={ca} over coated a={a} cos={c}"),
+            name: format!("clearcoat {cc} a={ca} n={n} over coated a={a} cos={c}"),
             bsdf: Bsdf::Coated {
                 base: Vec3::new(0.8, 0.5, 0.2),
                 coat,
@@ -655,7 +666,7 @@ pub fn chi2_cases() -> Vec<Case> {
             wo: dir_cos(c, PHI_O),
         });
         v.push(Case {
-            name: format!("clearcoat {cc} a={ca} over metallic a={a} cos={c}"),
+            name: format!("clearcoat {cc} a={ca} n={n} over metallic a={a} cos={c}"),
             bsdf: Bsdf::Metallic {
                 metallic: 0.7,
                 base: Vec3::new(0.9, 0.6, 0.3),
