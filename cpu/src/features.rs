@@ -90,6 +90,32 @@ impl Features {
             .collect()
     }
 
+    /// The bits a rough model needs (none when it is rendered smooth).
+    fn rough(r: &Roughness) -> u32 {
+        if r.is_smooth() {
+            return 0;
+        }
+        let mut f = Self::ROUGH;
+        if r.alpha_u != r.alpha_v {
+            f |= Self::ANISOTROPIC;
+        }
+        f | match r.shadowing {
+            Shadowing::Correlated => Self::SMITH_CORRELATED,
+            Shadowing::Separable => Self::SMITH_SEPARABLE,
+        }
+    }
+
+    /// A rough clear coat needs the rough code whatever the material under
+    /// it is (its GGX lobe is `cc_smooth` without it). Textures only scale
+    /// its roughness factor down, so the factor decides.
+    fn clearcoat_rough(c: &crate::bsdf::coated::CoatParams) -> u32 {
+        if c.clearcoat > 0.0 && c.clearcoat_alpha >= crate::bsdf::SMOOTH_ALPHA_THRESHOLD {
+            Self::ROUGH | Self::SMITH_CORRELATED
+        } else {
+            0
+        }
+    }
+
     /// What rendering `scene` with `opts` needs.
     pub fn of(scene: &Scene, opts: &RenderOptions) -> Features {
         let mut f = 0u32;
@@ -99,27 +125,6 @@ impl Features {
                 *u = true;
             }
         }
-        let rough = |r: &Roughness, f: &mut u32| {
-            if r.is_smooth() {
-                return;
-            }
-            *f |= Self::ROUGH;
-            if r.alpha_u != r.alpha_v {
-                *f |= Self::ANISOTROPIC;
-            }
-            *f |= match r.shadowing {
-                Shadowing::Correlated => Self::SMITH_CORRELATED,
-                Shadowing::Separable => Self::SMITH_SEPARABLE,
-            };
-        };
-        // A rough clear coat needs the rough code whatever the material
-        // under it is (its GGX lobe is `cc_smooth` without it). Textures
-        // only scale its roughness factor down, so the factor decides.
-        let clearcoat_rough = |c: &crate::bsdf::coated::CoatParams, f: &mut u32| {
-            if c.clearcoat > 0.0 && c.clearcoat_alpha >= crate::bsdf::SMOOTH_ALPHA_THRESHOLD {
-                *f |= Self::ROUGH | Self::SMITH_CORRELATED;
-            }
-        };
         for (i, (m, _)) in scene
             .materials
             .iter()
@@ -141,33 +146,33 @@ impl Features {
                 Bsdf::Plastic(_) => f |= Self::PLASTIC,
                 Bsdf::RoughPlastic(p) => {
                     f |= Self::PLASTIC;
-                    rough(&p.roughness, &mut f);
+                    f |= Self::rough(&p.roughness);
                 }
                 Bsdf::ThinDielectric { .. } => f |= Self::THIN_DIELECTRIC,
                 Bsdf::Coated {
                     roughness, coat, ..
                 } => {
                     f |= Self::COATED;
-                    rough(roughness, &mut f);
-                    clearcoat_rough(coat, &mut f);
+                    f |= Self::rough(roughness);
+                    f |= Self::clearcoat_rough(coat);
                 }
                 Bsdf::Conductor(c) => {
                     f |= Self::CONDUCTOR;
-                    rough(&c.roughness, &mut f);
+                    f |= Self::rough(&c.roughness);
                 }
                 Bsdf::Dielectric { eta, roughness } => {
                     f |= Self::DIELECTRIC;
                     // A rough dielectric with eta = 1 is rendered smooth.
                     if *eta != 1.0 {
-                        rough(roughness, &mut f);
+                        f |= Self::rough(roughness);
                     }
                 }
                 Bsdf::Metallic {
                     conductor, coat, ..
                 } => {
                     f |= Self::METALLIC;
-                    rough(&conductor.roughness, &mut f);
-                    clearcoat_rough(coat, &mut f);
+                    f |= Self::rough(&conductor.roughness);
+                    f |= Self::clearcoat_rough(coat);
                 }
             }
         }

@@ -125,7 +125,8 @@ fn non_finite(img: &RadianceImage) -> Option<String> {
         .map(|at| format!("a non-finite variance (NaN or infinite) at {at}"))
 }
 
-pub fn run(args: &DiffArgs) -> Result<bool> {
+/// The options' ranges, and outputs that would overwrite an input.
+fn check_args(args: &DiffArgs) -> Result<()> {
     if !(args.alpha > 0.0 && args.alpha < 1.0) {
         bail!("--alpha {} is out of range (0, 1)", args.alpha);
     }
@@ -136,7 +137,6 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
             bail!("--{name} {x} is out of range (a finite number >= 0)");
         }
     }
-    let thresholds = args.max_relmse.is_some() || args.max_flip.is_some();
     if let Some(d) = &args.diff
         && glint::cpu::OutputFormat::from_path(d) != Some(glint::cpu::OutputFormat::Png)
     {
@@ -149,6 +149,86 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
             }
         }
     }
+    Ok(())
+}
+
+/// The block test of `a` against `b` when both hold variances; None
+/// (the thresholds decide) when either has none, or, with thresholds,
+/// when the test has no power.
+fn statistical_report<'a>(
+    a: &'a RadianceImage,
+    b: &'a RadianceImage,
+    args: &DiffArgs,
+    thresholds: bool,
+) -> Result<Option<CompareReport>> {
+    let (an, bn) = (args.a.display(), args.b.display());
+    Ok(match (&a.variance, &b.variance) {
+        (Some(va), Some(vb)) => {
+            let estimate = |img: &'a RadianceImage, variance: &'a [Vec3]| Estimate {
+                width: img.width,
+                height: img.height,
+                mean: &img.mean,
+                variance,
+                samples: img.variance_samples(),
+            };
+            match compare::compare_estimates(&estimate(a, va), &estimate(b, vb), args.alpha) {
+                Ok(r) => Some(r),
+                // No statistical verdict (no power): the thresholds decide.
+                Err(e) if thresholds => {
+                    println!("no statistical verdict: {an} vs {bn}: {e}");
+                    None
+                }
+                Err(e) => bail!("{an} vs {bn}: {e}"),
+            }
+        }
+        _ => None,
+    })
+}
+
+/// The `--json` record: inputs, metrics, verdict and the test's figures.
+fn json_report(
+    args: &DiffArgs,
+    a: &RadianceImage,
+    m: &metrics::Metrics,
+    max_rel: f64,
+    verdict: Option<&str>,
+    report: Option<&CompareReport>,
+) -> serde_json::Value {
+    let ratio = m.mean_ratio();
+    let mut j = serde_json::json!({
+        "a": args.a.display().to_string(),
+        "b": args.b.display().to_string(),
+        "width": a.width,
+        "height": a.height,
+        "relmse": m.relmse,
+        "relmse_trim": m.relmse_trim,
+        "rmse": m.rmse,
+        "flip": m.flip,
+        "mean_a": m.mean.to_array(),
+        "mean_b": m.reference_mean.to_array(),
+        "mean_ratio": ratio.to_array(),
+        "max_relative_difference": max_rel,
+        "verdict": verdict,
+        "alpha": args.alpha,
+        "max_relmse": args.max_relmse,
+        "max_flip": args.max_flip,
+    });
+    if let Some(r) = report {
+        j["test"] = serde_json::json!({
+            "tests": r.tests,
+            "z_max": r.z_max,
+            "z_local": r.z_local,
+            "exceed_global": r.exceed_global,
+            "allowed_global": r.allowed_global,
+            "skipped_blocks": r.skipped,
+        });
+    }
+    j
+}
+
+pub fn run(args: &DiffArgs) -> Result<bool> {
+    check_args(args)?;
+    let thresholds = args.max_relmse.is_some() || args.max_flip.is_some();
     let mut outputs = Outputs::new();
     let diff_slot = args.diff.as_ref().map(|p| outputs.reserve(p)).transpose()?;
     let json_slot = args.json.as_ref().map(|p| outputs.reserve(p)).transpose()?;
@@ -196,34 +276,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
     let ratio = m.mean_ratio();
     let max_rel = max_relative_difference(&a.mean, &b.mean);
 
-    let report: Option<CompareReport> = match (&a.variance, &b.variance) {
-        (Some(va), Some(vb)) => {
-            let ea = Estimate {
-                width: a.width,
-                height: a.height,
-                mean: &a.mean,
-                variance: va,
-                samples: a.variance_samples(),
-            };
-            let eb = Estimate {
-                width: b.width,
-                height: b.height,
-                mean: &b.mean,
-                variance: vb,
-                samples: b.variance_samples(),
-            };
-            match compare::compare_estimates(&ea, &eb, args.alpha) {
-                Ok(r) => Some(r),
-                // No statistical verdict (no power): the thresholds decide.
-                Err(e) if thresholds => {
-                    println!("no statistical verdict: {an} vs {bn}: {e}");
-                    None
-                }
-                Err(e) => bail!("{an} vs {bn}: {e}"),
-            }
-        }
-        _ => None,
-    };
+    let report = statistical_report(&a, &b, args, thresholds)?;
 
     if let Some(slot) = diff_slot {
         let (values, range, label) = difference_values(&a, &b);
@@ -242,34 +295,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
     };
     let verdict = pass.map(|p| if p { "agree" } else { "differ" });
     if let Some(slot) = json_slot {
-        let mut j = serde_json::json!({
-            "a": args.a.display().to_string(),
-            "b": args.b.display().to_string(),
-            "width": a.width,
-            "height": a.height,
-            "relmse": m.relmse,
-            "relmse_trim": m.relmse_trim,
-            "rmse": m.rmse,
-            "flip": m.flip,
-            "mean_a": m.mean.to_array(),
-            "mean_b": m.reference_mean.to_array(),
-            "mean_ratio": ratio.to_array(),
-            "max_relative_difference": max_rel,
-            "verdict": verdict,
-            "alpha": args.alpha,
-            "max_relmse": args.max_relmse,
-            "max_flip": args.max_flip,
-        });
-        if let Some(r) = &report {
-            j["test"] = serde_json::json!({
-                "tests": r.tests,
-                "z_max": r.z_max,
-                "z_local": r.z_local,
-                "exceed_global": r.exceed_global,
-                "allowed_global": r.allowed_global,
-                "skipped_blocks": r.skipped,
-            });
-        }
+        let j = json_report(args, &a, &m, max_rel, verdict, report.as_ref());
         outputs.write(slot, |w| {
             serde_json::to_writer_pretty(&mut *w, &j)?;
             use std::io::Write;

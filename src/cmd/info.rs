@@ -217,6 +217,22 @@ fn bytes(n: usize) -> String {
 pub fn describe(path: &str, s: &Scene) -> String {
     let mut o = String::new();
     let _ = writeln!(o, "scene: {path}");
+    cameras(&mut o, s);
+    let _ = writeln!(o, "materials: {}", s.materials.len());
+    for (i, m) in s.materials.iter().enumerate() {
+        let _ = writeln!(o, "  {i}: {}", material_line(s, i, m));
+    }
+    textures(&mut o, s);
+    lights(&mut o, s);
+    geometry(&mut o, s);
+    let _ = writeln!(o, "warnings: {}", s.warnings.len());
+    for w in &s.warnings {
+        let _ = writeln!(o, "  {}", one_line(w));
+    }
+    o
+}
+
+fn cameras(o: &mut String, s: &Scene) {
     let _ = writeln!(o, "cameras: {}", s.cameras.len());
     for (i, c) in s.cameras.iter().enumerate() {
         let p = c.to_world.w_axis.truncate();
@@ -234,70 +250,75 @@ pub fn describe(path: &str, s: &Scene) -> String {
     if s.cameras.is_empty() {
         let _ = writeln!(o, "  (none: the default viewpoint frames the scene)");
     }
-    let _ = writeln!(o, "materials: {}", s.materials.len());
-    for (i, m) in s.materials.iter().enumerate() {
-        let mut extra = Vec::new();
-        let mt = s.textures.materials.get(i);
-        let textured_emission = mt.is_some_and(|mt| mt.emissive.is_some());
-        if m.is_emissive() {
-            extra.push(match mt {
-                Some(mt) if textured_emission => format!(
-                    "emission texture {} x {} (textured: not the scene's lighting)",
-                    mt.emissive.texture,
-                    rgb(m.emission)
-                ),
-                _ => format!("emission {}", rgb(m.emission)),
-            });
-        }
-        if m.double_sided {
-            extra.push("double-sided".into());
-        }
-        if m.absorption != glam::Vec3::ZERO {
-            extra.push(format!("absorbing interior sigma_a {}", rgb(m.absorption)));
-        }
-        let mut bsdf = model(&m.bsdf);
-        if let Some(mt) = mt {
-            if mt.mode == MAP_GLTF {
-                // The BSDF is recomputed per texel: the factor-only model
-                // (a metal "k 63.2" from base colour 1) would mislead.
-                bsdf = gltf_channels(mt);
-            } else if mt.mode == MAP_EXTRAS {
-                extra.push(format!(
-                    "baseColor texture {} x the reflectance above",
-                    mt.base_color.texture
-                ));
-            }
-            if mt.normal.is_some() {
-                extra.push(format!(
-                    "normal texture {} x scale {}",
-                    mt.normal.texture, mt.normal.scale
-                ));
-            }
-            if mt.clearcoat_normal.is_some() {
-                extra.push(format!(
-                    "clear-coat normal texture {} x scale {}",
-                    mt.clearcoat_normal.texture, mt.clearcoat_normal.scale
-                ));
-            }
-            if mt.is_masked() {
-                extra.push(format!("alpha mask < {}", mt.alpha_cutoff));
-            }
-            if mt.is_blended() {
-                extra.push("alpha blend (stochastic)".into());
-            }
-        }
-        let extra = if extra.is_empty() {
-            String::new()
-        } else {
-            format!("; {}", extra.join("; "))
-        };
-        let name = if m.name.is_empty() {
-            "(unnamed)"
-        } else {
-            &m.name
-        };
-        let _ = writeln!(o, "  {i}: {name}: {bsdf}{extra}");
+}
+
+/// One material: its model (per texel where textured), then what else it
+/// has (emission, sides, interior, texture slots).
+fn material_line(s: &Scene, i: usize, m: &glint::cpu::Material) -> String {
+    let mut extra = Vec::new();
+    let mt = s.textures.materials.get(i);
+    let textured_emission = mt.is_some_and(|mt| mt.emissive.is_some());
+    if m.is_emissive() {
+        extra.push(match mt {
+            Some(mt) if textured_emission => format!(
+                "emission texture {} x {} (textured: not the scene's lighting)",
+                mt.emissive.texture,
+                rgb(m.emission)
+            ),
+            _ => format!("emission {}", rgb(m.emission)),
+        });
     }
+    if m.double_sided {
+        extra.push("double-sided".into());
+    }
+    if m.absorption != glam::Vec3::ZERO {
+        extra.push(format!("absorbing interior sigma_a {}", rgb(m.absorption)));
+    }
+    let mut bsdf = model(&m.bsdf);
+    if let Some(mt) = mt {
+        if mt.mode == MAP_GLTF {
+            // The BSDF is recomputed per texel: the factor-only model
+            // (a metal "k 63.2" from base colour 1) would mislead.
+            bsdf = gltf_channels(mt);
+        } else if mt.mode == MAP_EXTRAS {
+            extra.push(format!(
+                "baseColor texture {} x the reflectance above",
+                mt.base_color.texture
+            ));
+        }
+        if mt.normal.is_some() {
+            extra.push(format!(
+                "normal texture {} x scale {}",
+                mt.normal.texture, mt.normal.scale
+            ));
+        }
+        if mt.clearcoat_normal.is_some() {
+            extra.push(format!(
+                "clear-coat normal texture {} x scale {}",
+                mt.clearcoat_normal.texture, mt.clearcoat_normal.scale
+            ));
+        }
+        if mt.is_masked() {
+            extra.push(format!("alpha mask < {}", mt.alpha_cutoff));
+        }
+        if mt.is_blended() {
+            extra.push("alpha blend (stochastic)".into());
+        }
+    }
+    let extra = if extra.is_empty() {
+        String::new()
+    } else {
+        format!("; {}", extra.join("; "))
+    };
+    let name = if m.name.is_empty() {
+        "(unnamed)"
+    } else {
+        &m.name
+    };
+    format!("{name}: {bsdf}{extra}")
+}
+
+fn textures(o: &mut String, s: &Scene) {
     let t = &s.textures;
     let _ = writeln!(o, "textures: {}", t.table.len());
     for (i, (g, info)) in t.table.iter().zip(&t.info).enumerate() {
@@ -321,6 +342,9 @@ pub fn describe(path: &str, s: &Scene) -> String {
             }
         );
     }
+}
+
+fn lights(o: &mut String, s: &Scene) {
     let emitters = s.emitter_triangles().len();
     let _ = writeln!(
         o,
@@ -359,6 +383,12 @@ pub fn describe(path: &str, s: &Scene) -> String {
         };
         let _ = writeln!(o, "  {i}: {d}");
     }
+}
+
+/// Triangles, bounds, the kernel's features and what the GPU holds.
+fn geometry(o: &mut String, s: &Scene) {
+    let t = &s.textures;
+    let emitters = s.emitter_triangles().len();
     let (lo, hi) = s.bounds();
     let _ = writeln!(o, "triangles: {}", s.triangles.len());
     let _ = writeln!(o, "bounds: min {} max {}", rgb(lo), rgb(hi));
@@ -413,9 +443,4 @@ pub fn describe(path: &str, s: &Scene) -> String {
         uv_bytes,
         (size_of::<Triangle>() + size_of::<TriangleShading>()) as f64 + uv_bytes,
     );
-    let _ = writeln!(o, "warnings: {}", s.warnings.len());
-    for w in &s.warnings {
-        let _ = writeln!(o, "  {}", one_line(w));
-    }
-    o
 }

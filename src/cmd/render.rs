@@ -68,8 +68,9 @@ fn control_stats(
     v
 }
 
-pub fn run(args: &RenderArgs) -> Result<()> {
-    let start = Instant::now();
+/// Everything about the arguments that can be refused before the scene is
+/// read; the output formats, in `args.outputs`' order.
+fn check_args(args: &RenderArgs) -> Result<Vec<OutputFormat>> {
     check_params(&args.scene)?;
     for o in args.outputs.iter().chain(&args.stats) {
         if super::outputs::names_same(o, &args.scene.scene) || same_file(o, &args.scene.scene) {
@@ -95,7 +96,6 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         bail!("{}: given both as an image and as --stats", s.display());
     }
     check_scene_path(&args.scene.scene)?;
-    let shard = args.shard.unwrap_or(Shard::WHOLE);
     if args.shard.is_some() && args.scene.opts.time_limit.is_some() {
         bail!(
             "--shard and --time-limit cannot be combined (a shard's samples are fixed in advance)"
@@ -109,6 +109,51 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     if args.variance && !formats.contains(&OutputFormat::Exr) {
         eprintln!("glint: warning: --variance: no .exr output to hold it");
     }
+    Ok(formats)
+}
+
+/// The `--stats` record of a finished render.
+fn stats_json(
+    args: &RenderArgs,
+    scene: &glint::cpu::Scene,
+    opts: &glint::cpu::RenderOptions,
+    r: &glint::backend::BackendRender,
+    load_seconds: f64,
+) -> serde_json::Value {
+    let st = Stats {
+        // The backend that ran (`auto` resolved).
+        backend: r.backend.name(),
+        device: r.device.clone(),
+        driver: r.driver.clone(),
+        scene: args.scene.scene.display().to_string(),
+        width: opts.width,
+        height: opts.height,
+        spp: r.film.spp,
+        max_depth: opts.max_depth,
+        seed: opts.seed,
+        camera: scene
+            .cameras
+            .get(opts.camera)
+            .map(|c| c.name.clone().unwrap_or_else(|| opts.camera.to_string())),
+        triangles: scene.triangles.len(),
+        emitters: scene.emitter_triangles().len(),
+        lights: scene.lights.len(),
+        threads: r.threads,
+        setup_seconds: load_seconds + r.setup_seconds,
+        render_seconds: r.render_seconds,
+        rays: r.rays,
+        options: opts,
+        kernel: r.kernel.map(|k| k.name()),
+        traversal: r.traversal.map(|t| t.name()),
+        features: r.features.names(),
+    };
+    control_stats(st.to_json(), &r.film, opts)
+}
+
+pub fn run(args: &RenderArgs) -> Result<()> {
+    let start = Instant::now();
+    let formats = check_args(args)?;
+    let shard = args.shard.unwrap_or(Shard::WHOLE);
     super::QUIET.store(args.quiet, std::sync::atomic::Ordering::Relaxed);
 
     let mut outputs = Outputs::new();
@@ -152,34 +197,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         outputs.write(slot, |w| encode(&r.film, w, format, &meta, args.variance))?;
     }
     if let Some(slot) = stats_slot {
-        let st = Stats {
-            // The backend that ran (`auto` resolved).
-            backend: r.backend.name(),
-            device: r.device.clone(),
-            driver: r.driver.clone(),
-            scene: args.scene.scene.display().to_string(),
-            width: opts.width,
-            height: opts.height,
-            spp: r.film.spp,
-            max_depth: opts.max_depth,
-            seed: opts.seed,
-            camera: scene
-                .cameras
-                .get(opts.camera)
-                .map(|c| c.name.clone().unwrap_or_else(|| opts.camera.to_string())),
-            triangles: scene.triangles.len(),
-            emitters: scene.emitter_triangles().len(),
-            lights: scene.lights.len(),
-            threads: r.threads,
-            setup_seconds: load_seconds + r.setup_seconds,
-            render_seconds: r.render_seconds,
-            rays: r.rays,
-            options: &opts,
-            kernel: r.kernel.map(|k| k.name()),
-            traversal: r.traversal.map(|t| t.name()),
-            features: r.features.names(),
-        };
-        let json = control_stats(st.to_json(), &r.film, &opts);
+        let json = stats_json(args, &scene, &opts, &r, load_seconds);
         outputs.write(slot, |w| {
             serde_json::to_writer_pretty(&mut *w, &json)?;
             use std::io::Write;

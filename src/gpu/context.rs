@@ -345,76 +345,9 @@ impl Context {
         let (queue_family, timestamp_valid_bits) = candidate.queue.expect("filtered");
         let pd = candidate.pd;
 
-        // Driver name and info (core in 1.2; every device we accept is 1.2+).
-        let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
-        let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
-        unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
-        let driver = {
-            let name = cstr_array(driver_props.driver_name_as_c_str());
-            let info = cstr_array(driver_props.driver_info_as_c_str());
-            if info.is_empty() {
-                name
-            } else {
-                format!("{name} {info}")
-            }
-        };
+        let driver = driver_name(&instance, pd);
 
-        // Enable the optional shader features kernels may use when the device
-        // has them; robustBufferAccess stays off (bounds checks cost speed and
-        // kernels index in range).
-        let mut have11 = vk::PhysicalDeviceVulkan11Features::default();
-        let mut have12 = vk::PhysicalDeviceVulkan12Features::default();
-        let mut have = vk::PhysicalDeviceFeatures2::default()
-            .push_next(&mut have11)
-            .push_next(&mut have12);
-        unsafe { instance.get_physical_device_features2(pd, &mut have) };
-        let have10 = have.features;
-        let features10 = vk::PhysicalDeviceFeatures::default()
-            .shader_int64(have10.shader_int64 == vk::TRUE)
-            .shader_int16(have10.shader_int16 == vk::TRUE)
-            .shader_float64(have10.shader_float64 == vk::TRUE);
-        let mut features11 = vk::PhysicalDeviceVulkan11Features::default()
-            .storage_buffer16_bit_access(have11.storage_buffer16_bit_access == vk::TRUE);
-        let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
-            .scalar_block_layout(have12.scalar_block_layout == vk::TRUE)
-            .shader_int8(have12.shader_int8 == vk::TRUE)
-            .storage_buffer8_bit_access(have12.storage_buffer8_bit_access == vk::TRUE)
-            .uniform_buffer_standard_layout(have12.uniform_buffer_standard_layout == vk::TRUE)
-            .vulkan_memory_model(have12.vulkan_memory_model == vk::TRUE)
-            // glslang emits Device-scope atomics, which the memory model
-            // only allows with this feature on.
-            .vulkan_memory_model_device_scope(have12.vulkan_memory_model_device_scope == vk::TRUE)
-            .host_query_reset(have12.host_query_reset == vk::TRUE);
-        let mut accel_features = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default()
-            .acceleration_structure(true);
-        let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-        let device_extensions = if ray_query {
-            check_ray_query(&instance, pd, &candidate.name, &have12)?;
-            features12 = features12.buffer_device_address(true);
-            RAY_QUERY_EXTENSIONS.map(CStr::as_ptr).to_vec()
-        } else {
-            Vec::new()
-        };
-        let mut features = vk::PhysicalDeviceFeatures2::default()
-            .features(features10)
-            .push_next(&mut features11)
-            .push_next(&mut features12);
-        if ray_query {
-            features = features
-                .push_next(&mut accel_features)
-                .push_next(&mut rq_features);
-        }
-
-        let priorities = [1.0f32];
-        let queue_infos = [vk::DeviceQueueCreateInfo::default()
-            .queue_family_index(queue_family)
-            .queue_priorities(&priorities)];
-        let device_info = vk::DeviceCreateInfo::default()
-            .queue_create_infos(&queue_infos)
-            .enabled_extension_names(&device_extensions)
-            .push_next(&mut features);
-        let device = unsafe { instance.create_device(pd, &device_info, None) }
-            .map_err(vk_err("vkCreateDevice"))?;
+        let device = create_device(&instance, pd, queue_family, ray_query, &candidate.name)?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
         let pool_info = vk::CommandPoolCreateInfo::default()
@@ -449,20 +382,7 @@ impl Context {
             }
         };
 
-        let unified_memory = {
-            let mem = unsafe { instance.get_physical_device_memory_properties(pd) };
-            let host =
-                vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
-            // Every device-local type is also host-visible and coherent, so
-            // whatever the allocator picks for GpuOnly can be written directly.
-            mem.memory_types_as_slice()
-                .iter()
-                .filter(|t| {
-                    t.property_flags
-                        .contains(vk::MemoryPropertyFlags::DEVICE_LOCAL)
-                })
-                .all(|t| t.property_flags.contains(host))
-        };
+        let unified_memory = unified_memory(&instance, pd);
 
         let info = DeviceInfo {
             name: candidate.name,
@@ -761,4 +681,100 @@ impl Drop for Context {
             self.instance.destroy_instance(None);
         }
     }
+}
+
+/// The driver's name and info (core in 1.2; every device glint accepts is
+/// 1.2+).
+fn driver_name(instance: &ash::Instance, pd: vk::PhysicalDevice) -> String {
+    let mut driver_props = vk::PhysicalDeviceDriverProperties::default();
+    let mut props2 = vk::PhysicalDeviceProperties2::default().push_next(&mut driver_props);
+    unsafe { instance.get_physical_device_properties2(pd, &mut props2) };
+    let name = cstr_array(driver_props.driver_name_as_c_str());
+    let info = cstr_array(driver_props.driver_info_as_c_str());
+    if info.is_empty() {
+        name
+    } else {
+        format!("{name} {info}")
+    }
+}
+
+/// The logical device: the optional shader features kernels may use where
+/// the device has them, and the ray-query extensions with `ray_query`.
+fn create_device(
+    instance: &ash::Instance,
+    pd: vk::PhysicalDevice,
+    queue_family: u32,
+    ray_query: bool,
+    name: &str,
+) -> Result<ash::Device, GpuError> {
+    // Enable the optional shader features kernels may use when the device
+    // has them; robustBufferAccess stays off (bounds checks cost speed and
+    // kernels index in range).
+    let mut have11 = vk::PhysicalDeviceVulkan11Features::default();
+    let mut have12 = vk::PhysicalDeviceVulkan12Features::default();
+    let mut have = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut have11)
+        .push_next(&mut have12);
+    unsafe { instance.get_physical_device_features2(pd, &mut have) };
+    let have10 = have.features;
+    let features10 = vk::PhysicalDeviceFeatures::default()
+        .shader_int64(have10.shader_int64 == vk::TRUE)
+        .shader_int16(have10.shader_int16 == vk::TRUE)
+        .shader_float64(have10.shader_float64 == vk::TRUE);
+    let mut features11 = vk::PhysicalDeviceVulkan11Features::default()
+        .storage_buffer16_bit_access(have11.storage_buffer16_bit_access == vk::TRUE);
+    let mut features12 = vk::PhysicalDeviceVulkan12Features::default()
+        .scalar_block_layout(have12.scalar_block_layout == vk::TRUE)
+        .shader_int8(have12.shader_int8 == vk::TRUE)
+        .storage_buffer8_bit_access(have12.storage_buffer8_bit_access == vk::TRUE)
+        .uniform_buffer_standard_layout(have12.uniform_buffer_standard_layout == vk::TRUE)
+        .vulkan_memory_model(have12.vulkan_memory_model == vk::TRUE)
+        // glslang emits Device-scope atomics, which the memory model
+        // only allows with this feature on.
+        .vulkan_memory_model_device_scope(have12.vulkan_memory_model_device_scope == vk::TRUE)
+        .host_query_reset(have12.host_query_reset == vk::TRUE);
+    let mut accel_features =
+        vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
+    let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
+    let device_extensions = if ray_query {
+        check_ray_query(instance, pd, name, &have12)?;
+        features12 = features12.buffer_device_address(true);
+        RAY_QUERY_EXTENSIONS.map(CStr::as_ptr).to_vec()
+    } else {
+        Vec::new()
+    };
+    let mut features = vk::PhysicalDeviceFeatures2::default()
+        .features(features10)
+        .push_next(&mut features11)
+        .push_next(&mut features12);
+    if ray_query {
+        features = features
+            .push_next(&mut accel_features)
+            .push_next(&mut rq_features);
+    }
+
+    let priorities = [1.0f32];
+    let queue_infos = [vk::DeviceQueueCreateInfo::default()
+        .queue_family_index(queue_family)
+        .queue_priorities(&priorities)];
+    let device_info = vk::DeviceCreateInfo::default()
+        .queue_create_infos(&queue_infos)
+        .enabled_extension_names(&device_extensions)
+        .push_next(&mut features);
+    unsafe { instance.create_device(pd, &device_info, None) }.map_err(vk_err("vkCreateDevice"))
+}
+
+/// Whether every device-local memory type is also host-visible and
+/// coherent, so whatever the allocator picks for GpuOnly can be written
+/// directly.
+fn unified_memory(instance: &ash::Instance, pd: vk::PhysicalDevice) -> bool {
+    let mem = unsafe { instance.get_physical_device_memory_properties(pd) };
+    let host = vk::MemoryPropertyFlags::HOST_VISIBLE | vk::MemoryPropertyFlags::HOST_COHERENT;
+    mem.memory_types_as_slice()
+        .iter()
+        .filter(|t| {
+            t.property_flags
+                .contains(vk::MemoryPropertyFlags::DEVICE_LOCAL)
+        })
+        .all(|t| t.property_flags.contains(host))
 }

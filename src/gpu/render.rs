@@ -264,6 +264,145 @@ pub struct KernelConfig<'k> {
     pub hardware: Option<&'k [bool]>,
 }
 
+/// The buffers one film render binds (shaders/bindings.glsl, 0-15), but
+/// for the active-pixel mask and the ray-query ones.
+struct FilmBuffers<'c> {
+    params: Buffer<'c>,
+    triangles: Buffer<'c>,
+    nodes: Buffer<'c>,
+    shading: Buffer<'c>,
+    materials: Buffer<'c>,
+    emitters: Buffer<'c>,
+    lights: Buffer<'c>,
+    accum: Buffer<'c>,
+    rays: Buffer<'c>,
+    texels: Buffer<'c>,
+    textures: Buffer<'c>,
+    material_textures: Buffer<'c>,
+    uvs: Buffer<'c>,
+    env_texels: Buffer<'c>,
+    env_dist: Buffer<'c>,
+    ms_tables: Buffer<'c>,
+}
+
+impl<'c> FilmBuffers<'c> {
+    fn new(
+        ctx: &'c Context,
+        scene: &SceneBytes<'_>,
+        width: u32,
+        height: u32,
+    ) -> Result<Self, GpuError> {
+        let pixels = width as u64 * height as u64;
+        let storage =
+            |name: &str, bytes: &[u8]| Buffer::from_slice(ctx, name, BufferKind::Storage, bytes);
+        let params = Buffer::from_slice(ctx, "params", BufferKind::Uniform, scene.params)?;
+        let triangles = storage("triangles", scene.triangles)?;
+        let nodes = storage("bvh nodes", scene.bvh_nodes)?;
+        let shading = storage("shading", scene.shading)?;
+        let materials = storage("materials", scene.materials)?;
+        let emitters = storage("emitters", scene.emitters)?;
+        let lights = storage("lights", scene.lights)?;
+        let texels = storage("texels", scene.texels)?;
+        let textures = storage("textures", scene.textures)?;
+        let material_textures = storage("material textures", scene.material_textures)?;
+        let uvs = storage("triangle uvs", scene.uvs)?;
+        let env_texels = storage("environment map", scene.env_texels)?;
+        let env_dist = storage("environment map distribution", scene.env_dist)?;
+        let ms_tables = storage(
+            "multiscatter tables",
+            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
+        )?;
+        let accum = Buffer::new(
+            ctx,
+            &format!("accumulation film ({width}x{height} pixels, 64 bytes each)"),
+            BufferKind::Storage,
+            pixels * 64,
+        )?;
+        let rays = Buffer::new(
+            ctx,
+            &format!("ray counts ({width}x{height} pixels)"),
+            BufferKind::Storage,
+            pixels * 4,
+        )?;
+        Ok(FilmBuffers {
+            params,
+            triangles,
+            nodes,
+            shading,
+            materials,
+            emitters,
+            lights,
+            accum,
+            rays,
+            texels,
+            textures,
+            material_textures,
+            uvs,
+            env_texels,
+            env_dist,
+            ms_tables,
+        })
+    }
+
+    /// In binding order.
+    fn bindings(&self) -> Vec<&Buffer<'c>> {
+        vec![
+            &self.params,
+            &self.triangles,
+            &self.nodes,
+            &self.shading,
+            &self.materials,
+            &self.emitters,
+            &self.lights,
+            &self.accum,
+            &self.rays,
+            &self.texels,
+            &self.textures,
+            &self.material_textures,
+            &self.uvs,
+            &self.env_texels,
+            &self.env_dist,
+            &self.ms_tables,
+        ]
+    }
+}
+
+/// One batch: the dispatch between two timestamps (where the device has
+/// them). Returns (wall seconds, device seconds; wall where no timer).
+fn timed_dispatch(
+    ctx: &Context,
+    kernel: &Kernel,
+    timer: Option<&Timer>,
+    push: &SamplePush,
+    grid: [u32; 3],
+) -> Result<(f64, f64), GpuError> {
+    let t = Instant::now();
+    let mut recorded = Ok(());
+    ctx.submit_and_wait(|cmd| unsafe {
+        if let Some(timer) = timer {
+            ctx.device.cmd_reset_query_pool(cmd, timer.pool, 0, 2);
+            ctx.device
+                .cmd_write_timestamp(cmd, vk::PipelineStageFlags::TOP_OF_PIPE, timer.pool, 0);
+        }
+        recorded = kernel.record_dispatch(cmd, bytemuck::bytes_of(push), grid);
+        if let Some(timer) = timer {
+            ctx.device.cmd_write_timestamp(
+                cmd,
+                vk::PipelineStageFlags::BOTTOM_OF_PIPE,
+                timer.pool,
+                1,
+            );
+        }
+    })?;
+    recorded?;
+    let wall = t.elapsed().as_secs_f64();
+    let seconds = match timer {
+        Some(timer) => timer.seconds()?,
+        None => wall,
+    };
+    Ok((wall, seconds))
+}
+
 /// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
 /// of samples taken.
 pub fn render_film_range(
@@ -283,43 +422,13 @@ pub fn render_film_range(
     }
     let setup_start = Instant::now();
     let pixels = width as u64 * height as u64;
-    let storage =
-        |name: &str, bytes: &[u8]| Buffer::from_slice(ctx, name, BufferKind::Storage, bytes);
-    let params = Buffer::from_slice(ctx, "params", BufferKind::Uniform, scene.params)?;
-    let triangles = storage("triangles", scene.triangles)?;
-    let nodes = storage("bvh nodes", scene.bvh_nodes)?;
-    let shading = storage("shading", scene.shading)?;
-    let materials = storage("materials", scene.materials)?;
-    let emitters = storage("emitters", scene.emitters)?;
-    let lights = storage("lights", scene.lights)?;
-    let texels = storage("texels", scene.texels)?;
-    let textures = storage("textures", scene.textures)?;
-    let material_textures = storage("material textures", scene.material_textures)?;
-    let uvs = storage("triangle uvs", scene.uvs)?;
-    let env_texels = storage("environment map", scene.env_texels)?;
-    let env_dist = storage("environment map distribution", scene.env_dist)?;
-    let ms_tables = storage(
-        "multiscatter tables",
-        bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
-    )?;
-    let accum = Buffer::new(
-        ctx,
-        &format!("accumulation film ({width}x{height} pixels, 64 bytes each)"),
-        BufferKind::Storage,
-        pixels * 64,
-    )?;
-    let rays = Buffer::new(
-        ctx,
-        &format!("ray counts ({width}x{height} pixels)"),
-        BufferKind::Storage,
-        pixels * 4,
-    )?;
-
+    let b = FilmBuffers::new(ctx, scene, width, height)?;
+    let (triangles, accum, rays) = (&b.triangles, &b.accum, &b.rays);
     let accel = match kernel_cfg.hardware {
         Some(masked) => {
             let count = (scene.triangles.len() / 48) as u32;
             let alpha = |i: u32| masked.get(i as usize).copied().unwrap_or(false);
-            Some(Accel::build(ctx, &triangles, count, &alpha)?)
+            Some(Accel::build(ctx, triangles, count, &alpha)?)
         }
         None => None,
     };
@@ -337,25 +446,8 @@ pub fn render_film_range(
         options.acceleration_structure = a.tlas();
     }
     let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &options)?;
-    let mut buffers = vec![
-        &params,
-        &triangles,
-        &nodes,
-        &shading,
-        &materials,
-        &emitters,
-        &lights,
-        &accum,
-        &rays,
-        &texels,
-        &textures,
-        &material_textures,
-        &uvs,
-        &env_texels,
-        &env_dist,
-        &ms_tables,
-        &active,
-    ];
+    let mut buffers = b.bindings();
+    buffers.push(&active);
     if let Some(a) = &accel {
         buffers.push(&a.tri_map);
     }
@@ -386,34 +478,7 @@ pub fn render_film_range(
             sample_start: range.start.wrapping_add(done),
             sample_count: count,
         };
-        let t = Instant::now();
-        let mut recorded = Ok(());
-        ctx.submit_and_wait(|cmd| unsafe {
-            if let Some(timer) = &timer {
-                ctx.device.cmd_reset_query_pool(cmd, timer.pool, 0, 2);
-                ctx.device.cmd_write_timestamp(
-                    cmd,
-                    vk::PipelineStageFlags::TOP_OF_PIPE,
-                    timer.pool,
-                    0,
-                );
-            }
-            recorded = kernel.record_dispatch(cmd, bytemuck::bytes_of(&push), grid);
-            if let Some(timer) = &timer {
-                ctx.device.cmd_write_timestamp(
-                    cmd,
-                    vk::PipelineStageFlags::BOTTOM_OF_PIPE,
-                    timer.pool,
-                    1,
-                );
-            }
-        })?;
-        recorded?;
-        let wall_batch = t.elapsed().as_secs_f64();
-        let seconds = match &timer {
-            Some(timer) => timer.seconds()?,
-            None => wall_batch,
-        };
+        let (wall_batch, seconds) = timed_dispatch(ctx, &kernel, timer.as_ref(), &push, grid)?;
         render_seconds += seconds;
         done += count;
         batches.push(count);

@@ -204,6 +204,91 @@ fn normal_matrix(m: Mat3) -> Mat3 {
     if m.determinant() < 0.0 { -cof } else { cof }
 }
 
+/// A primitive's vertex data as read (and checked) from its accessors.
+struct PrimData {
+    positions: Vec<[f32; 3]>,
+    normals: Option<Vec<[f32; 3]>>,
+    tangents: Option<Vec<[f32; 4]>>,
+    /// TEXCOORD_0 (read when textures are used or for dP/du tangents) and
+    /// TEXCOORD_1 (when textures are used).
+    uvs: Option<Vec<[f32; 2]>>,
+    uvs1: Option<Vec<[f32; 2]>>,
+    indices: Option<Vec<u32>>,
+}
+
+fn read_primitive(
+    src: &Source,
+    prim: &gltf::Primitive,
+    want_uvs: bool,
+) -> Result<PrimData, String> {
+    let root = src.doc.as_json();
+    let pos_acc = prim
+        .get(&gltf::Semantic::Positions)
+        .ok_or_else(|| "has no POSITION attribute".to_string())?;
+    let positions = read_vec::<3>(root, &src.buffers, pos_acc.index())?;
+    if let Some(k) = positions.iter().position(|p| !Vec3::from(*p).is_finite()) {
+        return Err(format!("POSITION {k} is not finite: {:?}", positions[k]));
+    }
+    let n_verts = positions.len();
+    let attr = |sem: gltf::Semantic| -> Option<usize> { prim.get(&sem).map(|a| a.index()) };
+    let same_count = |name: &str, len: usize| -> Result<(), String> {
+        if len == n_verts {
+            Ok(())
+        } else {
+            Err(format!(
+                "{name} has {len} elements but POSITION has {n_verts}"
+            ))
+        }
+    };
+    let normals = match attr(gltf::Semantic::Normals) {
+        Some(a) => {
+            let v = read_vec::<3>(root, &src.buffers, a)?;
+            same_count("NORMAL", v.len())?;
+            if let Some(k) = v.iter().position(|n| !Vec3::from(*n).is_finite()) {
+                return Err(format!("NORMAL {k} is not finite: {:?}", v[k]));
+            }
+            Some(v)
+        }
+        None => None,
+    };
+    let tangents = match attr(gltf::Semantic::Tangents) {
+        Some(a) => {
+            let v = read_vec::<4>(root, &src.buffers, a)?;
+            same_count("TANGENT", v.len())?;
+            Some(v)
+        }
+        None => None,
+    };
+    let read_uv = |set: u32| -> Result<Option<Vec<[f32; 2]>>, String> {
+        match attr(gltf::Semantic::TexCoords(set)) {
+            Some(a) => {
+                let v = read_vec::<2>(root, &src.buffers, a)?;
+                same_count(&format!("TEXCOORD_{set}"), v.len())?;
+                Ok(Some(v))
+            }
+            None => Ok(None),
+        }
+    };
+    let uvs = if tangents.is_none() || want_uvs {
+        read_uv(0)?
+    } else {
+        None
+    };
+    let uvs1 = if want_uvs { read_uv(1)? } else { None };
+    let indices = match prim.indices() {
+        Some(a) => Some(read_indices(root, &src.buffers, a.index())?),
+        None => None,
+    };
+    Ok(PrimData {
+        positions,
+        normals,
+        tangents,
+        uvs,
+        uvs1,
+        indices,
+    })
+}
+
 fn add_mesh(
     src: &Source,
     mesh: &gltf::Mesh,
@@ -213,7 +298,6 @@ fn add_mesh(
     out: &mut Collected,
     skipped: &mut Skipped,
 ) -> Result<(), String> {
-    let root = src.doc.as_json();
     let linear = Mat3::from_mat4(world);
     let normal_m = normal_matrix(linear);
     let flip = linear.determinant() < 0.0;
@@ -241,66 +325,15 @@ fn add_mesh(
         if prim.morph_targets().len() > 0 {
             skipped.morphs += 1;
         }
-        let pos_acc = prim
-            .get(&gltf::Semantic::Positions)
-            .ok_or_else(|| err("has no POSITION attribute".into()))?;
-        let positions = read_vec::<3>(root, &src.buffers, pos_acc.index()).map_err(err)?;
-        if let Some(k) = positions.iter().position(|p| !Vec3::from(*p).is_finite()) {
-            return Err(err(format!(
-                "POSITION {k} is not finite: {:?}",
-                positions[k]
-            )));
-        }
+        let PrimData {
+            positions,
+            normals,
+            tangents,
+            uvs,
+            uvs1,
+            indices,
+        } = read_primitive(src, &prim, want_uvs).map_err(err)?;
         let n_verts = positions.len();
-        let attr = |sem: gltf::Semantic| -> Option<usize> { prim.get(&sem).map(|a| a.index()) };
-        let same_count = |name: &str, len: usize| -> Result<(), String> {
-            if len == n_verts {
-                Ok(())
-            } else {
-                Err(err(format!(
-                    "{name} has {len} elements but POSITION has {n_verts}"
-                )))
-            }
-        };
-        let normals = match attr(gltf::Semantic::Normals) {
-            Some(a) => {
-                let v = read_vec::<3>(root, &src.buffers, a).map_err(err)?;
-                same_count("NORMAL", v.len())?;
-                if let Some(k) = v.iter().position(|n| !Vec3::from(*n).is_finite()) {
-                    return Err(err(format!("NORMAL {k} is not finite: {:?}", v[k])));
-                }
-                Some(v)
-            }
-            None => None,
-        };
-        let tangents = match attr(gltf::Semantic::Tangents) {
-            Some(a) => {
-                let v = read_vec::<4>(root, &src.buffers, a).map_err(err)?;
-                same_count("TANGENT", v.len())?;
-                Some(v)
-            }
-            None => None,
-        };
-        let read_uv = |set: u32| -> Result<Option<Vec<[f32; 2]>>, String> {
-            match attr(gltf::Semantic::TexCoords(set)) {
-                Some(a) => {
-                    let v = read_vec::<2>(root, &src.buffers, a).map_err(err)?;
-                    same_count(&format!("TEXCOORD_{set}"), v.len())?;
-                    Ok(Some(v))
-                }
-                None => Ok(None),
-            }
-        };
-        let uvs = if tangents.is_none() || want_uvs {
-            read_uv(0)?
-        } else {
-            None
-        };
-        let uvs1 = if want_uvs { read_uv(1)? } else { None };
-        let indices = match prim.indices() {
-            Some(a) => Some(read_indices(root, &src.buffers, a.index()).map_err(err)?),
-            None => None,
-        };
         let n_refs = indices.as_ref().map_or(n_verts, Vec::len);
         if mode == Mode::Triangles && n_refs % 3 != 0 {
             let what = if indices.is_some() { "index" } else { "vertex" };
@@ -395,72 +428,115 @@ fn add_mesh(
                 flags: 0,
             });
             let geo = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-            let mut sh = TriangleShading::default();
-            let shading_normals = normals.as_ref().and_then(|ns| {
-                let n = v.map(|k| (normal_m * Vec3::from(ns[k])).normalize_or_zero());
-                n.iter().all(|x| *x != Vec3::ZERO).then_some(n)
-            });
-            match shading_normals {
-                Some(n) => sh.n = n.map(|x| x.extend(1.0).to_array()),
-                // w = 0: no usable NORMAL; the geometric normal is stored for
-                // convenience and readers use the geometric normal.
-                None => sh.n = [geo.extend(0.0).to_array(); 3],
-            }
             // The file's tangent (xyz) at each of our corners.
             let given: Option<[[f32; 4]; 3]> = match (&tangents, &mikk) {
                 (Some(ts), _) => Some(v.map(|k| ts[k])),
                 (None, Some(m)) => Some(corner.map(|j| m[3 * t + j])),
                 _ => None,
             };
-            if let Some(ts) = &given {
-                for (slot, tg) in sh.t.iter_mut().zip(ts) {
-                    let t = linear * Vec3::from_slice(&tg[..3]);
-                    let t = t.normalize_or_zero();
-                    *slot = t.extend(if t != Vec3::ZERO { 1.0 } else { 0.0 }).to_array();
-                }
-            } else if let Some(uv) = &uvs {
-                let t = dpdu(p, v.map(|k| Vec2::from(uv[k])));
-                let w = if t != Vec3::ZERO { 1.0 } else { 0.0 };
-                sh.t = [t.extend(w).to_array(); 3];
-            }
+            let sh = triangle_shading(
+                v,
+                p,
+                geo,
+                normals.as_deref(),
+                normal_m,
+                linear,
+                given.as_ref(),
+                uvs.as_deref(),
+            );
             out.shading.push(sh);
             if want_uvs {
-                let mut tuv = TriangleUv::default();
-                for (j, &k) in v.iter().enumerate() {
-                    if let Some(uv) = &uvs {
-                        tuv.uv[j][0] = uv[k][0];
-                        tuv.uv[j][1] = uv[k][1];
-                    }
-                    if let Some(uv) = &uvs1 {
-                        tuv.uv[j][2] = uv[k][0];
-                        tuv.uv[j][3] = uv[k][1];
-                    }
-                }
-                // A mirroring transform turns cross(N, T) against the
-                // bitangent it carries: the sign flips with it.
-                let mirror = if flip { -1.0 } else { 1.0 };
-                tuv.extra[0] = match (&given, &uvs) {
-                    // glTF: bitangent = cross(normal, tangent.xyz) * w.
-                    (Some(ts), _) if ts[0][3] < 0.0 => -mirror,
-                    (Some(_), _) => mirror,
-                    // Without TANGENT: the sign that makes the bitangent
-                    // point up the image (-dP/dv, glTF's v running down).
-                    (None, Some(uv)) => {
-                        let uvv = v.map(|k| Vec2::from(uv[k]));
-                        let (tu, tv) = (dpdu(p, uvv), dpdv(p, uvv));
-                        if geo.cross(tu).dot(-tv) < 0.0 {
-                            -1.0
-                        } else {
-                            1.0
-                        }
-                    }
-                    _ => 1.0,
-                };
-                out.uvs.push(tuv);
+                let uv = (uvs.as_deref(), uvs1.as_deref());
+                out.uvs
+                    .push(triangle_uv(v, p, geo, given.as_ref(), uv, flip));
             }
         }
     }
     Ok(())
+}
+
+/// A triangle's shading record: its vertices' normals (through the normal
+/// matrix; the geometric normal with w = 0 where NORMAL is missing or
+/// degenerate) and tangents (`given` per corner, else dP/du from
+/// TEXCOORD_0), `v` its vertex indices and `p` its world positions.
+#[allow(clippy::too_many_arguments)]
+fn triangle_shading(
+    v: [usize; 3],
+    p: [Vec3; 3],
+    geo: Vec3,
+    normals: Option<&[[f32; 3]]>,
+    normal_m: Mat3,
+    linear: Mat3,
+    given: Option<&[[f32; 4]; 3]>,
+    uvs: Option<&[[f32; 2]]>,
+) -> TriangleShading {
+    let mut sh = TriangleShading::default();
+    let shading_normals = normals.and_then(|ns| {
+        let n = v.map(|k| (normal_m * Vec3::from(ns[k])).normalize_or_zero());
+        n.iter().all(|x| *x != Vec3::ZERO).then_some(n)
+    });
+    match shading_normals {
+        Some(n) => sh.n = n.map(|x| x.extend(1.0).to_array()),
+        // w = 0: no usable NORMAL; the geometric normal is stored for
+        // convenience and readers use the geometric normal.
+        None => sh.n = [geo.extend(0.0).to_array(); 3],
+    }
+    if let Some(ts) = given {
+        for (slot, tg) in sh.t.iter_mut().zip(ts) {
+            let t = linear * Vec3::from_slice(&tg[..3]);
+            let t = t.normalize_or_zero();
+            *slot = t.extend(if t != Vec3::ZERO { 1.0 } else { 0.0 }).to_array();
+        }
+    } else if let Some(uv) = uvs {
+        let t = dpdu(p, v.map(|k| Vec2::from(uv[k])));
+        let w = if t != Vec3::ZERO { 1.0 } else { 0.0 };
+        sh.t = [t.extend(w).to_array(); 3];
+    }
+    sh
+}
+
+/// A triangle's texture coordinates (TEXCOORD_0 and _1 per corner) and its
+/// bitangent sign.
+fn triangle_uv(
+    v: [usize; 3],
+    p: [Vec3; 3],
+    geo: Vec3,
+    given: Option<&[[f32; 4]; 3]>,
+    (uvs, uvs1): (Option<&[[f32; 2]]>, Option<&[[f32; 2]]>),
+    flip: bool,
+) -> TriangleUv {
+    let mut tuv = TriangleUv::default();
+    for (j, &k) in v.iter().enumerate() {
+        if let Some(uv) = uvs {
+            tuv.uv[j][0] = uv[k][0];
+            tuv.uv[j][1] = uv[k][1];
+        }
+        if let Some(uv) = uvs1 {
+            tuv.uv[j][2] = uv[k][0];
+            tuv.uv[j][3] = uv[k][1];
+        }
+    }
+    // A mirroring transform turns cross(N, T) against the
+    // bitangent it carries: the sign flips with it.
+    let mirror = if flip { -1.0 } else { 1.0 };
+    tuv.extra[0] = match (given, uvs) {
+        // glTF: bitangent = cross(normal, tangent.xyz) * w.
+        (Some(ts), _) if ts[0][3] < 0.0 => -mirror,
+        (Some(_), _) => mirror,
+        // Without TANGENT: the sign that makes the bitangent
+        // point up the image (-dP/dv, glTF's v running down).
+        (None, Some(uv)) => {
+            let uvv = v.map(|k| Vec2::from(uv[k]));
+            let (tu, tv) = (dpdu(p, uvv), dpdv(p, uvv));
+            if geo.cross(tu).dot(-tv) < 0.0 {
+                -1.0
+            } else {
+                1.0
+            }
+        }
+        _ => 1.0,
+    };
+    tuv
 }
 
 /// The UV set (`texCoord`, as `KHR_texture_transform` may override it) of

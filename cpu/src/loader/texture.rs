@@ -88,57 +88,7 @@ pub fn collect(
                 &mut out,
             )?;
         }
-        let factor = pbr["baseColorFactor"].as_array();
-        let f = |k: usize| {
-            factor
-                .and_then(|a| a.get(k))
-                .and_then(Value::as_f64)
-                .unwrap_or(1.0) as f32
-        };
-        mt.base_factor = [f(0), f(1), f(2), 1.0];
-        mt.base_alpha = f(3);
-        let num = |v: &Value, d: f64| v.as_f64().unwrap_or(d) as f32;
-        mt.mr_factor = [
-            num(&pbr["metallicFactor"], 1.0),
-            num(&pbr["roughnessFactor"], 1.0),
-            num(
-                &ext["KHR_materials_transmission"]["transmissionFactor"],
-                0.0,
-            ),
-            num(&ext["KHR_materials_ior"]["ior"], 1.5),
-        ];
-        // The loader (`material::gltf_coat`) has checked these ranges.
-        let cc = &ext["KHR_materials_clearcoat"];
-        let sp = &ext["KHR_materials_specular"];
-        mt.coat_factor = [
-            num(&cc["clearcoatFactor"], 0.0),
-            num(&cc["clearcoatRoughnessFactor"], 0.0),
-            num(&sp["specularFactor"], 1.0),
-            0.0,
-        ];
-        let color = sp["specularColorFactor"].as_array();
-        let c = |k: usize| {
-            color
-                .and_then(|a| a.get(k))
-                .and_then(Value::as_f64)
-                .unwrap_or(1.0) as f32
-        };
-        mt.specular_color_factor = [c(0), c(1), c(2), 1.0];
-        match m["alphaMode"].as_str() {
-            Some("MASK") => {
-                let c = num(&m["alphaCutoff"], 0.5);
-                if !(c.is_finite() && c >= 0.0) {
-                    return Err(format!(
-                        "{label}: alphaCutoff must be finite and >= 0, got {c}"
-                    ));
-                }
-                mt.alpha_cutoff = c;
-            }
-            // Stochastic transparency (SceneTextures::alpha_pass): no
-            // sorting, no order-dependent compositing, unbiased.
-            Some("BLEND") => mt.blend = 1,
-            _ => {}
-        }
+        factors(m, &mut mt).map_err(|e| format!("{label}: {e}"))?;
         let textured_base =
             mt.base_color.is_some() || mt.metallic_roughness.is_some() || mt.has_coat_textures();
         mt.mode = if !textured_base {
@@ -157,6 +107,55 @@ pub fn collect(
         return Ok(SceneTextures::default());
     }
     Ok(out)
+}
+
+/// The factors a material's textures multiply, and its alpha mode. The
+/// loader (`material::gltf_coat`) has checked the coat's ranges.
+fn factors(m: &Value, mt: &mut MaterialTextures) -> Result<(), String> {
+    let pbr = &m["pbrMetallicRoughness"];
+    let ext = &m["extensions"];
+    let num = |v: &Value, d: f64| v.as_f64().unwrap_or(d) as f32;
+    // An RGB(A) array, 1 where absent.
+    let color = |v: &Value| {
+        let a = v.as_array();
+        [0, 1, 2, 3].map(|k| num(a.and_then(|a| a.get(k)).unwrap_or(&Value::Null), 1.0))
+    };
+    let [r, g, b, alpha] = color(&pbr["baseColorFactor"]);
+    mt.base_factor = [r, g, b, 1.0];
+    mt.base_alpha = alpha;
+    mt.mr_factor = [
+        num(&pbr["metallicFactor"], 1.0),
+        num(&pbr["roughnessFactor"], 1.0),
+        num(
+            &ext["KHR_materials_transmission"]["transmissionFactor"],
+            0.0,
+        ),
+        num(&ext["KHR_materials_ior"]["ior"], 1.5),
+    ];
+    let cc = &ext["KHR_materials_clearcoat"];
+    let sp = &ext["KHR_materials_specular"];
+    mt.coat_factor = [
+        num(&cc["clearcoatFactor"], 0.0),
+        num(&cc["clearcoatRoughnessFactor"], 0.0),
+        num(&sp["specularFactor"], 1.0),
+        0.0,
+    ];
+    let [r, g, b, _] = color(&sp["specularColorFactor"]);
+    mt.specular_color_factor = [r, g, b, 1.0];
+    match m["alphaMode"].as_str() {
+        Some("MASK") => {
+            let c = num(&m["alphaCutoff"], 0.5);
+            if !(c.is_finite() && c >= 0.0) {
+                return Err(format!("alphaCutoff must be finite and >= 0, got {c}"));
+            }
+            mt.alpha_cutoff = c;
+        }
+        // Stochastic transparency (SceneTextures::alpha_pass): no
+        // sorting, no order-dependent compositing, unbiased.
+        Some("BLEND") => mt.blend = 1,
+        _ => {}
+    }
+    Ok(())
 }
 
 /// One `textureInfo` (or absent: no texture).
