@@ -239,7 +239,7 @@ fn cell_color(status: u8, err: f64) -> RGBColor {
 fn draw_maps<DB: DrawingBackend>(
     root: DrawingArea<DB, Shift>,
     title: &str,
-    col_labels: &[String],
+    legend: &str,
     maps: &[Heatmap],
 ) -> Result<(), ChartError>
 where
@@ -256,10 +256,7 @@ where
         .map_err(err)?;
     root_title
         .draw(&Text::new(
-            format!(
-                "columns: cos theta_o = {}; green pass (darker: larger error), amber degrade, red fail",
-                col_labels.join(" ")
-            ),
+            legend.to_string(),
             (16, 36),
             (FONT, 12).into_font().color(&BLACK),
         ))
@@ -306,33 +303,25 @@ fn maps_size(maps: &[Heatmap]) -> (u32, u32) {
     (MAP_COLUMNS as u32 * MAP_PANEL_W, 60 + rows * MAP_PANEL_H)
 }
 
-/// The heat maps as an SVG document.
-pub fn heatmaps_svg(
-    title: &str,
-    col_labels: &[String],
-    maps: &[Heatmap],
-) -> Result<String, ChartError> {
+/// The heat maps as an SVG document; `legend` is the line under the title.
+pub fn heatmaps_svg(title: &str, legend: &str, maps: &[Heatmap]) -> Result<String, ChartError> {
     register_font()?;
     let mut s = String::new();
     {
         let root = SVGBackend::with_string(&mut s, maps_size(maps)).into_drawing_area();
-        draw_maps(root, title, col_labels, maps)?;
+        draw_maps(root, title, legend, maps)?;
     }
     Ok(s)
 }
 
 /// The heat maps as PNG bytes.
-pub fn heatmaps_png(
-    title: &str,
-    col_labels: &[String],
-    maps: &[Heatmap],
-) -> Result<Vec<u8>, ChartError> {
+pub fn heatmaps_png(title: &str, legend: &str, maps: &[Heatmap]) -> Result<Vec<u8>, ChartError> {
     register_font()?;
     let (w, h) = maps_size(maps);
     let mut buf = vec![0u8; (w * h * 3) as usize];
     {
         let root = BitMapBackend::with_buffer(&mut buf, (w, h)).into_drawing_area();
-        draw_maps(root, title, col_labels, maps)?;
+        draw_maps(root, title, legend, maps)?;
     }
     let img = image::RgbImage::from_raw(w, h, buf).expect("sized buffer");
     let mut out = std::io::Cursor::new(Vec::new());

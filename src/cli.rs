@@ -620,6 +620,12 @@ pub struct StabilityArgs {
     #[arg(long)]
     pub quick: bool,
 
+    /// The sampling methods' sweep instead (Veach's plate roughness x
+    /// light size, each technique at equal time): DIR/methods.md, .csv,
+    /// .svg and .png.
+    #[arg(long)]
+    pub methods: bool,
+
     /// Skip the GPU-vs-CPU half (no Vulkan device needed).
     #[arg(long)]
     pub cpu_only: bool,

@@ -7,4 +7,5 @@ pub mod cache;
 pub mod chart;
 pub mod gpu;
 pub mod heatmap;
+pub mod methods;
 pub mod stability;

@@ -6,6 +6,7 @@ use std::io::Write;
 
 use anyhow::{Context as _, Result, bail};
 use glint::gpu::{Context, ContextDesc};
+use glint::methods;
 use glint::stability::{self, COS, Size};
 
 use super::outputs::Outputs;
@@ -26,6 +27,9 @@ pub fn run(args: &StabilityArgs) -> Result<()> {
 }
 
 fn run_in(args: &StabilityArgs) -> Result<()> {
+    if args.methods {
+        return run_methods(args);
+    }
     let dir = &args.dir;
     let mut outputs = Outputs::new();
     let md_slot = outputs.reserve(&dir.join("stability.md"))?;
@@ -33,17 +37,7 @@ fn run_in(args: &StabilityArgs) -> Result<()> {
     let svg_slot = outputs.reserve(&dir.join("stability.svg"))?;
     let png_slot = outputs.reserve(&dir.join("stability.png"))?;
     let size = if args.quick { Size::Quick } else { Size::Full };
-    let ctx = if args.cpu_only {
-        None
-    } else {
-        Some(
-            Context::new(&ContextDesc {
-                device: args.device.as_deref(),
-                ..Default::default()
-            })
-            .context("the GPU half of the sweep needs a Vulkan device (--cpu-only skips it)")?,
-        )
-    };
+    let ctx = gpu_context(args)?;
     let device = ctx.as_ref().map(|c| c.info().name.clone());
     let rows = stability::run(size, ctx.as_ref())?;
     drop(ctx);
@@ -51,8 +45,12 @@ fn run_in(args: &StabilityArgs) -> Result<()> {
     let maps = stability::heatmaps(&rows);
     let labels: Vec<String> = COS.iter().map(|c| format!("{c:e}")).collect();
     let title = "glint stability: each BSDF over (parameter, cos theta_o)";
-    let svg = glint::chart::heatmaps_svg(title, &labels, &maps)?;
-    let png = glint::chart::heatmaps_png(title, &labels, &maps)?;
+    let legend = format!(
+        "columns: cos theta_o = {}; green pass (darker: larger error), amber degrade, red fail",
+        labels.join(" ")
+    );
+    let svg = glint::chart::heatmaps_svg(title, &legend, &maps)?;
+    let png = glint::chart::heatmaps_png(title, &legend, &maps)?;
     outputs.write(md_slot, |w| Ok(w.write_all(md.as_bytes())?))?;
     outputs.write(csv_slot, |w| {
         Ok(w.write_all(stability::csv(&rows).as_bytes())?)
@@ -67,6 +65,74 @@ fn run_in(args: &StabilityArgs) -> Result<()> {
     eprintln!(
         "glint: wrote {} ({} points, {fails} failing)",
         dir.join("stability.md").display(),
+        rows.len()
+    );
+    Ok(())
+}
+
+/// The Vulkan context of the GPU half, unless `--cpu-only`.
+fn gpu_context(args: &StabilityArgs) -> Result<Option<Context>> {
+    if args.cpu_only {
+        return Ok(None);
+    }
+    Ok(Some(
+        Context::new(&ContextDesc {
+            device: args.device.as_deref(),
+            ..Default::default()
+        })
+        .context("the GPU half of the sweep needs a Vulkan device (--cpu-only skips it)")?,
+    ))
+}
+
+/// `--methods`: the sampling methods' sweep (`glint::methods`) on the CPU
+/// and, unless `--cpu-only`, the GPU.
+fn run_methods(args: &StabilityArgs) -> Result<()> {
+    let dir = &args.dir;
+    let mut outputs = Outputs::new();
+    let md_slot = outputs.reserve(&dir.join("methods.md"))?;
+    let csv_slot = outputs.reserve(&dir.join("methods.csv"))?;
+    let svg_slot = outputs.reserve(&dir.join("methods.svg"))?;
+    let png_slot = outputs.reserve(&dir.join("methods.png"))?;
+    let sweep = methods::Sweep::new(args.quick);
+    let cpu = |s: &glint::cpu::Scene, o: &glint::cpu::RenderOptions| {
+        glint::cpu::render(s, o, &|_, _| {})
+            .map(|(f, st)| (f, st.render_seconds))
+            .map_err(|e| e.to_string())
+    };
+    let threads = rayon::current_num_threads();
+    let mut devices = vec![("cpu".to_string(), format!("{threads} threads"))];
+    let mut rows = methods::run(&sweep, "cpu", &cpu).map_err(anyhow::Error::msg)?;
+    if let Some(ctx) = gpu_context(args)? {
+        let gpu = |s: &glint::cpu::Scene, o: &glint::cpu::RenderOptions| {
+            glint::gpu::render::render_on(&ctx, s, o, &|_, _| {})
+                .map(|r| (r.film, r.stats.render_seconds))
+                .map_err(|e| e.to_string())
+        };
+        devices.push(("gpu".to_string(), ctx.info().name.clone()));
+        rows.extend(methods::run(&sweep, "gpu", &gpu).map_err(anyhow::Error::msg)?);
+    }
+    let md = methods::markdown(&rows, &sweep, &devices);
+    let backends: Vec<String> = devices.iter().map(|d| d.0.clone()).collect();
+    let maps = methods::heatmaps(&rows, &sweep, &backends);
+    let title = "glint stability --methods: each technique over (GGX alpha, light radius)";
+    let radii: Vec<String> = sweep.radii.iter().map(|r| r.to_string()).collect();
+    let legend = format!(
+        "columns: light radius {}; green within 1.25x of the cell's best relMSE at equal time, amber within 2x, red beyond",
+        radii.join(" ")
+    );
+    let svg = glint::chart::heatmaps_svg(title, &legend, &maps)?;
+    let png = glint::chart::heatmaps_png(title, &legend, &maps)?;
+    outputs.write(md_slot, |w| Ok(w.write_all(md.as_bytes())?))?;
+    outputs.write(csv_slot, |w| {
+        Ok(w.write_all(methods::csv(&rows).as_bytes())?)
+    })?;
+    outputs.write(svg_slot, |w| Ok(w.write_all(svg.as_bytes())?))?;
+    outputs.write(png_slot, |w| Ok(w.write_all(&png)?))?;
+    outputs.commit()?;
+    eprintln!(
+        "glint: wrote {} ({} cells, {} measurements)",
+        dir.join("methods.md").display(),
+        sweep.cells().len(),
         rows.len()
     );
     Ok(())

@@ -1,0 +1,513 @@
+//! `glint stability --methods`: where the sampling methods fail. Veach's
+//! test (thesis 1997, figure 9.2): a plate from near-mirror to rough, lit
+//! by a spherical light from point-like to large at equal power, rendered
+//! with each technique (BSDF sampling alone, light sampling alone, MIS with
+//! the balance and the power heuristic) at equal time on each backend, and
+//! measured against one high-spp reference per cell.
+//!
+//! The scene of a cell (built in code, [`scene`]): a square plate of the
+//! cell's model in the y = 0 plane, seen from 45 degrees above; the light,
+//! a sphere of radius r and radiance 10 / r^2 (power 40 pi^2 at every
+//! radius, so the plate's diffuse radiance is of order 1), centred on the mirror direction of the view ray at the plate's
+//! centre, 2.5 away, out of the camera's view; a black background. Where
+//! the lobe is narrow and the light large, light sampling fails (its
+//! samples fall outside the lobe); where the lobe is wide and the light
+//! small, BSDF sampling fails (its samples miss the light). MIS should be
+//! close to the better of the two everywhere.
+
+use std::f32::consts::PI;
+
+use glam::{Mat4, Vec3};
+use glint_cpu::bsdf::plastic::PlasticParams;
+use glint_cpu::bsdf::roughplastic::RoughPlasticParams;
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
+use glint_cpu::metrics::{self, ImageRef};
+use glint_cpu::{Camera, Film, Material, Mis, NO_LIGHT, RenderOptions, Scene, Triangle};
+
+/// A sampling technique, as the render options select it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Technique {
+    /// BSDF sampling alone (`--nee off`).
+    Bsdf,
+    /// Light sampling alone for the area light (`--mis none`).
+    Light,
+    /// MIS, balance heuristic (`--mis balance`).
+    MisBalance,
+    /// MIS, power heuristic (the default).
+    MisPower,
+}
+
+impl Technique {
+    pub const ALL: [Technique; 4] = [
+        Technique::Bsdf,
+        Technique::Light,
+        Technique::MisBalance,
+        Technique::MisPower,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Technique::Bsdf => "bsdf",
+            Technique::Light => "light",
+            Technique::MisBalance => "mis-balance",
+            Technique::MisPower => "mis-power",
+        }
+    }
+
+    /// `o` with this technique's switches.
+    pub fn options(self, o: &RenderOptions) -> RenderOptions {
+        let (nee, mis) = match self {
+            Technique::Bsdf => (false, Mis::Power),
+            Technique::Light => (true, Mis::None),
+            Technique::MisBalance => (true, Mis::Balance),
+            Technique::MisPower => (true, Mis::Power),
+        };
+        RenderOptions {
+            nee,
+            mis,
+            ..o.clone()
+        }
+    }
+}
+
+/// The plate's model.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Model {
+    /// `roughconductor`, aluminium (GGX, height-correlated Smith).
+    Conductor,
+    /// Mitsuba's `roughplastic` (GGX coat over a 0.5 grey base).
+    RoughPlastic,
+}
+
+impl Model {
+    pub const ALL: [Model; 2] = [Model::Conductor, Model::RoughPlastic];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Model::Conductor => "roughconductor",
+            Model::RoughPlastic => "roughplastic",
+        }
+    }
+
+    fn bsdf(self, alpha: f32) -> Bsdf {
+        let roughness = Roughness {
+            alpha_u: alpha,
+            alpha_v: alpha,
+            shadowing: Shadowing::Correlated,
+            multiscatter: false,
+        };
+        match self {
+            Model::Conductor => {
+                let (eta, k) = glint_cpu::bsdf::named_metal("Al").expect("a tabulated metal");
+                Bsdf::Conductor(ConductorParams {
+                    eta,
+                    k,
+                    specular_reflectance: Vec3::ONE,
+                    roughness,
+                })
+            }
+            Model::RoughPlastic => Bsdf::RoughPlastic(RoughPlasticParams {
+                plastic: PlasticParams {
+                    diffuse: Vec3::splat(0.5),
+                    specular: Vec3::ONE,
+                    eta: 1.49,
+                    nonlinear: false,
+                },
+                roughness,
+            }),
+        }
+    }
+}
+
+/// One cell of the sweep.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cell {
+    pub model: Model,
+    pub alpha: f32,
+    pub radius: f32,
+}
+
+/// The sweep's extent and budgets.
+#[derive(Clone, Debug)]
+pub struct Sweep {
+    pub alphas: Vec<f32>,
+    pub radii: Vec<f32>,
+    /// Image side, pixels.
+    pub size: u32,
+    /// Each technique's time per cell and backend (seconds of rendering).
+    pub seconds: f64,
+    /// The spp cap of a timed render (never reached in practice).
+    pub max_spp: u32,
+    /// The reference's spp (MIS, power heuristic).
+    pub reference_spp: u32,
+}
+
+impl Sweep {
+    /// The full sweep, or the small one CI runs.
+    pub fn new(quick: bool) -> Sweep {
+        if quick {
+            Sweep {
+                alphas: vec![0.002, 0.05, 1.0],
+                radii: vec![0.01, 0.1, 0.6],
+                size: 24,
+                seconds: 0.05,
+                max_spp: 1 << 16,
+                reference_spp: 1024,
+            }
+        } else {
+            Sweep {
+                alphas: vec![0.001, 0.005, 0.02, 0.08, 0.3, 1.0],
+                radii: vec![0.005, 0.02, 0.08, 0.25, 0.6],
+                size: 32,
+                seconds: 0.25,
+                max_spp: 1 << 20,
+                reference_spp: 4096,
+            }
+        }
+    }
+
+    pub fn cells(&self) -> Vec<Cell> {
+        let mut v = Vec::new();
+        for model in Model::ALL {
+            for &alpha in &self.alphas {
+                for &radius in &self.radii {
+                    v.push(Cell {
+                        model,
+                        alpha,
+                        radius,
+                    });
+                }
+            }
+        }
+        v
+    }
+
+    /// The options of a cell's renders (before the technique's switches).
+    pub fn options(&self, seed: u64) -> RenderOptions {
+        RenderOptions {
+            seed,
+            // Direct lighting only: the plate is the only reflector, so a
+            // second bounce adds nothing but the technique's own noise.
+            max_depth: 2,
+            ..RenderOptions::new(self.size, self.size)
+        }
+    }
+}
+
+/// The light's radiance at radius `r`: equal power (4 pi^2 r^2 L) at every
+/// radius.
+pub fn light_radiance(r: f32) -> f32 {
+    10.0 / (r * r)
+}
+
+fn tri(a: Vec3, b: Vec3, c: Vec3, material: u32) -> Triangle {
+    Triangle {
+        p0: a.into(),
+        material,
+        p1: b.into(),
+        light: NO_LIGHT,
+        p2: c.into(),
+        flags: 0,
+    }
+}
+
+/// A flat-shaded UV sphere with outward faces.
+fn sphere(c: Vec3, r: f32, n_phi: u32, n_theta: u32, material: u32) -> Vec<Triangle> {
+    let p = |i: u32, j: u32| {
+        let th = PI * i as f32 / n_theta as f32;
+        let ph = 2.0 * PI * j as f32 / n_phi as f32;
+        c + r * Vec3::new(th.sin() * ph.cos(), th.cos(), th.sin() * ph.sin())
+    };
+    let mut out = Vec::new();
+    for i in 0..n_theta {
+        for j in 0..n_phi {
+            let (a, b, cc, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+            for (x, y, z) in [(a, b, cc), (a, cc, d)] {
+                let t = tri(x, y, z, material);
+                if t.area() < 1e-12 * r * r {
+                    continue;
+                }
+                let outward = t.geometric_normal().dot((x + y + z) / 3.0 - c) >= 0.0;
+                out.push(if outward { t } else { tri(x, z, y, material) });
+            }
+        }
+    }
+    out
+}
+
+/// The cell's scene (module documentation).
+pub fn scene(cell: &Cell) -> Scene {
+    let eye = Vec3::new(0.0, 2.0, 2.0);
+    let mirror = Vec3::new(0.0, 1.0, -1.0).normalize();
+    let light_at = mirror * 2.5;
+    let s = 3.0;
+    let mut triangles = vec![
+        tri(
+            Vec3::new(-s, 0.0, s),
+            Vec3::new(s, 0.0, s),
+            Vec3::new(s, 0.0, -s),
+            0,
+        ),
+        tri(
+            Vec3::new(-s, 0.0, s),
+            Vec3::new(s, 0.0, -s),
+            Vec3::new(-s, 0.0, -s),
+            0,
+        ),
+    ];
+    triangles.extend(sphere(light_at, cell.radius, 32, 16, 1));
+    let plate = Material {
+        name: cell.model.name().into(),
+        bsdf: cell.model.bsdf(cell.alpha),
+        emission: Vec3::ZERO,
+        double_sided: false,
+        absorption: Vec3::ZERO,
+    };
+    let light = Material {
+        name: "light".into(),
+        bsdf: Bsdf::Diffuse {
+            reflectance: Vec3::ZERO,
+        },
+        emission: Vec3::splat(light_radiance(cell.radius)),
+        double_sided: false,
+        absorption: Vec3::ZERO,
+    };
+    let camera = Camera {
+        name: None,
+        node_name: None,
+        to_world: Mat4::look_at_rh(eye, Vec3::ZERO, Vec3::Y).inverse(),
+        yfov: 40f32.to_radians(),
+        aspect_ratio: None,
+    };
+    let mut scene = Scene {
+        triangles,
+        materials: vec![plate, light],
+        cameras: vec![camera],
+        ..Scene::default()
+    };
+    scene.build_bvh();
+    scene
+}
+
+/// A render: the film and its render seconds.
+pub type Render<'a> = dyn Fn(&Scene, &RenderOptions) -> Result<(Film, f64), String> + 'a;
+
+/// One measurement.
+#[derive(Clone, Debug)]
+pub struct Row {
+    pub backend: String,
+    pub cell: Cell,
+    pub technique: Technique,
+    pub seconds: f64,
+    pub spp: u32,
+    pub relmse: f64,
+}
+
+/// relMSE of `film` against `reference`.
+pub fn relmse(film: &Film, reference: &Film) -> Result<f64, String> {
+    let pixels = |f: &Film| (0..f.sum.len()).map(|i| f.mean(i)).collect::<Vec<_>>();
+    let (a, b) = (pixels(film), pixels(reference));
+    let ia = ImageRef::new(film.width, film.height, &a).map_err(|e| e.to_string())?;
+    let ib = ImageRef::new(reference.width, reference.height, &b).map_err(|e| e.to_string())?;
+    metrics::relmse(&ia, &ib).map_err(|e| e.to_string())
+}
+
+/// Every cell and technique on one backend: each technique rendered for
+/// `sweep.seconds` (`--time-limit`), against a reference of
+/// `sweep.reference_spp` (power heuristic, another seed).
+pub fn run(sweep: &Sweep, backend: &str, render: &Render<'_>) -> Result<Vec<Row>, String> {
+    let mut rows = Vec::new();
+    for cell in sweep.cells() {
+        let s = scene(&cell);
+        let reference = RenderOptions {
+            spp: sweep.reference_spp,
+            ..sweep.options(0x5eed_0001)
+        };
+        let (reference, _) = render(&s, &reference)?;
+        for technique in Technique::ALL {
+            let o = RenderOptions {
+                spp: sweep.max_spp,
+                time_limit: Some(sweep.seconds),
+                ..technique.options(&sweep.options(7))
+            };
+            let (film, seconds) = render(&s, &o)?;
+            rows.push(Row {
+                backend: backend.to_string(),
+                cell,
+                technique,
+                seconds,
+                spp: film.spp,
+                relmse: relmse(&film, &reference)?,
+            });
+        }
+    }
+    Ok(rows)
+}
+
+/// The relMSE a row would reach in `seconds`: relMSE falls as 1 / time, so
+/// a render that overshot its budget is not credited for it.
+pub fn at_time(r: &Row, seconds: f64) -> f64 {
+    r.relmse * r.seconds / seconds
+}
+
+pub fn csv(rows: &[Row]) -> String {
+    let mut s = String::from("backend,model,alpha,light_radius,technique,seconds,relmse\n");
+    for r in rows {
+        s.push_str(&format!(
+            "{},{},{},{},{},{:.6},{:.6e}\n",
+            r.backend,
+            r.cell.model.name(),
+            r.cell.alpha,
+            r.cell.radius,
+            r.technique.name(),
+            r.seconds,
+            r.relmse
+        ));
+    }
+    s
+}
+
+/// The rows of one (backend, model) by cell, in `sweep`'s order.
+fn group<'r>(rows: &'r [Row], backend: &str, model: Model) -> Vec<&'r Row> {
+    rows.iter()
+        .filter(|r| r.backend == backend && r.cell.model == model)
+        .collect()
+}
+
+fn find<'r>(g: &[&'r Row], alpha: f32, radius: f32, t: Technique) -> Option<&'r Row> {
+    g.iter()
+        .copied()
+        .find(|r| r.cell.alpha == alpha && r.cell.radius == radius && r.technique == t)
+}
+
+/// The best technique of a cell at equal time, and each technique's relMSE
+/// at equal time over the best's.
+pub fn ratios(g: &[&Row], alpha: f32, radius: f32, seconds: f64) -> Vec<(Technique, f64)> {
+    let v: Vec<(Technique, f64)> = Technique::ALL
+        .iter()
+        .filter_map(|&t| find(g, alpha, radius, t).map(|r| (t, at_time(r, seconds))))
+        .collect();
+    let best = v.iter().map(|x| x.1).fold(f64::INFINITY, f64::min);
+    v.into_iter().map(|(t, e)| (t, e / best)).collect()
+}
+
+pub fn markdown(rows: &[Row], sweep: &Sweep, devices: &[(String, String)]) -> String {
+    let mut s = String::from("# glint stability --methods: where sampling methods fail\n\n");
+    s.push_str(&format!(
+        "Veach's sweep (thesis figure 9.2): a plate of each model at GGX alpha (rows) lit by a \
+         sphere light of radius r (columns) at equal power, {0}x{0} pixels, direct lighting. \
+         Each technique renders for {1} s per cell (`--time-limit`) against a {2}-spp \
+         reference (MIS, power heuristic, another seed); relMSE is scaled to exactly {1} s \
+         (relMSE x seconds / {1}). `src/methods.rs` builds the scenes.\n\n",
+        sweep.size, sweep.seconds, sweep.reference_spp
+    ));
+    for (backend, device) in devices {
+        s.push_str(&format!("Backend `{backend}`: {device}.\n\n"));
+    }
+    let backends: Vec<&String> = devices.iter().map(|d| &d.0).collect();
+    for backend in backends {
+        for model in Model::ALL {
+            let g = group(rows, backend, model);
+            if g.is_empty() {
+                continue;
+            }
+            s.push_str(&format!("## {backend}, {}\n\n", model.name()));
+            s.push_str("Best technique per cell at equal time (the others' relMSE over the best's in brackets):\n\n");
+            header(&mut s, sweep);
+            for &alpha in &sweep.alphas {
+                s.push_str(&format!("| {alpha} |"));
+                for &radius in &sweep.radii {
+                    let mut r = ratios(&g, alpha, radius, sweep.seconds);
+                    r.sort_by(|a, b| a.1.total_cmp(&b.1));
+                    let rest: Vec<String> = r[1..]
+                        .iter()
+                        .map(|(t, x)| format!("{} {x:.2}", t.name()))
+                        .collect();
+                    s.push_str(&format!(" **{}** ({}) |", r[0].0.name(), rest.join(", ")));
+                }
+                s.push('\n');
+            }
+            s.push('\n');
+            for t in Technique::ALL {
+                s.push_str(&format!(
+                    "relMSE at {} s, `{}`:\n\n",
+                    sweep.seconds,
+                    t.name()
+                ));
+                header(&mut s, sweep);
+                for &alpha in &sweep.alphas {
+                    s.push_str(&format!("| {alpha} |"));
+                    for &radius in &sweep.radii {
+                        match find(&g, alpha, radius, t) {
+                            Some(r) => s.push_str(&format!(
+                                " {:.3e} ({} spp) |",
+                                at_time(r, sweep.seconds),
+                                r.spp
+                            )),
+                            None => s.push_str(" - |"),
+                        }
+                    }
+                    s.push('\n');
+                }
+                s.push('\n');
+            }
+        }
+    }
+    s
+}
+
+fn header(s: &mut String, sweep: &Sweep) {
+    s.push_str("| alpha \\ r |");
+    for r in &sweep.radii {
+        s.push_str(&format!(" {r} |"));
+    }
+    s.push_str("\n|---|");
+    for _ in &sweep.radii {
+        s.push_str("---|");
+    }
+    s.push('\n');
+}
+
+/// One map per (backend, model, technique): green where the technique is
+/// within 1.25x of the cell's best relMSE at equal time, amber within 2x,
+/// red beyond.
+pub fn heatmaps(rows: &[Row], sweep: &Sweep, backends: &[String]) -> Vec<crate::chart::Heatmap> {
+    let mut maps = Vec::new();
+    for backend in backends {
+        for model in Model::ALL {
+            let g = group(rows, backend, model);
+            if g.is_empty() {
+                continue;
+            }
+            for t in Technique::ALL {
+                let mut cells = Vec::new();
+                for (i, &alpha) in sweep.alphas.iter().enumerate() {
+                    for (j, &radius) in sweep.radii.iter().enumerate() {
+                        let Some(&(_, x)) = ratios(&g, alpha, radius, sweep.seconds)
+                            .iter()
+                            .find(|(u, _)| *u == t)
+                        else {
+                            continue;
+                        };
+                        let status = if x <= 1.25 {
+                            0
+                        } else if x <= 2.0 {
+                            1
+                        } else {
+                            2
+                        };
+                        // Paler green the closer to the best.
+                        cells.push((i, j, status, 1e-6 * 10f64.powf(4.0 * (x - 1.0) / 0.25)));
+                    }
+                }
+                maps.push(crate::chart::Heatmap {
+                    title: format!("{backend} {} {}", model.name(), t.name()),
+                    rows: sweep.alphas.iter().map(|a| format!("alpha {a}")).collect(),
+                    cols: sweep.radii.len(),
+                    cells,
+                });
+            }
+        }
+    }
+    maps
+}
