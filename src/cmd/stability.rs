@@ -31,11 +31,7 @@ fn run_in(args: &StabilityArgs) -> Result<()> {
         return run_methods(args);
     }
     let dir = &args.dir;
-    let mut outputs = Outputs::new();
-    let md_slot = outputs.reserve(&dir.join("stability.md"))?;
-    let csv_slot = outputs.reserve(&dir.join("stability.csv"))?;
-    let svg_slot = outputs.reserve(&dir.join("stability.svg"))?;
-    let png_slot = outputs.reserve(&dir.join("stability.png"))?;
+    let report = Report::reserve(dir, "stability")?;
     let size = if args.quick { Size::Quick } else { Size::Full };
     let ctx = gpu_context(args)?;
     let device = ctx.as_ref().map(|c| c.info().name.clone());
@@ -49,15 +45,7 @@ fn run_in(args: &StabilityArgs) -> Result<()> {
         "columns: cos theta_o = {}; green pass (darker: larger error), amber degrade, red fail",
         labels.join(" ")
     );
-    let svg = glint::chart::heatmaps_svg(title, &legend, &maps)?;
-    let png = glint::chart::heatmaps_png(title, &legend, &maps)?;
-    outputs.write(md_slot, |w| Ok(w.write_all(md.as_bytes())?))?;
-    outputs.write(csv_slot, |w| {
-        Ok(w.write_all(stability::csv(&rows).as_bytes())?)
-    })?;
-    outputs.write(svg_slot, |w| Ok(w.write_all(svg.as_bytes())?))?;
-    outputs.write(png_slot, |w| Ok(w.write_all(&png)?))?;
-    outputs.commit()?;
+    report.write(&md, &stability::csv(&rows), title, &legend, &maps)?;
     let fails = rows
         .iter()
         .filter(|(_, r)| r.status == stability::Status::Fail)
@@ -88,11 +76,7 @@ fn gpu_context(args: &StabilityArgs) -> Result<Option<Context>> {
 /// and, unless `--cpu-only`, the GPU.
 fn run_methods(args: &StabilityArgs) -> Result<()> {
     let dir = &args.dir;
-    let mut outputs = Outputs::new();
-    let md_slot = outputs.reserve(&dir.join("methods.md"))?;
-    let csv_slot = outputs.reserve(&dir.join("methods.csv"))?;
-    let svg_slot = outputs.reserve(&dir.join("methods.svg"))?;
-    let png_slot = outputs.reserve(&dir.join("methods.png"))?;
+    let report = Report::reserve(dir, "methods")?;
     let sweep = methods::Sweep::new(args.quick);
     let cpu = |s: &glint::cpu::Scene, o: &glint::cpu::RenderOptions| {
         glint::cpu::render(s, o, &|_, _| {})
@@ -120,15 +104,7 @@ fn run_methods(args: &StabilityArgs) -> Result<()> {
         "columns: light radius {}; green within 1.25x of the cell's best relMSE at equal time, amber within 2x, red beyond",
         radii.join(" ")
     );
-    let svg = glint::chart::heatmaps_svg(title, &legend, &maps)?;
-    let png = glint::chart::heatmaps_png(title, &legend, &maps)?;
-    outputs.write(md_slot, |w| Ok(w.write_all(md.as_bytes())?))?;
-    outputs.write(csv_slot, |w| {
-        Ok(w.write_all(methods::csv(&rows).as_bytes())?)
-    })?;
-    outputs.write(svg_slot, |w| Ok(w.write_all(svg.as_bytes())?))?;
-    outputs.write(png_slot, |w| Ok(w.write_all(&png)?))?;
-    outputs.commit()?;
+    report.write(&md, &methods::csv(&rows), title, &legend, &maps)?;
     eprintln!(
         "glint: wrote {} ({} cells, {} measurements)",
         dir.join("methods.md").display(),
@@ -136,4 +112,39 @@ fn run_methods(args: &StabilityArgs) -> Result<()> {
         rows.len()
     );
     Ok(())
+}
+
+/// A sweep's four outputs, DIR/STEM.md, .csv, .svg and .png: reserved
+/// before the sweep runs, written together (whole or not at all).
+struct Report {
+    outputs: Outputs,
+    slots: [usize; 4],
+}
+
+impl Report {
+    fn reserve(dir: &std::path::Path, stem: &str) -> Result<Report> {
+        let mut outputs = Outputs::new();
+        let mut slots = [0; 4];
+        for (slot, ext) in slots.iter_mut().zip(["md", "csv", "svg", "png"]) {
+            *slot = outputs.reserve(&dir.join(format!("{stem}.{ext}")))?;
+        }
+        Ok(Report { outputs, slots })
+    }
+
+    fn write(
+        mut self,
+        md: &str,
+        csv: &str,
+        title: &str,
+        legend: &str,
+        maps: &[glint::chart::Heatmap],
+    ) -> Result<()> {
+        let svg = glint::chart::heatmaps_svg(title, legend, maps)?;
+        let png = glint::chart::heatmaps_png(title, legend, maps)?;
+        let files: [&[u8]; 4] = [md.as_bytes(), csv.as_bytes(), svg.as_bytes(), &png];
+        for (slot, bytes) in self.slots.into_iter().zip(files) {
+            self.outputs.write(slot, |w| Ok(w.write_all(bytes)?))?;
+        }
+        self.outputs.commit()
+    }
 }
