@@ -121,7 +121,6 @@ impl<'a> Kernel<'a> {
                 "kernel '{name}': {push_constant_size} bytes of push constants (must be a multiple of 4, at most {max_push})"
             )));
         }
-        let device = &ctx.device;
         let mut kernel = Kernel {
             ctx,
             name: name.to_string(),
@@ -141,6 +140,20 @@ impl<'a> Kernel<'a> {
             .map(|k| k.descriptor_type())
             .chain(accel.then_some(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR))
             .collect();
+        kernel.create_layouts(&types)?;
+        kernel.create_pipeline(code, options)?;
+        if !types.is_empty() {
+            kernel.create_descriptor_set(&types)?;
+        }
+        if accel {
+            kernel.write_acceleration_structure(options.acceleration_structure);
+        }
+        Ok(kernel)
+    }
+
+    /// The descriptor set layout of `types` (binding i is types[i]) and the
+    /// pipeline layout with the push constants.
+    fn create_layouts(&mut self, types: &[vk::DescriptorType]) -> Result<(), GpuError> {
         let layout_bindings: Vec<_> = types
             .iter()
             .enumerate()
@@ -152,28 +165,41 @@ impl<'a> Kernel<'a> {
                     .stage_flags(vk::ShaderStageFlags::COMPUTE)
             })
             .collect();
-        kernel.set_layout = unsafe {
-            device.create_descriptor_set_layout(
+        self.set_layout = unsafe {
+            self.ctx.device.create_descriptor_set_layout(
                 &vk::DescriptorSetLayoutCreateInfo::default().bindings(&layout_bindings),
                 None,
             )
         }
         .map_err(|e| GpuError::from_vk("vkCreateDescriptorSetLayout", e))?;
 
-        let set_layouts = [kernel.set_layout];
+        let set_layouts = [self.set_layout];
         let ranges = [vk::PushConstantRange::default()
             .stage_flags(vk::ShaderStageFlags::COMPUTE)
             .offset(0)
-            .size(push_constant_size)];
+            .size(self.push_constant_size)];
         let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
-        if push_constant_size > 0 {
+        if self.push_constant_size > 0 {
             layout_info = layout_info.push_constant_ranges(&ranges);
         }
-        kernel.pipeline_layout = unsafe { device.create_pipeline_layout(&layout_info, None) }
-            .map_err(|e| GpuError::from_vk("vkCreatePipelineLayout", e))?;
+        self.pipeline_layout =
+            unsafe { self.ctx.device.create_pipeline_layout(&layout_info, None) }
+                .map_err(|e| GpuError::from_vk("vkCreatePipelineLayout", e))?;
 
+        Ok(())
+    }
+
+    /// The compute pipeline of SPIR-V `code` with `options`' specialization
+    /// constants and pipeline cache.
+    fn create_pipeline(
+        &mut self,
+        code: &[u32],
+        options: &KernelOptions<'_>,
+    ) -> Result<(), GpuError> {
         let module = unsafe {
-            device.create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
+            self.ctx
+                .device
+                .create_shader_module(&vk::ShaderModuleCreateInfo::default().code(code), None)
         }
         .map_err(|e| GpuError::from_vk("vkCreateShaderModule", e))?;
         let entry: &CStr = c"main";
@@ -200,46 +226,51 @@ impl<'a> Kernel<'a> {
         }
         let info = [vk::ComputePipelineCreateInfo::default()
             .stage(stage)
-            .layout(kernel.pipeline_layout)];
-        let pipelines = unsafe { device.create_compute_pipelines(options.cache, &info, None) };
-        unsafe { device.destroy_shader_module(module, None) };
-        kernel.pipeline =
+            .layout(self.pipeline_layout)];
+        let pipelines = unsafe {
+            self.ctx
+                .device
+                .create_compute_pipelines(options.cache, &info, None)
+        };
+        unsafe { self.ctx.device.destroy_shader_module(module, None) };
+        self.pipeline =
             pipelines.map_err(|(_, e)| GpuError::from_vk("vkCreateComputePipelines", e))?[0];
 
-        if !types.is_empty() {
-            let mut sizes = Vec::new();
-            for ty in [
-                vk::DescriptorType::STORAGE_BUFFER,
-                vk::DescriptorType::UNIFORM_BUFFER,
-                vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
-            ] {
-                let n = types.iter().filter(|&&t| t == ty).count() as u32;
-                if n > 0 {
-                    sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(n));
-                }
+        Ok(())
+    }
+
+    /// A descriptor pool and the one set of `types`.
+    fn create_descriptor_set(&mut self, types: &[vk::DescriptorType]) -> Result<(), GpuError> {
+        let set_layouts = [self.set_layout];
+        let mut sizes = Vec::new();
+        for ty in [
+            vk::DescriptorType::STORAGE_BUFFER,
+            vk::DescriptorType::UNIFORM_BUFFER,
+            vk::DescriptorType::ACCELERATION_STRUCTURE_KHR,
+        ] {
+            let n = types.iter().filter(|&&t| t == ty).count() as u32;
+            if n > 0 {
+                sizes.push(vk::DescriptorPoolSize::default().ty(ty).descriptor_count(n));
             }
-            kernel.descriptor_pool = unsafe {
-                device.create_descriptor_pool(
-                    &vk::DescriptorPoolCreateInfo::default()
-                        .max_sets(1)
-                        .pool_sizes(&sizes),
-                    None,
-                )
-            }
-            .map_err(|e| GpuError::from_vk("vkCreateDescriptorPool", e))?;
-            kernel.set = unsafe {
-                device.allocate_descriptor_sets(
-                    &vk::DescriptorSetAllocateInfo::default()
-                        .descriptor_pool(kernel.descriptor_pool)
-                        .set_layouts(&set_layouts),
-                )
-            }
-            .map_err(|e| GpuError::from_vk("vkAllocateDescriptorSets", e))?[0];
         }
-        if accel {
-            kernel.write_acceleration_structure(options.acceleration_structure);
+        self.descriptor_pool = unsafe {
+            self.ctx.device.create_descriptor_pool(
+                &vk::DescriptorPoolCreateInfo::default()
+                    .max_sets(1)
+                    .pool_sizes(&sizes),
+                None,
+            )
         }
-        Ok(kernel)
+        .map_err(|e| GpuError::from_vk("vkCreateDescriptorPool", e))?;
+        self.set = unsafe {
+            self.ctx.device.allocate_descriptor_sets(
+                &vk::DescriptorSetAllocateInfo::default()
+                    .descriptor_pool(self.descriptor_pool)
+                    .set_layouts(&set_layouts),
+            )
+        }
+        .map_err(|e| GpuError::from_vk("vkAllocateDescriptorSets", e))?[0];
+        Ok(())
     }
 
     pub fn name(&self) -> &str {
