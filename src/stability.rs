@@ -228,6 +228,19 @@ pub fn points() -> Vec<Point> {
             });
         }
     };
+    alpha_points(&mut add);
+    eta_points(&mut add);
+    k_points(&mut add);
+    aniso_points(&mut add);
+    v
+}
+
+/// Adds one model's points (over every cos theta_o): family, model, the
+/// parameter's index and label, the BSDF.
+type Add<'a> = dyn FnMut(&'static str, &str, usize, String, Bsdf) + 'a;
+
+/// Family "alpha": each rough model through the smooth threshold.
+fn alpha_points(add: &mut Add<'_>) {
     add(
         "alpha",
         "diffuse",
@@ -297,6 +310,10 @@ pub fn points() -> Vec<Point> {
             },
         );
     }
+}
+
+/// Family "eta": rough glass through eta = 1.
+fn eta_points(add: &mut Add<'_>) {
     for (pi, &eta) in etas().iter().enumerate() {
         for a in [0.01f32, 0.3] {
             add(
@@ -311,6 +328,10 @@ pub fn points() -> Vec<Point> {
             );
         }
     }
+}
+
+/// Family "k": a conductor's extinction from 0 to 1e3.
+fn k_points(add: &mut Add<'_>) {
     for (pi, &k) in KS.iter().enumerate() {
         for eta in [0.2f32, 1.5] {
             add(
@@ -327,6 +348,10 @@ pub fn points() -> Vec<Point> {
             );
         }
     }
+}
+
+/// Family "aniso": anisotropy ratios to 1000.
+fn aniso_points(add: &mut Add<'_>) {
     for (pi, &ratio) in ANISO.iter().enumerate() {
         let r = rough(0.3, 0.3 / ratio, Shadowing::Correlated);
         add(
@@ -347,7 +372,6 @@ pub fn points() -> Vec<Point> {
             },
         );
     }
-    v
 }
 
 /// PCG32, deterministic per point (and the query stream of
@@ -465,50 +489,14 @@ pub fn measure_cpu(pt: &Point, size: Size, seed: u64) -> Row {
         finite: true,
         ..Row::default()
     };
-    // wi = wo and wi = -wo, then random pairs: finiteness and reciprocity.
-    let mut recip = 0.0f64;
-    for k in 0..size.pairs() + 2 {
-        let wi = match k {
-            0 => wo,
-            1 => -wo,
-            _ => rng.dir(),
-        };
-        let f = b.eval(wo, wi);
-        let p = b.pdf(wo, wi);
-        let fr = b.eval(wi, wo);
-        let pr = b.pdf(wi, wo);
-        if !finite_ok(f, p) || !finite_ok(fr, pr) {
-            row.finite = false;
-            continue;
-        }
-        let a = f / medium(b, wo).powi(2);
-        let r = fr / medium(b, wi).powi(2);
-        // Relative, with the absolute floor of bsdf_physics.rs (2e-5 at
-        // the 1e-3 level) for tiny values next to the critical angle.
-        let scale = a.max_element().max(r.max_element()) as f64 + 2e-2;
-        recip = recip.max((a - r).abs().max_element() as f64 / scale);
-    }
-    row.recip = recip;
+    reciprocity(b, wo, size, &mut rng, &mut row);
     // Samples: albedo, consistency with pdf/eval, lost samples.
     let n = size.samples();
     // Per channel: the albedo is the largest channel's mean.
     let (mut s1, mut s2) = (glam::DVec3::ZERO, glam::DVec3::ZERO);
     let (mut lost, mut checked, mut bad) = (0usize, 0usize, 0usize);
-    // The corners 0 and 1 - 2^-24 of every random number: finiteness only
-    // (a sampler meets them once in 2^24 draws).
-    let corners = [0.0, 0.5, U_MAX];
-    for &uc in &corners {
-        for &ux in &corners {
-            for &uy in &corners {
-                if let Some(s) = b.sample(wo, uc, Vec2::new(ux, uy))
-                    && (!(s.wi.is_finite() && s.weight.is_finite() && s.pdf.is_finite())
-                        || s.weight.min_element() < 0.0
-                        || !(s.pdf > 0.0))
-                {
-                    row.finite = false;
-                }
-            }
-        }
+    if !corners_finite(b, wo) {
+        row.finite = false;
     }
     let mut ill = 0usize;
     for _ in 0..n {
@@ -532,27 +520,10 @@ pub fn measure_cpu(pt: &Point, size: Size, seed: u64) -> Row {
             continue;
         }
         checked += 1;
-        let pdf = b.pdf(wo, s.wi);
-        let w = b.eval(wo, s.wi) * s.wi.z.abs() / pdf;
-        let ok = (pdf - s.pdf).abs() <= 1e-3 * pdf
-            && (w - s.weight).abs().max_element() <= 1e-3 * w.max_element() + 1e-6;
-        if !ok {
-            // Ill-conditioned (as bsdf_physics.rs tells them): pdf moves by
-            // more than 1e-3 under a 32-ulp jitter of wi, i.e. f32 cannot
-            // resolve the lobe at this direction.
-            let jit = |k: f32| {
-                let e = k * 32.0 * f32::EPSILON;
-                b.pdf(
-                    wo,
-                    Vec3::new(s.wi.x * (1.0 + e), s.wi.y * (1.0 - e), s.wi.z),
-                )
-            };
-            let spread = (jit(1.0) - pdf).abs().max((jit(-1.0) - pdf).abs());
-            if spread > 1e-3 * pdf {
-                ill += 1;
-            } else {
-                bad += 1;
-            }
+        match sample_check(b, wo, &s) {
+            SampleCheck::Ok => {}
+            SampleCheck::Ill => ill += 1,
+            SampleCheck::Bad => bad += 1,
         }
     }
     row.pdf_ill = if checked > 0 {
@@ -583,6 +554,89 @@ pub fn measure_cpu(pt: &Point, size: Size, seed: u64) -> Row {
         .filter(|(_, err)| err[c] <= 2e-3)
         .map(|(q, _)| q[c]);
     row
+}
+
+/// Finiteness and reciprocity at wi = wo, wi = -wo and `size.pairs()`
+/// random pairs: `row.finite` cleared on a non-finite value, `row.recip`
+/// the largest relative reciprocity error.
+fn reciprocity(b: &Bsdf, wo: Vec3, size: Size, rng: &mut Rng, row: &mut Row) {
+    // wi = wo and wi = -wo, then random pairs: finiteness and reciprocity.
+    let mut recip = 0.0f64;
+    for k in 0..size.pairs() + 2 {
+        let wi = match k {
+            0 => wo,
+            1 => -wo,
+            _ => rng.dir(),
+        };
+        let f = b.eval(wo, wi);
+        let p = b.pdf(wo, wi);
+        let fr = b.eval(wi, wo);
+        let pr = b.pdf(wi, wo);
+        if !finite_ok(f, p) || !finite_ok(fr, pr) {
+            row.finite = false;
+            continue;
+        }
+        let a = f / medium(b, wo).powi(2);
+        let r = fr / medium(b, wi).powi(2);
+        // Relative, with the absolute floor of bsdf_physics.rs (2e-5 at
+        // the 1e-3 level) for tiny values next to the critical angle.
+        let scale = a.max_element().max(r.max_element()) as f64 + 2e-2;
+        recip = recip.max((a - r).abs().max_element() as f64 / scale);
+    }
+    row.recip = recip;
+}
+
+/// Whether `sample` stays finite at the corners 0 and 1 - 2^-24 of every
+/// random number (a sampler meets them once in 2^24 draws).
+fn corners_finite(b: &Bsdf, wo: Vec3) -> bool {
+    let corners = [0.0, 0.5, U_MAX];
+    for &uc in &corners {
+        for &ux in &corners {
+            for &uy in &corners {
+                if let Some(s) = b.sample(wo, uc, Vec2::new(ux, uy))
+                    && (!(s.wi.is_finite() && s.weight.is_finite() && s.pdf.is_finite())
+                        || s.weight.min_element() < 0.0
+                        || !(s.pdf > 0.0))
+                {
+                    return false;
+                }
+            }
+        }
+    }
+    true
+}
+
+enum SampleCheck {
+    Ok,
+    /// f32 cannot resolve the lobe at this direction.
+    Ill,
+    Bad,
+}
+
+/// A non-delta sample against `pdf` and `eval` (1e-3). Ill-conditioned (as
+/// bsdf_physics.rs tells them): pdf moves by more than 1e-3 under a 32-ulp
+/// jitter of wi.
+fn sample_check(b: &Bsdf, wo: Vec3, s: &glint_cpu::BsdfSample) -> SampleCheck {
+    let pdf = b.pdf(wo, s.wi);
+    let w = b.eval(wo, s.wi) * s.wi.z.abs() / pdf;
+    let ok = (pdf - s.pdf).abs() <= 1e-3 * pdf
+        && (w - s.weight).abs().max_element() <= 1e-3 * w.max_element() + 1e-6;
+    if ok {
+        return SampleCheck::Ok;
+    }
+    let jit = |k: f32| {
+        let e = k * 32.0 * f32::EPSILON;
+        b.pdf(
+            wo,
+            Vec3::new(s.wi.x * (1.0 + e), s.wi.y * (1.0 - e), s.wi.z),
+        )
+    };
+    let spread = (jit(1.0) - pdf).abs().max((jit(-1.0) - pdf).abs());
+    if spread > 1e-3 * pdf {
+        SampleCheck::Ill
+    } else {
+        SampleCheck::Bad
+    }
 }
 
 // ------------------------------------------------------------------ GPU
