@@ -495,6 +495,9 @@ fn triangle_shading(
     sh
 }
 
+/// One TEXCOORD set of a primitive, if it has it.
+type Uvs<'a> = Option<&'a [[f32; 2]]>;
+
 /// A triangle's texture coordinates (TEXCOORD_0 and _1 per corner) and its
 /// bitangent sign.
 fn triangle_uv(
@@ -502,7 +505,7 @@ fn triangle_uv(
     p: [Vec3; 3],
     geo: Vec3,
     given: Option<&[[f32; 4]; 3]>,
-    (uvs, uvs1): (Option<&[[f32; 2]]>, Option<&[[f32; 2]]>),
+    (uvs, uvs1): (Uvs<'_>, Uvs<'_>),
     flip: bool,
 ) -> TriangleUv {
     let mut tuv = TriangleUv::default();
