@@ -292,14 +292,15 @@ vec3 normal_mapped(MaterialTextures mt, uint tri, float u, float v, vec3 ng, vec
     return dot(n, ng) > 0.0 ? valid_reflection_normal(ng, wo, n) : fn;
 }
 
-// bsdf::clearcoat::encode_coat_normal: 0, or 1 + qx 4095 + qy with
-// q = floor((x + 1) 2047 + 1/2), an integer an f32 holds exactly.
+// bsdf::clearcoat::encode_coat_normal: 0, or 1 + qx STRIDE + qy, an
+// integer an f32 holds exactly (bsdf/material.glsl).
 float encode_coat_normal(vec2 xy) {
     if (xy == vec2(0.0)) {
         return 0.0;
     }
-    uvec2 q = uvec2(floor((clamp(xy, vec2(-1.0), vec2(1.0)) + 1.0) * 2047.0 + 0.5));
-    return float(1u + q.x * 4095u + q.y);
+    float steps = float(COAT_NORMAL_STEPS);
+    uvec2 q = uvec2(floor((clamp(xy, vec2(-1.0), vec2(1.0)) + 1.0) * steps + 0.5));
+    return float(1u + q.x * COAT_NORMAL_STRIDE + q.y);
 }
 
 // texture::clearcoat_normal, encoded for Material.extra.w: the coat's

@@ -26,6 +26,17 @@ fn render(s: &glint::cpu::Scene, o: &RenderOptions) -> Film {
     glint::cpu::render(s, o, &|_, _| {}).unwrap().0
 }
 
+/// A cell's reference: the power heuristic at `REFERENCE_SPP`, its own seed.
+fn reference(sweep: &Sweep, s: &glint::cpu::Scene) -> Film {
+    render(
+        s,
+        &RenderOptions {
+            spp: REFERENCE_SPP,
+            ..sweep.options(99)
+        },
+    )
+}
+
 /// The image's mean (channel average over pixels) and its variance.
 fn image_mean(f: &Film) -> (f64, f64) {
     let n = f.sum.len() as f64;
@@ -49,13 +60,7 @@ fn measure(sweep: &Sweep) -> Vec<Measured> {
         .into_iter()
         .map(|cell| {
             let s = methods::scene(&cell);
-            let reference = render(
-                &s,
-                &RenderOptions {
-                    spp: REFERENCE_SPP,
-                    ..sweep.options(99)
-                },
-            );
+            let reference = reference(sweep, &s);
             let films = Technique::ALL
                 .iter()
                 .map(|&t| {
@@ -186,13 +191,7 @@ fn weights_that_sum_to_two_are_caught() {
     let sweep = Sweep::new(true);
     let cell = sweep.cells()[sweep.radii.len() + 1];
     let s = methods::scene(&cell);
-    let reference = render(
-        &s,
-        &RenderOptions {
-            spp: REFERENCE_SPP,
-            ..sweep.options(99)
-        },
-    );
+    let reference = reference(&sweep, &s);
     let o = |t: Technique| RenderOptions {
         spp: SPP,
         ..t.options(&sweep.options(5))

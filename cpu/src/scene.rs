@@ -151,6 +151,20 @@ impl GpuMaterial {
     pub const KIND_ROUGH_PLASTIC: u32 = 7;
 }
 
+/// The non-metal's coat as the record's `coat` (specular scale, IOR) and
+/// `extra` (transmission, clear coat weight, alpha and encoded normal).
+fn coat_record(coat: &crate::bsdf::coated::CoatParams) -> ([f32; 4], [f32; 4]) {
+    (
+        vec4(coat.specular, coat.eta),
+        [
+            coat.transmission,
+            coat.clearcoat,
+            coat.clearcoat_alpha,
+            encode_coat_normal(coat.clearcoat_normal),
+        ],
+    )
+}
+
 /// `GpuMaterial::shadowing`: bit 0 separable, bit 1 multiscatter.
 fn shadowing_bits(r: &crate::bsdf::Roughness) -> u32 {
     (r.shadowing == Shadowing::Separable) as u32 | (r.multiscatter as u32) << 1
@@ -234,13 +248,7 @@ impl From<&Material> for GpuMaterial {
             } => {
                 g.kind = Self::KIND_COATED;
                 g.reflectance = vec4(*base, 0.0);
-                g.coat = vec4(coat.specular, coat.eta);
-                g.extra = [
-                    coat.transmission,
-                    coat.clearcoat,
-                    coat.clearcoat_alpha,
-                    encode_coat_normal(coat.clearcoat_normal),
-                ];
+                (g.coat, g.extra) = coat_record(coat);
                 g.alpha_u = roughness.alpha_u;
                 g.alpha_v = roughness.alpha_v;
                 g.shadowing = shadowing_bits(roughness);
@@ -253,13 +261,7 @@ impl From<&Material> for GpuMaterial {
             } => {
                 g.kind = Self::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
-                g.coat = vec4(coat.specular, coat.eta);
-                g.extra = [
-                    coat.transmission,
-                    coat.clearcoat,
-                    coat.clearcoat_alpha,
-                    encode_coat_normal(coat.clearcoat_normal),
-                ];
+                (g.coat, g.extra) = coat_record(coat);
                 conductor(&mut g, c);
             }
         }

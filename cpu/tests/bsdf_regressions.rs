@@ -397,6 +397,12 @@ fn constants_agree_with_the_glsl() {
         GpuLight::KIND_DIRECTIONAL
     );
     assert_eq!(define_f32(&mf, "MIN_ALPHA"), MIN_ALPHA);
+    {
+        use glint_cpu::bsdf::clearcoat::{CLEARCOAT_IOR, COAT_NORMAL_STEPS, COAT_NORMAL_STRIDE};
+        assert_eq!(define_f32(&bsdf, "CLEARCOAT_IOR"), CLEARCOAT_IOR);
+        assert_eq!(define_u32(&mat, "COAT_NORMAL_STEPS"), COAT_NORMAL_STEPS);
+        assert_eq!(define_u32(&mat, "COAT_NORMAL_STRIDE"), COAT_NORMAL_STRIDE);
+    }
     assert_eq!(
         define_f32(&bsdf, "SMOOTH_ALPHA_THRESHOLD"),
         SMOOTH_ALPHA_THRESHOLD

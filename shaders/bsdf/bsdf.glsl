@@ -482,7 +482,8 @@ vec2 decode_coat_normal(float e) {
         return vec2(0.0);
     }
     uint k = uint(e) - 1u;
-    return vec2(float(k / 4095u), float(k % 4095u)) / 2047.0 - 1.0;
+    vec2 q = vec2(float(k / COAT_NORMAL_STRIDE), float(k % COAT_NORMAL_STRIDE));
+    return q / float(COAT_NORMAL_STEPS) - 1.0;
 }
 
 bool cc_tilted(Material m) {
@@ -530,43 +531,43 @@ float cc_p_coat(Material m, vec3 wo) {
     return clamp(1.0 - cc_through(m, wo, cc_side(wo)), 0.0, 1.0);
 }
 
-float cc_coat_eval(Material m, vec3 wo, vec3 wi) {
+// The coat's pair (wo, wi) in its frame on the front side, and their half
+// vector and cosine; false where the coat's lobe is 0 (smooth, or wi and
+// wo on different sides of the coat).
+bool cc_pair(Material m, vec3 wo, vec3 wi, out vec3 wo_c, out vec3 wi_c, out vec3 h, out float d) {
     if (cc_smooth(m) || wo.z == 0.0) {
-        return 0.0;
+        return false;
     }
     float side = cc_side(wo);
-    vec3 wo_c = cc_local(m, cc_front(wo, side));
-    vec3 wi_c = cc_local(m, cc_front(wi, side));
+    wo_c = cc_local(m, cc_front(wo, side));
+    wi_c = cc_local(m, cc_front(wi, side));
     if (wo_c.z <= 0.0 || wi_c.z <= 0.0) {
+        return false;
+    }
+    h = normalize(wo_c + wi_c);
+    d = dot(wo_c, h);
+    return d > 0.0;
+}
+
+float cc_coat_eval(Material m, vec3 wo, vec3 wi) {
+    vec3 wo_c, wi_c, h;
+    float d;
+    if (!cc_pair(m, wo, wi, wo_c, wi_c, h, d)) {
         return 0.0;
     }
     float a = max(m.extra.z, MIN_ALPHA);
-    vec3 h = normalize(wo_c + wi_c);
-    float d = dot(wo_c, h);
-    if (d <= 0.0) {
-        return 0.0;
-    }
     float f = m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(h, a, a)
         * ggx_visibility(wo_c, wi_c, a, a, false);
     return cc_shading_value(m, f, wi_c, wi.z);
 }
 
 float cc_coat_pdf(Material m, vec3 wo, vec3 wi) {
-    if (cc_smooth(m) || wo.z == 0.0) {
-        return 0.0;
-    }
-    float side = cc_side(wo);
-    vec3 wo_c = cc_local(m, cc_front(wo, side));
-    vec3 wi_c = cc_local(m, cc_front(wi, side));
-    if (wo_c.z <= 0.0 || wi_c.z <= 0.0) {
+    vec3 wo_c, wi_c, h;
+    float d;
+    if (!cc_pair(m, wo, wi, wo_c, wi_c, h, d)) {
         return 0.0;
     }
     float a = max(m.extra.z, MIN_ALPHA);
-    vec3 h = normalize(wo_c + wi_c);
-    float d = dot(wo_c, h);
-    if (d <= 0.0) {
-        return 0.0;
-    }
     return ggx_pdf_visible(wo_c, h, a, a) / (4.0 * d);
 }
 

@@ -13,6 +13,12 @@
 #define KIND_ROUGH_PLASTIC 7u
 
 // Material.shadowing: 0 height-correlated Smith G2, 1 separable G1 G1.
+// Material.extra.w, the clear coat's normal (bsdf::clearcoat's
+// COAT_NORMAL_STEPS and COAT_NORMAL_STRIDE): 0, or 1 + qx STRIDE + qy with
+// q = floor((x + 1) STEPS + 1/2) in [0, 2 STEPS].
+#define COAT_NORMAL_STEPS 2047u
+#define COAT_NORMAL_STRIDE 4095u
+
 #define SHADOWING_CORRELATED 0u
 #define SHADOWING_SEPARABLE 1u
 // Material.shadowing bit 1: `multiscatter` energy compensation.

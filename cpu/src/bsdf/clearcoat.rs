@@ -40,10 +40,9 @@ pub const CLEARCOAT_IOR: f32 = 1.5;
 pub struct Clearcoat {
     pub weight: f32,
     pub alpha: f32,
-    /// The coat's normal in the shading frame, as its (x, y) (z =
-    /// sqrt(1 - x^2 - y^2) > 0, on the front side); ZERO: the shading
-    /// normal itself.
-    pub normal: Vec2,
+    /// The frame about the coat's normal, in front-side shading
+    /// coordinates; None: the shading normal itself.
+    pub frame: Option<Frame>,
 }
 
 /// `w` with z multiplied by `side` (+-1): a direction on wo's side of the
@@ -64,24 +63,29 @@ impl Clearcoat {
     fn a(&self) -> f32 {
         self.alpha.max(MIN_ALPHA)
     }
-    /// The frame about the coat's normal, in shading coordinates; None when
-    /// it is the shading normal.
-    fn frame(&self) -> Option<Frame> {
-        (self.normal != Vec2::ZERO).then(|| Frame::from_normal(coat_normal(self.normal)))
+    /// The coat of weight `weight`, alpha `alpha` and normal `normal` (its
+    /// (x, y) in the shading frame, [`coat_normal`]; ZERO: the shading
+    /// normal), its frame built once.
+    pub fn new(weight: f32, alpha: f32, normal: Vec2) -> Self {
+        Clearcoat {
+            weight,
+            alpha,
+            frame: (normal != Vec2::ZERO).then(|| Frame::from_normal(coat_normal(normal))),
+        }
     }
     /// A front-side shading direction in the coat's frame.
     fn local(&self, w: Vec3) -> Vec3 {
-        self.frame().map_or(w, |f| f.to_local(w))
+        self.frame.map_or(w, |f| f.to_local(w))
     }
     /// A direction in the coat's frame back in front-side shading terms.
     fn world(&self, w: Vec3) -> Vec3 {
-        self.frame().map_or(w, |f| f.to_world(w))
+        self.frame.map_or(w, |f| f.to_world(w))
     }
     /// The coat's lobe value `f` (about the coat's normal, at `wi_c` in its
     /// frame) as the shading-frame BSDF returns it: times the coat's
     /// cosine over the shading one (`wi_z`); `f` itself for an untilted coat.
     fn shading_value(&self, f: f32, wi_c: Vec3, wi_z: f32) -> f32 {
-        if self.normal == Vec2::ZERO {
+        if self.frame.is_none() {
             f
         } else if wi_z == 0.0 {
             0.0
@@ -109,17 +113,24 @@ pub fn coat_normal(xy: Vec2) -> Vec3 {
     Vec3::new(xy.x, xy.y, (1.0 - xy.length_squared()).max(0.0).sqrt())
 }
 
+/// Grid steps per unit of the coat normal's x and y (GLSL
+/// `COAT_NORMAL_STEPS`, pinned by `cpu/tests/bsdf_regressions.rs`).
+pub const COAT_NORMAL_STEPS: u32 = 2047;
+/// Values of q per axis, 2 STEPS + 1 (GLSL `COAT_NORMAL_STRIDE`).
+pub const COAT_NORMAL_STRIDE: u32 = 2 * COAT_NORMAL_STEPS + 1;
+
 /// `clearcoat_normal` encoding of the GPU record (`GpuMaterial::extra.w`):
-/// 0 for no tilt, else 1 + qx 4095 + qy, q = floor((x + 1) 2047 + 1/2) in
-/// [0, 4094]: an integer below 2^24, exact in an f32 on every device (no
-/// NaN or denormal bit patterns to lose). The step (1/2047) is finer than
-/// an 8-bit normal map's (1/127.5).
+/// 0 for no tilt, else 1 + qx STRIDE + qy, q = floor((x + 1) STEPS + 1/2)
+/// in [0, 2 STEPS]: an integer below 2^24, exact in an f32 on every device
+/// (no NaN or denormal bit patterns to lose). The step (1/2047) is finer
+/// than an 8-bit normal map's (1/127.5).
 pub fn encode_coat_normal(xy: Vec2) -> f32 {
     if xy == Vec2::ZERO {
         return 0.0;
     }
-    let q = |x: f32| ((x.clamp(-1.0, 1.0) + 1.0) * 2047.0 + 0.5).floor() as u32;
-    (1 + q(xy.x) * 4095 + q(xy.y)) as f32
+    let steps = COAT_NORMAL_STEPS as f32;
+    let q = |x: f32| ((x.clamp(-1.0, 1.0) + 1.0) * steps + 0.5).floor() as u32;
+    (1 + q(xy.x) * COAT_NORMAL_STRIDE + q(xy.y)) as f32
 }
 
 /// The inverse of [`encode_coat_normal`] (the grid's values): what the CPU
@@ -129,27 +140,34 @@ pub fn decode_coat_normal(e: f32) -> Vec2 {
         return Vec2::ZERO;
     }
     let e = e as u32 - 1;
-    let d = |q: u32| q as f32 / 2047.0 - 1.0;
-    Vec2::new(d(e / 4095), d(e % 4095))
+    let d = |q: u32| q as f32 / COAT_NORMAL_STEPS as f32 - 1.0;
+    Vec2::new(d(e / COAT_NORMAL_STRIDE), d(e % COAT_NORMAL_STRIDE))
 }
 
-/// c f_cc for wo, wi on the same side of the coat (0 otherwise, and for a
-/// smooth coat), as the shading-frame BSDF returns it.
-fn coat_eval(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
+/// The pair (wo, wi) in the coat's frame on the front side, with their
+/// half vector and its cosine; None where the coat's lobe is 0 (a smooth
+/// coat, or wo and wi on different sides of the coat).
+fn coat_pair(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3, Vec3, f32)> {
     if cc.smooth() || wo.z == 0.0 {
-        return 0.0;
+        return None;
     }
     let side = side_of(wo);
     let (wo_c, wi_c) = (cc.local(front(wo, side)), cc.local(front(wi, side)));
     if wo_c.z <= 0.0 || wi_c.z <= 0.0 {
-        return 0.0;
+        return None;
     }
-    let a = cc.a();
     let h = (wo_c + wi_c).normalize();
     let dot = wo_c.dot(h);
-    if dot <= 0.0 {
+    (dot > 0.0).then_some((wo_c, wi_c, h, dot))
+}
+
+/// c f_cc as the shading-frame BSDF returns it (0 where [`coat_pair`] is
+/// None).
+fn coat_eval(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
+    let Some((wo_c, wi_c, h, dot)) = coat_pair(cc, wo, wi) else {
         return 0.0;
-    }
+    };
+    let a = cc.a();
     let f = cc.weight
         * fresnel_dielectric(dot, CLEARCOAT_IOR)
         * ggx_d(h, a, a)
@@ -158,19 +176,9 @@ fn coat_eval(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
 }
 
 fn coat_pdf(cc: &Clearcoat, wo: Vec3, wi: Vec3) -> f32 {
-    if cc.smooth() || wo.z == 0.0 {
+    let Some((wo_c, _, h, dot)) = coat_pair(cc, wo, wi) else {
         return 0.0;
-    }
-    let side = side_of(wo);
-    let (wo_c, wi_c) = (cc.local(front(wo, side)), cc.local(front(wi, side)));
-    if wo_c.z <= 0.0 || wi_c.z <= 0.0 {
-        return 0.0;
-    }
-    let h = (wo_c + wi_c).normalize();
-    let dot = wo_c.dot(h);
-    if dot <= 0.0 {
-        return 0.0;
-    }
+    };
     ggx_pdf_visible(wo_c, h, cc.a(), cc.a()) / (4.0 * dot)
 }
 

@@ -89,10 +89,12 @@ impl CoatParams {
 
     /// The clear coat, if any.
     pub fn clearcoat(&self) -> Option<super::clearcoat::Clearcoat> {
-        (self.clearcoat > 0.0).then_some(super::clearcoat::Clearcoat {
-            weight: self.clearcoat,
-            alpha: self.clearcoat_alpha,
-            normal: self.clearcoat_normal,
+        (self.clearcoat > 0.0).then(|| {
+            super::clearcoat::Clearcoat::new(
+                self.clearcoat,
+                self.clearcoat_alpha,
+                self.clearcoat_normal,
+            )
         })
     }
 }
