@@ -17,6 +17,7 @@ pub mod coated;
 pub mod conductor;
 pub mod dielectric;
 pub mod diffuse;
+pub mod fold;
 pub mod fresnel;
 pub mod metallic;
 pub mod microfacet;
