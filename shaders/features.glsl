@@ -26,6 +26,7 @@ layout(constant_id = 0) const uint GLINT_FEATURES = 0xffffffffu;
 #define F_COATED 16384u
 #define F_PLASTIC 32768u
 #define F_THIN_DIELECTRIC 65536u
+#define F_NORMAL_MAP 131072u
 
 #define HAS(f) ((GLINT_FEATURES & (f)) != 0u)
 

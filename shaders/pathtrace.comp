@@ -28,6 +28,7 @@ bool bvh_present(uint tri, float u, float v, vec3 o, vec3 d) {
 #include "bvh.glsl"
 #endif
 #include "bsdf/bsdf.glsl"
+#include "bsdf/fold.glsl"
 #include "integrator/rng.glsl"
 #include "integrator/sobol.glsl"
 #include "integrator/frame.glsl"
@@ -104,6 +105,9 @@ struct SurfaceFrame {
     vec3 ng;
     vec3 ns;
     Frame frame;
+    // A normal-mapped hit on a BSDF without transmission: directions below
+    // the geometric surface fold back above it (bsdf/fold.glsl).
+    bool fold;
 };
 
 SurfaceFrame surface(uint tri, float u, float v) {
@@ -112,6 +116,7 @@ SurfaceFrame surface(uint tri, float u, float v) {
     sf.ng = normalize(triangle_normal(t));
     float w = 1.0 - u - v;
     sf.ns = sf.ng;
+    sf.fold = false;
     // The triangle's packed shading data (glint_cpu::Scene::set_shading).
     uint flags = floatBitsToUint(t.p2.w);
     uint off = flags >> TRI_SHADING_SHIFT;
@@ -147,6 +152,7 @@ void apply_textures(uint material, uint tri, float u, float v, vec3 wo, inout Su
         sf.ns = ns;
     }
     m = textured_bsdf(mt, m, tri, u, v);
+    sf.fold = HAS(F_NORMAL_MAP) && mt.normal.texture != NO_TEXTURE && !bsdf_has_transmission(m);
     // The clear coat's own normal, where a normal map tilts either.
     if ((m.kind == KIND_COATED || m.kind == KIND_METALLIC) && m.extra.y > 0.0
         && (mt.normal.texture != NO_TEXTURE || mt.clearcoat_normal.texture != NO_TEXTURE)) {
@@ -247,6 +253,9 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
             apply_textures(material, hit.tri, hit.u, hit.v, wo, sf, m);
         }
         vec3 wo_local = frame_to_local(sf.frame, wo);
+        // A normal-mapped reflecting hit folds its BSDF (bsdf/fold.glsl).
+        bool fold = HAS(F_NORMAL_MAP) && sf.fold;
+        vec3 fold_n = fold ? fold_normal(frame_to_local(sf.frame, sf.ng), wo_local) : vec3(0.0);
         vec3 bg_normal = background_direction_frame(sf.ns, wo, bsdf_has_transmission(m));
 
         bool lights_present = params.p_area + params.p_punctual + params.p_background > 0.0;
@@ -255,29 +264,44 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         if (sample_lights
             && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls)) {
             vec3 wi_local = frame_to_local(sf.frame, ls.wi);
-            bool same_side = (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0);
-            if (same_side) {
-                vec3 f = bsdf_eval(m, wo_local, wi_local) * abs(wi_local.z);
-                if (max(f.x, max(f.y, f.z)) > 0.0) {
-                    vec3 so;
-                    vec3 sd;
-                    float stmax;
-                    shadow_ray(p, p_err, sf.ng, ls, so, sd, stmax);
-                    rays += 1u;
-                    if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
-                        float w = ls.delta ? 1.0 : mis_light(params.mis, ls.pdf, bsdf_pdf(m, wo_local, wi_local));
-                        radiance += throughput * f * ls.weight * w;
+            // The light-leak rule, or folded (Fold::eval_pdf) f |cos| and
+            // the density summed over wi and its mirror image.
+            bool valid = fold ? dot(wi_local, fold_n) > 0.0
+                              : (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0);
+            uint terms = valid ? (fold ? 2u : 1u) : 0u;
+            vec3 f = vec3(0.0);
+            for (uint k = 0u; k < terms; ++k) {
+                vec3 w = k == 0u ? wi_local : fold_mirror(fold_n, wi_local);
+                f += bsdf_eval(m, wo_local, w) * abs(w.z);
+            }
+            if (max(f.x, max(f.y, f.z)) > 0.0) {
+                vec3 so;
+                vec3 sd;
+                float stmax;
+                shadow_ray(p, p_err, sf.ng, ls, so, sd, stmax);
+                rays += 1u;
+                if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
+                    float pdf = 0.0;
+                    for (uint k = 0u; k < terms && !ls.delta; ++k) {
+                        pdf += bsdf_pdf(m, wo_local, k == 0u ? wi_local : fold_mirror(fold_n, wi_local));
                     }
+                    float w = ls.delta ? 1.0 : mis_light(params.mis, ls.pdf, pdf);
+                    radiance += throughput * f * ls.weight * w;
                 }
             }
         }
 
         BsdfSample bs;
-        if (!bsdf_sample(m, wo_local, u_bsdf_lobe, u_bsdf, bs)) {
+        if (!bsdf_sample(m, wo_local, u_bsdf_lobe, u_bsdf, bs)
+            || (fold && !fold_sample(m, fold_n, wo_local, bs))) {
             break;
         }
         vec3 wi = normalize(frame_to_world(sf.frame, bs.wi));
-        if ((dot(wi, sf.ng) > 0.0) != (bs.wi.z > 0.0)) {
+        // The light-leak rule; folded, wi is on wo's side of the surface
+        // (up to rounding at the horizon).
+        bool leaks = fold ? (dot(wi, sf.ng) > 0.0) != (dot(wo, sf.ng) > 0.0)
+                          : (dot(wi, sf.ng) > 0.0) != (bs.wi.z > 0.0);
+        if (leaks) {
             break;
         }
         throughput *= bs.weight;

@@ -599,6 +599,8 @@ fn info_describes_the_textured_asset() {
         "roughness texture 1.G x 1.0000",
         "baseColor texture 0 x 1.0000,1.0000,1.0000",
         "normal texture 2 x scale 1",
+        // The kernel carries the fold for the normal-mapped material.
+        "normal-map, textures",
         // The model each maps to (the glTF non-metal is the coated one).
         "glTF per texel: metal/coated non-metal blend",
         "coated non-metal (ggx coat alpha 1.0000 ior 1.5000 over diffuse base 0.7000,0.3000,0.2500)",

@@ -88,6 +88,37 @@ fn blend_quad_of_alpha_0_3_transmits_70_percent_to_camera_and_shadow_rays() {
 }
 
 #[test]
+fn normal_mapped_white_furnace_loses_nothing_on_either_backend() {
+    let ctx = common::context();
+    // A white Lambertian under a 60-degree map in a white sky: folded at
+    // the geometric surface (glint_cpu::bsdf::fold, shaders/bsdf/fold.glsl)
+    // it reflects everything, as the unmapped one does (0.998 on the CPU,
+    // cpu/tests/gltf_viewers.rs); discarding what the tilted lobe sends
+    // into the surface kept 0.882 (measured on the CPU).
+    let path = viewer::mapped_sphere(
+        "furnace_fold",
+        viewer::white_diffuse(),
+        Some(60f32.to_radians()),
+    );
+    let (size, spp) = (12u32, 16u32);
+    let mut means = Vec::new();
+    for (backend, f) in both(&ctx, &path, size, spp, 5) {
+        let n = (f.width * f.height) as usize;
+        let m = (0..n).map(|i| f.mean(i).x).sum::<f32>() / n as f32;
+        let se = (0..n).map(|i| f.variance_of_mean(i).x).sum::<f32>().sqrt() / n as f32;
+        assert!(
+            (m - 1.0).abs() < 5.0 * se + 5e-3,
+            "{backend}: furnace mean {m} (standard error {se})"
+        );
+        means.push(m);
+    }
+    eprintln!(
+        "furnace under a 60-degree map: gpu {} cpu {}",
+        means[0], means[1]
+    );
+}
+
+#[test]
 fn normal_mapped_glossy_sphere_has_no_black_rims_on_either_backend() {
     let ctx = common::context();
     // As cpu/tests/gltf_viewers.rs: the smooth metal keeps (nearly) all,

@@ -71,6 +71,7 @@ fn the_glsl_feature_bits_are_the_rust_ones() {
         ("F_COATED", Features::COATED),
         ("F_PLASTIC", Features::PLASTIC),
         ("F_THIN_DIELECTRIC", Features::THIN_DIELECTRIC),
+        ("F_NORMAL_MAP", Features::NORMAL_MAP),
     ];
     let mut defined = 0;
     for line in src.lines() {
@@ -93,7 +94,7 @@ fn the_glsl_feature_bits_are_the_rust_ones() {
 #[test]
 fn specialised_and_generic_kernels_give_the_same_image() {
     let ctx = common::context();
-    let cases: [(&str, i32, bool); 9] = [
+    let cases: [(&str, i32, bool); 10] = [
         ("cornell.gltf", -1, true),
         ("dielectric.gltf", 1, true),
         ("diffuse.gltf", -1, true),
@@ -103,6 +104,8 @@ fn specialised_and_generic_kernels_give_the_same_image() {
         ("dielectric.gltf", -1, true),
         ("roughdielectric.gltf", 4, true),
         ("bunny.glb", 2, true),
+        // Normal-mapped: the fold (feature normal-map) on both kernels.
+        ("textured.gltf", -1, true),
     ];
     for (file, max_depth, nee) in cases {
         let mut scene = glint::cpu::loader::load(&asset(file)).unwrap();

@@ -53,11 +53,14 @@ impl Features {
     pub const PLASTIC: u32 = 1 << 15;
     /// Mitsuba's `thindielectric`.
     pub const THIN_DIELECTRIC: u32 = 1 << 16;
+    /// A normal-mapped material: where its BSDF has no transmission, it
+    /// folds at the geometric surface ([`crate::bsdf::fold`]).
+    pub const NORMAL_MAP: u32 = 1 << 17;
 
     /// Every feature: the generic kernel.
-    pub const ALL: Features = Features((1 << 17) - 1);
+    pub const ALL: Features = Features((1 << 18) - 1);
 
-    const NAMES: [(u32, &'static str); 17] = [
+    const NAMES: [(u32, &'static str); 18] = [
         (Self::DIFFUSE, "diffuse"),
         (Self::CONDUCTOR, "conductor"),
         (Self::DIELECTRIC, "dielectric"),
@@ -75,6 +78,7 @@ impl Features {
         (Self::COATED, "coated"),
         (Self::PLASTIC, "plastic"),
         (Self::THIN_DIELECTRIC, "thindielectric"),
+        (Self::NORMAL_MAP, "normal-map"),
     ];
 
     pub fn has(self, bit: u32) -> bool {
@@ -140,6 +144,15 @@ impl Features {
                 .is_some_and(|t| t.mode == crate::texture::MAP_GLTF);
             if per_hit_blend && !matches!(m.bsdf, Bsdf::Dielectric { .. }) {
                 f |= Self::METALLIC;
+            }
+            // Whether the fold applies is decided per hit (a texture may
+            // take the transmission away).
+            if scene
+                .textures
+                .material(i as u32)
+                .is_some_and(|t| t.normal.is_some())
+            {
+                f |= Self::NORMAL_MAP;
             }
             match &m.bsdf {
                 Bsdf::Diffuse { .. } => f |= Self::DIFFUSE,

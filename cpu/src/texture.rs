@@ -591,8 +591,9 @@ pub fn textured_coat(
 /// `ng`. The mapped normal is then adapted ([`valid_reflection_normal`])
 /// so that the mirror direction of `wo` about it stays above the
 /// geometric surface: a glossy lobe about a strongly tilted normal would
-/// otherwise point into the surface, where the light-leak rule ends the
-/// path (black rims on every bump).
+/// otherwise point into the surface (black rims on every bump). What a
+/// wider lobe still sends below, the integrator folds back up
+/// ([`crate::bsdf::fold`]).
 #[allow(clippy::too_many_arguments)]
 pub fn normal_mapped(
     st: &SceneTextures,

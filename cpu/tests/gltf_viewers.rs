@@ -259,20 +259,25 @@ fn normal_mapped_glossy_sphere_has_no_black_rims() {
 #[test]
 fn white_furnace_of_normal_mapped_surfaces() {
     // Sky 1 everywhere, a convex object: a pixel is the surface's
-    // directional albedo. Mapped or not, it is at most 1 (no energy is
-    // created by the adapted normal). What the map loses is the part of
-    // the lobe below the geometric surface, which the adaptation keeps
-    // small but not zero (README, "Integrator"): measured at 35 degrees,
-    // white diffuse 0.939 mapped (0.907 before the adaptation) against
-    // 0.998 unmapped, the rough metal (roughness 0.5) 0.814 (0.750 before)
-    // against 0.898. The bounds: the diffuse keeps all but the cosine
-    // lobe's share below the surface at normal incidence, (1 - cos t) / 2;
-    // the metal loses at most 0.1 more than unmapped.
-    let tilt = 35f32.to_radians();
-    for (name, m) in [
-        ("furnace_diffuse", viewer::white_diffuse()),
-        ("furnace_metal", viewer::metal(0.5)),
+    // directional albedo. Mapped or not, it is at most 1; mapped, the BSDF
+    // folds at the geometric surface (glint_cpu::bsdf::fold) and loses
+    // nothing the unmapped surface does not. Measured at 35 degrees
+    // (24x24, 64 spp): white diffuse 1.000 mapped (0.939 when the part
+    // below the surface was discarded) against 0.998 unmapped, the rough
+    // metal (roughness 0.5) MAPPED_METAL against 0.898 (0.814 discarded).
+    for (name, m, deg) in [
+        ("furnace_diffuse", viewer::white_diffuse(), 35f32),
+        ("furnace_metal", viewer::metal(0.5), 35.0),
+        ("furnace_diffuse_60", viewer::white_diffuse(), 60.0),
+        ("furnace_metal_60", viewer::metal(0.5), 60.0),
+        // The glTF non-metal: a coat over a white Lambertian base.
+        (
+            "furnace_coated_60",
+            json!({ "pbrMetallicRoughness": { "metallicFactor": 0, "roughnessFactor": 0.3 } }),
+            60.0,
+        ),
     ] {
+        let tilt = deg.to_radians();
         let mapped = load(&viewer::mapped_sphere(name, m.clone(), Some(tilt))).unwrap();
         let plain = load(&viewer::mapped_sphere(&format!("{name}_plain"), m, None)).unwrap();
         let fm = render(&mapped, 24, 64, 2);
@@ -297,15 +302,21 @@ fn white_furnace_of_normal_mapped_surfaces() {
         }
         let (mm, mp) = (image_mean(&fm).x, image_mean(&fp).x);
         eprintln!("{name}: mapped {mm:.4}, unmapped {mp:.4}");
-        if name == "furnace_metal" {
-            assert!(
-                mm >= mp - 0.1,
-                "{name}: mapped {mm} loses much more than unmapped {mp}"
-            );
-        } else {
-            // At most the lobe's share below the surface at this tilt.
-            assert!(mm >= 1.0 - (1.0 - tilt.cos()) / 2.0 - 0.01, "{name}: {mm}");
-        }
+        // Loses no more than the unmapped surface, up to the images'
+        // noise (5 standard errors of the difference of the two means).
+        let se = |f: &Film| {
+            let n = (f.width * f.height) as f32;
+            ((0..n as usize)
+                .map(|i| f.variance_of_mean(i).x)
+                .sum::<f32>())
+            .sqrt()
+                / n
+        };
+        let tol = 5.0 * (se(&fm).powi(2) + se(&fp).powi(2)).sqrt();
+        assert!(
+            mm >= mp - tol,
+            "{name}: mapped {mm} loses more than unmapped {mp} (tolerance {tol})"
+        );
     }
 }
 
@@ -464,15 +475,19 @@ fn baked_band(test: &str) -> (Scene, Scene) {
     let scene = |normals: &[Vec3], map: bool, name: &str| {
         let mut d = Doc::new();
         let mut m = viewer::white_diffuse();
-        if map {
-            let t = d.png_texture(
+        // The smooth surface carries a flat map, so that both fold their
+        // BSDF at the geometric surface alike (glint_cpu::bsdf::fold).
+        let t = if map {
+            d.png_texture(
                 w as u32,
                 h as u32,
                 &texels.concat(),
                 json!({ "magFilter": 9729 }),
-            );
-            m["normalTexture"] = json!({ "index": t });
-        }
+            )
+        } else {
+            d.png_texture(1, 1, &[128u8, 128, 255, 255], Value::Null)
+        };
+        m["normalTexture"] = json!({ "index": t });
         let m = d.material(m);
         viewer::add_band(&mut d, &b, Some(normals), m);
         viewer::head_on(&mut d, 4.0);

@@ -44,7 +44,10 @@
 //!   A normal-mapped normal is first adapted as Cycles does
 //!   (`texture::valid_reflection_normal`) so that the mirror direction of
 //!   wo stays above the geometric surface: glossy lobes keep their energy
-//!   instead of ending in black rims where the map tilts far.
+//!   instead of ending in black rims where the map tilts far. On a
+//!   normal-mapped BSDF without transmission the rule gives way to the
+//!   fold ([`crate::bsdf::fold`]): what the lobe sends below the geometric
+//!   surface leaves mirrored above it, so the map loses no energy.
 
 // `!(x > 0.0)` on floats is meant: it rejects NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -60,6 +63,7 @@ use rayon::prelude::*;
 pub use gpu::{GpuParams, GpuSceneData, gpu_scene_data};
 
 use crate::bsdf::Bsdf;
+use crate::bsdf::fold::Fold;
 use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
 use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind, add_sample};
@@ -313,6 +317,10 @@ struct SurfaceFrame {
     ng: Vec3,
     ns: Vec3,
     frame: Frame,
+    /// A normal-mapped hit on a BSDF without transmission: directions
+    /// below the geometric surface are folded back above it ([`Fold`])
+    /// instead of discarded.
+    fold: bool,
 }
 
 impl<'a> PathTracer<'a> {
@@ -363,7 +371,12 @@ impl<'a> PathTracer<'a> {
         } else {
             Frame::from_normal(ns)
         };
-        SurfaceFrame { ng, ns, frame }
+        SurfaceFrame {
+            ng,
+            ns,
+            frame,
+            fold: false,
+        }
     }
 
     /// A textured material at a hit seen from `wo`: the normal map tilts
@@ -389,6 +402,7 @@ impl<'a> PathTracer<'a> {
             sf.ns = ns;
         }
         *bsdf = textured_bsdf(st, mt, bsdf, tri, u, v);
+        sf.fold = mt.normal.is_some() && !bsdf.has_transmission();
         // The clear coat's own normal (clearcoatNormalTexture, else the
         // unmapped one), where a normal map tilts either.
         if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = bsdf
@@ -421,6 +435,54 @@ impl<'a> PathTracer<'a> {
                 tmax: f32::MAX,
             }
         }
+    }
+
+    /// Next-event estimation at a hit: the light sample `ls`'s
+    /// f |cos| Le / pdf, MIS-weighted, where the shadow ray from `p` (error
+    /// bound `p_err`) is clear. Directions on different sides of the
+    /// geometric and shading normals are discarded (the light-leak rule),
+    /// except that a folded BSDF (`fold`) takes every direction above the
+    /// geometric surface.
+    #[allow(clippy::too_many_arguments)]
+    fn direct_light(
+        &self,
+        ls: &LightSample,
+        p: Vec3,
+        p_err: Vec3,
+        sf: &SurfaceFrame,
+        bsdf: &Bsdf,
+        wo_local: Vec3,
+        fold: Option<Fold>,
+        rays: &mut u64,
+    ) -> Vec3 {
+        let wi_local = sf.frame.to_local(ls.wi);
+        // f |cos| and the BSDF's density for MIS (deferred until the
+        // shadow ray is clear, except where the fold has both).
+        let (f, folded_pdf) = match fold {
+            Some(fd) => {
+                let (f, pdf) = fd.eval_pdf(bsdf, wo_local, wi_local);
+                (f, Some(pdf))
+            }
+            None if (ls.wi.dot(sf.ng) > 0.0) == (wi_local.z > 0.0) => {
+                (bsdf.eval(wo_local, wi_local) * wi_local.z.abs(), None)
+            }
+            None => (Vec3::ZERO, None),
+        };
+        if !(f.max_element() > 0.0) {
+            return Vec3::ZERO;
+        }
+        let shadow = self.shadow_ray(p, p_err, sf.ng, ls);
+        *rays += 1;
+        if !(shadow.tmax > 0.0) || self.scene.occluded_with(&shadow, self.masks) {
+            return Vec3::ZERO;
+        }
+        let w = if ls.delta {
+            1.0
+        } else {
+            let pdf = folded_pdf.unwrap_or_else(|| bsdf.pdf(wo_local, wi_local));
+            mis_light(self.mis, ls.pdf, pdf)
+        };
+        f * ls.weight * w
     }
 
     /// One radiance sample for pixel (x, y), sample index `s`; `rays`
@@ -493,6 +555,9 @@ impl<'a> PathTracer<'a> {
             }
             let bsdf = &bsdf;
             let wo_local = sf.frame.to_local(wo);
+            let fold = sf
+                .fold
+                .then(|| Fold::new(sf.frame.to_local(sf.ng), wo_local));
             let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
 
             // Next-event estimation.
@@ -502,31 +567,26 @@ impl<'a> PathTracer<'a> {
                     self.lights
                         .sample(scene, p, bg_normal, u_light_cat, u_light_idx, u_light)
             {
-                let wi_local = sf.frame.to_local(ls.wi);
-                let same_side = (ls.wi.dot(sf.ng) > 0.0) == (wi_local.z > 0.0);
-                if same_side {
-                    let f = bsdf.eval(wo_local, wi_local) * wi_local.z.abs();
-                    if f.max_element() > 0.0 {
-                        let shadow = self.shadow_ray(p, p_err, sf.ng, &ls);
-                        *rays += 1;
-                        if shadow.tmax > 0.0 && !scene.occluded_with(&shadow, self.masks) {
-                            let w = if ls.delta {
-                                1.0
-                            } else {
-                                mis_light(self.mis, ls.pdf, bsdf.pdf(wo_local, wi_local))
-                            };
-                            radiance += throughput * f * ls.weight * w;
-                        }
-                    }
-                }
+                radiance +=
+                    throughput * self.direct_light(&ls, p, p_err, &sf, bsdf, wo_local, fold, rays);
             }
 
             // BSDF sampling: the next ray.
-            let Some(bs) = bsdf.sample(wo_local, u_bsdf_lobe, u_bsdf) else {
+            let bs = match fold {
+                Some(fd) => fd.sample(bsdf, wo_local, u_bsdf_lobe, u_bsdf),
+                None => bsdf.sample(wo_local, u_bsdf_lobe, u_bsdf),
+            };
+            let Some(bs) = bs else {
                 break;
             };
             let wi = sf.frame.to_world(bs.wi).normalize();
-            if (wi.dot(sf.ng) > 0.0) != (bs.wi.z > 0.0) {
+            // The light-leak rule; folded, wi is on wo's side of the surface
+            // (up to rounding at the horizon).
+            let leaks = match fold {
+                Some(_) => (wi.dot(sf.ng) > 0.0) != (wo.dot(sf.ng) > 0.0),
+                None => (wi.dot(sf.ng) > 0.0) != (bs.wi.z > 0.0),
+            };
+            if leaks {
                 break;
             }
             throughput *= bs.weight;
