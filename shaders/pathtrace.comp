@@ -260,40 +260,58 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
 
         bool lights_present = params.p_area + params.p_punctual + params.p_background > 0.0;
         bool sample_lights = HAS(F_NEE) && nee && lights_present && !bsdf_is_delta(m);
+        // The BSDF sample first (its random numbers are its own): folded,
+        // its mirror image is evaluated in the light sample's loop below.
+        BsdfSample bs;
+        bool sampled = bsdf_sample(m, wo_local, u_bsdf_lobe, u_bsdf, bs);
+        bool partner = fold && sampled && !bs.delta;
+
+        // Next-event estimation: the light-leak rule, or folded
+        // (Fold::eval_pdf) f |cos| and the density summed over wi and its
+        // mirror image.
         LightSample ls;
-        if (sample_lights
-            && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls)) {
-            vec3 wi_local = frame_to_local(sf.frame, ls.wi);
-            // The light-leak rule, or folded (Fold::eval_pdf) f |cos| and
-            // the density summed over wi and its mirror image.
-            bool valid = fold ? dot(wi_local, fold_n) > 0.0
-                              : (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0);
-            uint terms = valid ? (fold ? 2u : 1u) : 0u;
-            vec3 f = vec3(0.0);
-            for (uint k = 0u; k < terms; ++k) {
-                vec3 w = k == 0u ? wi_local : fold_mirror(fold_n, wi_local);
-                f += bsdf_eval(m, wo_local, w) * abs(w.z);
+        bool lit = sample_lights && lights_sample(p, bg_normal, u_light_cat, u_light_idx, u_light, ls);
+        vec3 wi_local = lit ? frame_to_local(sf.frame, ls.wi) : vec3(0.0, 0.0, 1.0);
+        bool valid = lit && (fold ? dot(wi_local, fold_n) > 0.0
+                                  : (dot(ls.wi, sf.ng) > 0.0) == (wi_local.z > 0.0));
+        uint terms = valid ? (fold ? 2u : 1u) : 0u;
+        // One site evaluates them all, the light sample's terms and then
+        // the BSDF sample's mirror image (lavapipe's compile time grows
+        // with every inlined copy of the BSDFs); a kernel with normal maps
+        // takes the densities here too, others only for a clear shadow ray.
+        vec3 f = vec3(0.0);
+        float pdf = 0.0;
+        vec3 partner_f = vec3(0.0);
+        float partner_pdf = 0.0;
+        uint evals = terms + (partner ? 1u : 0u);
+        for (uint k = 0u; k < evals; ++k) {
+            vec3 w = k == terms ? fold_mirror(fold_n, bs.wi) : (k == 0u ? wi_local : fold_mirror(fold_n, wi_local));
+            vec3 fk = bsdf_eval(m, wo_local, w) * abs(w.z);
+            float pk = HAS(F_NORMAL_MAP) ? bsdf_pdf(m, wo_local, w) : 0.0;
+            if (k < terms) {
+                f += fk;
+                pdf += pk;
+            } else {
+                partner_f = fk;
+                partner_pdf = pk;
             }
-            if (max(f.x, max(f.y, f.z)) > 0.0) {
-                vec3 so;
-                vec3 sd;
-                float stmax;
-                shadow_ray(p, p_err, sf.ng, ls, so, sd, stmax);
-                rays += 1u;
-                if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
-                    float pdf = 0.0;
-                    for (uint k = 0u; k < terms && !ls.delta; ++k) {
-                        pdf += bsdf_pdf(m, wo_local, k == 0u ? wi_local : fold_mirror(fold_n, wi_local));
-                    }
-                    float w = ls.delta ? 1.0 : mis_light(params.mis, ls.pdf, pdf);
-                    radiance += throughput * f * ls.weight * w;
+        }
+        if (valid && max(f.x, max(f.y, f.z)) > 0.0) {
+            vec3 so;
+            vec3 sd;
+            float stmax;
+            shadow_ray(p, p_err, sf.ng, ls, so, sd, stmax);
+            rays += 1u;
+            if (stmax > 0.0 && !bvh_occluded(so, sd, stmax)) {
+                if (!HAS(F_NORMAL_MAP) && !ls.delta) {
+                    pdf = bsdf_pdf(m, wo_local, wi_local);
                 }
+                float w = ls.delta ? 1.0 : mis_light(params.mis, ls.pdf, pdf);
+                radiance += throughput * f * ls.weight * w;
             }
         }
 
-        BsdfSample bs;
-        if (!bsdf_sample(m, wo_local, u_bsdf_lobe, u_bsdf, bs)
-            || (fold && !fold_sample(m, fold_n, wo_local, bs))) {
+        if (!sampled || (fold && !fold_reweigh(fold_n, partner_f, partner_pdf, bs))) {
             break;
         }
         vec3 wi = normalize(frame_to_world(sf.frame, bs.wi));

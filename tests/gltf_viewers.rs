@@ -122,8 +122,10 @@ fn normal_mapped_white_furnace_loses_nothing_on_either_backend() {
 fn normal_mapped_glossy_sphere_has_no_black_rims_on_either_backend() {
     let ctx = common::context();
     // As cpu/tests/gltf_viewers.rs: the smooth metal keeps (nearly) all,
-    // the rough one loses the part of its lobe below the surface, never all.
-    for (name, r, least) in [("rims_smooth", 0.0, 0.95), ("rims_rough", 0.3, 0.25)] {
+    // the rough one too, folded (darkest pixel at 8 spp 0.79 on both
+    // backends; 0.25 was the bound when the part of the lobe below the
+    // surface was discarded).
+    for (name, r, least) in [("rims_smooth", 0.0, 0.95), ("rims_rough", 0.3, 0.55)] {
         let path = viewer::mapped_sphere(name, viewer::metal(r), Some(50f32.to_radians()));
         let mut means = Vec::new();
         for (backend, f) in both(&ctx, &path, 12, 8, 3) {

@@ -239,9 +239,10 @@ fn valid_reflection_normal_lifts_the_mirror_direction_and_keeps_valid_ones() {
 fn normal_mapped_glossy_sphere_has_no_black_rims() {
     // A 50-degree tilt: seen head-on, the mirror direction about the
     // mapped normal would point 10 degrees into the surface.
-    // The smooth metal keeps all of it (F0 0.999); the rough one still
-    // loses the part of its lobe below the surface (README), never all.
-    for (name, r, least) in [("rims_smooth", 0.0, 0.95), ("rims_rough", 0.3, 0.25)] {
+    // The smooth metal keeps all of it (F0 0.999); the rough one keeps the
+    // part of its lobe below the surface too, folded back (darkest pixel
+    // 0.84 at 16 spp; 0.25 was the bound when that part was discarded).
+    for (name, r, least) in [("rims_smooth", 0.0, 0.95), ("rims_rough", 0.3, 0.6)] {
         let s = load(&viewer::mapped_sphere(
             name,
             viewer::metal(r),

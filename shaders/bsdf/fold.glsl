@@ -18,22 +18,21 @@ vec3 fold_mirror(vec3 n, vec3 w) {
     return w - 2.0 * dot(w, n) * n;
 }
 
-// Fold::sample after bsdf_sample, in place: a sample below the geometric
+// Fold::reweigh, after bsdf_sample, in place: a sample below the geometric
 // surface leaves mirrored above it; a non-delta one is weighed by the
-// folded f and pdf, the pair's other member evaluated here (the sampled
-// one's f |cos| is its weight times its pdf). False where the folded pdf
-// vanishes. The folded evaluation at a light sample is the integrator's
-// (pathtrace.comp sums over wi and its mirror image in one loop, so the
-// kernel holds one copy of bsdf_eval and bsdf_pdf there).
-bool fold_sample(Material m, vec3 n, vec3 wo, inout BsdfSample s) {
+// folded f and pdf, from the sampled direction's f |cos| (its weight times
+// its pdf) and its mirror image's, `partner_f` and `partner_pdf` (which
+// pathtrace.comp evaluates in its light sample's loop, so that the kernel
+// holds one copy of bsdf_eval and bsdf_pdf). False where the folded pdf
+// vanishes.
+bool fold_reweigh(vec3 n, vec3 partner_f, float partner_pdf, inout BsdfSample s) {
     vec3 a = s.wi;
     if (!s.delta) {
-        vec3 r = fold_mirror(n, a);
-        float pdf = s.pdf + bsdf_pdf(m, wo, r);
+        float pdf = s.pdf + partner_pdf;
         if (!(pdf > 0.0)) {
             return false;
         }
-        s.weight = (s.weight * s.pdf + bsdf_eval(m, wo, r) * abs(r.z)) / pdf;
+        s.weight = (s.weight * s.pdf + partner_f) / pdf;
         s.pdf = pdf;
     }
     if (!(dot(a, n) > 0.0)) {

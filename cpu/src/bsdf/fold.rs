@@ -68,21 +68,37 @@ impl Fold {
         (f, bsdf.pdf(wo, wi) + bsdf.pdf(wo, m))
     }
 
-    /// The BSDF's sample, mirrored above the surface where it falls below;
-    /// a non-delta sample weighed by the folded f and pdf: the pair's
-    /// other member is evaluated, the sampled one's f |cos| is its weight
-    /// times its pdf. A delta lobe keeps its weight: its mirror image
-    /// carries the same energy. None where the folded pdf vanishes.
+    /// The BSDF's sample, folded ([`Fold::reweigh`], its mirror image
+    /// evaluated here).
     pub fn sample(&self, bsdf: &Bsdf, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
-        let mut bs = bsdf.sample(wo, uc, u)?;
+        let bs = bsdf.sample(wo, uc, u)?;
+        if bs.delta {
+            return self.reweigh(bs, Vec3::ZERO, 0.0);
+        }
+        let r = self.mirror(bs.wi);
+        self.reweigh(bs, bsdf.eval(wo, r) * r.z.abs(), bsdf.pdf(wo, r))
+    }
+
+    /// A BSDF sample folded: mirrored above the surface where it falls
+    /// below; a non-delta one weighed by the folded f and pdf, from the
+    /// sampled direction's f |cos| (its weight times its pdf) and its
+    /// mirror image's, `partner_f` and `partner_pdf`. A delta lobe keeps its
+    /// weight: its mirror image carries the same energy. None where the
+    /// folded pdf vanishes. (The GPU kernel evaluates the mirror image in
+    /// its light sample's loop, so that it holds one copy of the BSDFs.)
+    pub fn reweigh(
+        &self,
+        mut bs: BsdfSample,
+        partner_f: Vec3,
+        partner_pdf: f32,
+    ) -> Option<BsdfSample> {
         let a = bs.wi;
         if !bs.delta {
-            let r = self.mirror(a);
-            let pdf = bs.pdf + bsdf.pdf(wo, r);
+            let pdf = bs.pdf + partner_pdf;
             if pdf.is_nan() || pdf <= 0.0 {
                 return None;
             }
-            bs.weight = (bs.weight * bs.pdf + bsdf.eval(wo, r) * r.z.abs()) / pdf;
+            bs.weight = (bs.weight * bs.pdf + partner_f) / pdf;
             bs.pdf = pdf;
         }
         if !self.above(a) {
