@@ -136,22 +136,16 @@ impl Features {
             .enumerate()
             .filter(|(_, (_, u))| **u)
         {
+            let textures = scene.textures.material(i as u32);
             // A textured glTF material is recomputed per hit as the
             // metallic blend, whatever its factors map to.
-            let per_hit_blend = scene
-                .textures
-                .material(i as u32)
-                .is_some_and(|t| t.mode == crate::texture::MAP_GLTF);
+            let per_hit_blend = textures.is_some_and(|t| t.mode == crate::texture::MAP_GLTF);
             if per_hit_blend && !matches!(m.bsdf, Bsdf::Dielectric { .. }) {
                 f |= Self::METALLIC;
             }
             // Whether the fold applies is decided per hit (a texture may
             // take the transmission away).
-            if scene
-                .textures
-                .material(i as u32)
-                .is_some_and(|t| t.normal.is_some())
-            {
+            if textures.is_some_and(|t| t.normal.is_some()) {
                 f |= Self::NORMAL_MAP;
             }
             match &m.bsdf {
@@ -439,7 +433,13 @@ mod tests {
                 && f.has(Features::SMITH_CORRELATED)
         );
         assert!(!f.has(Features::ANISOTROPIC));
+    }
 
+    #[test]
+    fn each_light_kind_present_and_absent() {
+        let diffuse = material(Bsdf::Diffuse {
+            reflectance: Vec3::ONE,
+        });
         let point = PunctualLight::Point {
             position: Vec3::Y,
             intensity: Vec3::ONE,
@@ -463,7 +463,10 @@ mod tests {
         lamp.emission = Vec3::ONE;
         let f = Features::of(&scene(vec![lamp], vec![], Vec3::ZERO), &opts());
         assert!(f.has(Features::AREA_LIGHTS) && f.has(Features::NEE));
+    }
 
+    #[test]
+    fn a_rough_clear_coat_needs_the_rough_code_and_unused_materials_nothing() {
         // A rough clear coat over a smooth non-metal: the rough code, for
         // the coat's lobe.
         let coat = crate::bsdf::coated::CoatParams {
@@ -494,7 +497,10 @@ mod tests {
         assert!(!f.has(Features::ROUGH), "{:?}", f.names());
 
         // A material no triangle uses adds nothing.
-        let mut s = scene(vec![diffuse.clone()], vec![], Vec3::ZERO);
+        let diffuse = material(Bsdf::Diffuse {
+            reflectance: Vec3::ONE,
+        });
+        let mut s = scene(vec![diffuse], vec![], Vec3::ZERO);
         s.materials.push(material(conductor(Roughness::SMOOTH)));
         assert!(!Features::of(&s, &opts()).has(Features::CONDUCTOR));
         assert_eq!(Features(Features::DIFFUSE).names(), ["diffuse"]);

@@ -312,6 +312,47 @@ pub struct PathTracer<'a> {
     pub masks: bool,
 }
 
+/// The MIS weight of an emitter a BSDF-sampled ray found: 1 unless the
+/// previous vertex could have found it by light sampling too (`prev_mis`),
+/// with the density `light_pdf` gives.
+fn emitter_weight(
+    mis: Mis,
+    prev_mis: bool,
+    prev_bsdf_pdf: f32,
+    light_pdf: impl FnOnce() -> f32,
+) -> f32 {
+    if prev_mis {
+        mis_bsdf(mis, prev_bsdf_pdf, light_pdf())
+    } else {
+        1.0
+    }
+}
+
+/// The BSDF's sample at a hit (folded where `fold` says) and its world
+/// direction; None where the BSDF samples nothing or the direction breaks
+/// the light-leak rule (folded, wi must leave on wo's side of the
+/// geometric surface, which it does up to rounding at the horizon).
+fn next_direction(
+    bsdf: &Bsdf,
+    sf: &SurfaceFrame,
+    wo: Vec3,
+    wo_local: Vec3,
+    fold: Option<Fold>,
+    uc: f32,
+    u: glam::Vec2,
+) -> Option<(crate::bsdf::BsdfSample, Vec3)> {
+    let bs = match fold {
+        Some(fd) => fd.sample(bsdf, wo_local, uc, u),
+        None => bsdf.sample(wo_local, uc, u),
+    }?;
+    let wi = sf.frame.to_world(bs.wi).normalize();
+    let leaks = match fold {
+        Some(_) => (wi.dot(sf.ng) > 0.0) != (wo.dot(sf.ng) > 0.0),
+        None => (wi.dot(sf.ng) > 0.0) != (bs.wi.z > 0.0),
+    };
+    (!leaks).then_some((bs, wi))
+}
+
 /// The interpolated shading frame at a hit, with the geometric normal.
 struct SurfaceFrame {
     ng: Vec3,
@@ -320,7 +361,16 @@ struct SurfaceFrame {
     /// A normal-mapped hit on a BSDF without transmission: directions
     /// below the geometric surface are folded back above it ([`Fold`])
     /// instead of discarded.
-    fold: bool,
+    folds: bool,
+}
+
+impl SurfaceFrame {
+    /// The fold of a BSDF here seen from `wo` (in the shading frame), where
+    /// the hit folds.
+    fn fold_for(&self, wo: Vec3) -> Option<Fold> {
+        self.folds
+            .then(|| Fold::new(self.frame.to_local(self.ng), wo))
+    }
 }
 
 impl<'a> PathTracer<'a> {
@@ -375,7 +425,7 @@ impl<'a> PathTracer<'a> {
             ng,
             ns,
             frame,
-            fold: false,
+            folds: false,
         }
     }
 
@@ -402,7 +452,7 @@ impl<'a> PathTracer<'a> {
             sf.ns = ns;
         }
         *bsdf = textured_bsdf(st, mt, bsdf, tri, u, v);
-        sf.fold = mt.normal.is_some() && !bsdf.has_transmission();
+        sf.folds = mt.normal.is_some() && !bsdf.has_transmission();
         // The clear coat's own normal (clearcoatNormalTexture, else the
         // unmapped one), where a normal map tilts either.
         if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = bsdf
@@ -412,6 +462,17 @@ impl<'a> PathTracer<'a> {
             coat.clearcoat_normal =
                 clearcoat_normal(st, mt, tri, u, v, sf.ng, &unmapped, &sf.frame);
         }
+    }
+
+    /// The shading frame and the BSDF of material `material` at a hit on
+    /// triangle `tri` seen from `wo`, its textures applied.
+    fn shade(&self, material: u32, tri: u32, u: f32, v: f32, wo: Vec3) -> (SurfaceFrame, Bsdf) {
+        let mut sf = self.surface(tri, u, v);
+        let mut bsdf = self.scene.materials[material as usize].bsdf;
+        if let Some(mt) = self.scene.textures.material(material) {
+            self.apply_textures(mt, tri, u, v, wo, &mut sf, &mut bsdf);
+        }
+        (sf, bsdf)
     }
 
     /// The shadow ray from `p` (error bound `err`, geometric normal `ng`)
@@ -508,12 +569,9 @@ impl<'a> PathTracer<'a> {
             *rays += 1;
             let Some(hit) = scene.intersect_with(&ray, self.masks) else {
                 if self.lights.probs.background > 0.0 {
-                    let w = if !prev_mis {
-                        1.0
-                    } else {
-                        let lp = self.lights.background_pdf(prev_bg_normal, ray.d);
-                        mis_bsdf(self.mis, prev_bsdf_pdf, lp)
-                    };
+                    let w = emitter_weight(self.mis, prev_mis, prev_bsdf_pdf, || {
+                        self.lights.background_pdf(prev_bg_normal, ray.d)
+                    });
                     radiance += throughput * w * self.lights.background_radiance(ray.d);
                 }
                 break;
@@ -530,12 +588,9 @@ impl<'a> PathTracer<'a> {
             if tri.light != NO_LIGHT
                 && let Some(le) = emitted(scene, hit.tri, hit.u, hit.v, wo)
             {
-                let w = if !prev_mis {
-                    1.0
-                } else {
-                    let lp = self.lights.area_pdf(scene, hit.tri, ray.d, hit.t);
-                    mis_bsdf(self.mis, prev_bsdf_pdf, lp)
-                };
+                let w = emitter_weight(self.mis, prev_mis, prev_bsdf_pdf, || {
+                    self.lights.area_pdf(scene, hit.tri, ray.d, hit.t)
+                });
                 radiance += throughput * w * le;
             }
 
@@ -545,19 +600,10 @@ impl<'a> PathTracer<'a> {
 
             // The fixed per-bounce budget of random numbers.
             let u = rng.bounce();
-            let (u_light_cat, u_light_idx, u_light) = (u.light_cat, u.light_idx, u.light);
-            let (u_bsdf_lobe, u_bsdf, u_rr) = (u.bsdf_lobe, u.bsdf, u.rr);
 
-            let mut sf = self.surface(hit.tri, hit.u, hit.v);
-            let mut bsdf: Bsdf = scene.materials[tri.material as usize].bsdf;
-            if let Some(mt) = scene.textures.material(tri.material) {
-                self.apply_textures(mt, hit.tri, hit.u, hit.v, wo, &mut sf, &mut bsdf);
-            }
-            let bsdf = &bsdf;
+            let (sf, bsdf) = self.shade(tri.material, hit.tri, hit.u, hit.v, wo);
             let wo_local = sf.frame.to_local(wo);
-            let fold = sf
-                .fold
-                .then(|| Fold::new(sf.frame.to_local(sf.ng), wo_local));
+            let fold = sf.fold_for(wo_local);
             let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
 
             // Next-event estimation.
@@ -565,30 +611,18 @@ impl<'a> PathTracer<'a> {
             if sample_lights
                 && let Some(ls) =
                     self.lights
-                        .sample(scene, p, bg_normal, u_light_cat, u_light_idx, u_light)
+                        .sample(scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
             {
                 radiance +=
-                    throughput * self.direct_light(&ls, p, p_err, &sf, bsdf, wo_local, fold, rays);
+                    throughput * self.direct_light(&ls, p, p_err, &sf, &bsdf, wo_local, fold, rays);
             }
 
             // BSDF sampling: the next ray.
-            let bs = match fold {
-                Some(fd) => fd.sample(bsdf, wo_local, u_bsdf_lobe, u_bsdf),
-                None => bsdf.sample(wo_local, u_bsdf_lobe, u_bsdf),
-            };
-            let Some(bs) = bs else {
+            let Some((bs, wi)) =
+                next_direction(&bsdf, &sf, wo, wo_local, fold, u.bsdf_lobe, u.bsdf)
+            else {
                 break;
             };
-            let wi = sf.frame.to_world(bs.wi).normalize();
-            // The light-leak rule; folded, wi is on wo's side of the surface
-            // (up to rounding at the horizon).
-            let leaks = match fold {
-                Some(_) => (wi.dot(sf.ng) > 0.0) != (wo.dot(sf.ng) > 0.0),
-                None => (wi.dot(sf.ng) > 0.0) != (bs.wi.z > 0.0),
-            };
-            if leaks {
-                break;
-            }
             throughput *= bs.weight;
             eta *= bs.eta;
             prev_mis = sample_lights && !bs.delta;
@@ -603,7 +637,7 @@ impl<'a> PathTracer<'a> {
 
             if depth >= RR_DEPTH {
                 let q = (throughput.max_element() * eta * eta).min(RR_MAX_PROB);
-                if !(u_rr < q) {
+                if !(u.rr < q) {
                     break;
                 }
                 throughput /= q;
