@@ -4,14 +4,24 @@
 //! `.comp`, e.g. `"pathtrace"`, `"tests/bsdf_test"`), plus the
 //! [`VARIANTS`]: a kernel compiled again with a macro defined.
 //!
+//! It first writes the GLSL side of the device ABI (`cpu/src/abi.rs`,
+//! compiled into this script too): `$OUT_DIR/glsl/glint_abi.glsl` (every
+//! shared struct and constant) and `glint_bindings.glsl` (the path
+//! tracer's binding table and push constants).
+//!
 //! `#include "x.glsl"` resolves relative to the including file first, then
-//! relative to `shaders/`; `#include <x.glsl>` only relative to `shaders/`.
+//! relative to `shaders/`, then to the generated folder; `#include <x.glsl>`
+//! skips the first.
 //! A GLSL error fails the build with shaderc's message, which names the file
 //! and line.
 
 use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
+
+#[path = "cpu/src/abi.rs"]
+#[allow(dead_code)]
+mod abi;
 
 /// Compile-time variants: (kernel, variant name, macro defined for it).
 /// `pathtrace_rq` is pathtrace.comp with ray queries in place of the
@@ -27,6 +37,14 @@ fn main() {
     // catches new files; the per-file lines keep the intent explicit.
     println!("cargo:rerun-if-changed=shaders");
     println!("cargo:rerun-if-changed=build.rs");
+    println!("cargo:rerun-if-changed=cpu/src/abi.rs");
+    let generated_dir = out_dir.join("glsl");
+    fs::create_dir_all(&generated_dir).expect("create OUT_DIR/glsl");
+    write_if_changed(&generated_dir.join("glint_abi.glsl"), &abi::glsl_types());
+    write_if_changed(
+        &generated_dir.join("glint_bindings.glsl"),
+        &abi::glsl_bindings(),
+    );
     let mut files = Vec::new();
     if shader_root.is_dir() {
         walk(&shader_root, &mut files);
@@ -84,10 +102,10 @@ fn main() {
             options.add_macro_definition(d, None);
         }
         options.set_optimization_level(shaderc::OptimizationLevel::Performance);
-        let root = shader_root.clone();
+        let roots = [shader_root.clone(), generated_dir.clone()];
         let manifest_dir = manifest.clone();
         options.set_include_callback(move |requested, kind, requester, _depth| {
-            resolve_include(&root, &manifest_dir, requested, kind, requester)
+            resolve_include(&roots, &manifest_dir, requested, kind, requester)
         });
         match compiler.compile_into_spirv(
             &source,
@@ -150,10 +168,17 @@ fn walk(dir: &Path, out: &mut Vec<PathBuf>) {
     }
 }
 
+/// Writes `text` unless the file already holds it (keeps its time stamp).
+fn write_if_changed(path: &Path, text: &str) {
+    if fs::read_to_string(path).ok().as_deref() != Some(text) {
+        fs::write(path, text).expect("write generated GLSL");
+    }
+}
+
 /// `requester` is the display name of the including file: `shaders/...` for
 /// a kernel, or the `resolved_name` we returned for a nested include.
 fn resolve_include(
-    root: &Path,
+    roots: &[PathBuf],
     manifest: &Path,
     requested: &str,
     kind: shaderc::IncludeType,
@@ -165,7 +190,7 @@ fn resolve_include(
             candidates.push(dir.join(requested));
         }
     }
-    candidates.push(root.join(requested));
+    candidates.extend(roots.iter().map(|r| r.join(requested)));
     for c in candidates {
         if let Ok(content) = fs::read_to_string(&c) {
             let resolved_name = c
@@ -179,6 +204,6 @@ fn resolve_include(
         }
     }
     Err(format!(
-        "cannot find \"{requested}\" (included from {requester}) relative to it or to shaders/"
+        "cannot find \"{requested}\" (included from {requester}) relative to it, to shaders/ or to the generated GLSL"
     ))
 }

@@ -26,13 +26,8 @@
 
 #include "bvh_types.glsl"
 
-// Entries of the traversal stack: glint_cpu::bvh::STACK_SIZE. The builder
-// keeps every leaf at depth <= MAX_DEPTH (48) and front-to-back traversal
-// pushes at most one node per level, so it cannot overflow.
-#define BVH_STACK_SIZE 64
-// glint_cpu::bvh::SLAB_PAD = 1 + 2 gamma(3) rounded to f32: 1 + 3 * 2^-23
-// (Ize 2013, "Robust BVH ray traversal"; pbrt-v3's Bounds3::IntersectP).
-#define BVH_SLAB_PAD uintBitsToFloat(0x3f800003u)
+// BVH_STACK_SIZE, BVH_SLAB_PAD and the BVH4_* constants: glint_abi.glsl
+// (via bvh_types.glsl).
 
 // Per-ray constants of the slab and watertight triangle tests.
 struct PreparedRay {
@@ -269,12 +264,6 @@ bool bvh_occluded(vec3 o, vec3 d, float tmax) {
 
 // The 4-wide BVH (cpu/src/bvh/wide_traverse.rs).
 
-// glint_cpu::bvh::WIDE_STACK_SIZE: a node visited pushes at most 3 children,
-// and at most MAX_WIDE_DEPTH + 1 = 24 nodes lie on a path.
-#define BVH4_STACK_SIZE 72
-#define BVH4_SLOT_EMPTY 0xffffffffu
-#define BVH4_LEAF_BIT 0x80000000u
-#define BVH4_LEAF_FIRST_MASK 0x07ffffffu
 
 // intersect_aabb for the four child boxes at once, lane i computing exactly
 // what intersect_aabb computes for slot i's box: the entry distance, or

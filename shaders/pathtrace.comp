@@ -36,14 +36,9 @@ bool bvh_present(uint tri, float u, float v, vec3 o, vec3 d) {
 #include "integrator/envmap.glsl"
 #include "integrator/lights.glsl"
 
-// glint_cpu::integrator constants.
-#define RR_DEPTH 5u
-#define RR_MAX_PROB 0.95
-// pbrt-v4's gamma(7) (integrator::RAY_ERR_GAMMA) and ShadowEpsilon.
-#define RAY_ERR_GAMMA 4.1723268e-7
-#define SHADOW_EPS 1e-4
-// The triangle test's relative margin (integrator::RAY_ERR_TRI).
-#define RAY_ERR_TRI 3.8146973e-6
+// RR_DEPTH, RR_MAX_PROB, RAY_ERR_GAMMA (pbrt-v4's gamma(7)), SHADOW_EPS
+// (its ShadowEpsilon) and RAY_ERR_TRI (the triangle test's relative
+// margin): glint_abi.glsl, from glint_cpu::abi.
 
 // Componentwise error bound of a point interpolated from the triangle,
 // plus the triangle test's margin (hit_error in cpu/src/integrator).

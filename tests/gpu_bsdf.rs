@@ -313,8 +313,14 @@ fn glsl_bsdfs_match_the_cpu_crate() {
     let per_kind = 16_384;
     let mut rng = Rng(0x9e3779b97f4a7c15);
     let mut queries = Vec::new();
-    for kind in 0..8u32 {
-        let ids: Vec<usize> = (0..mats.len()).filter(|&i| mats[i].0 == kind).collect();
+    // Every kind of the device ABI, as the Rust packs it (GpuMaterial::kind),
+    // reaches the GLSL and must agree there: a kind added on one side only
+    // has no material here, or gets the dispatchers' NaN.
+    for kind in 0..glint_cpu::abi::KIND_COUNT {
+        let ids: Vec<usize> = (0..mats.len())
+            .filter(|&i| gpu_mats[i].kind == kind)
+            .collect();
+        assert!(!ids.is_empty(), "no material of kind {kind} under test");
         for _ in 0..per_kind {
             let id = ids[(rng.u32() as usize) % ids.len()];
             let wo = random_dir(&mut rng);
@@ -359,6 +365,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
         "thindielectric",
         "roughplastic",
     ];
+    assert_eq!(names.len() as u32, glint_cpu::abi::KIND_COUNT);
     let mut report = Vec::new();
     let mut failures = Vec::new();
     for (kind, name) in names.iter().enumerate() {
@@ -410,6 +417,50 @@ fn glsl_bsdfs_match_the_cpu_crate() {
         failures.len(),
         failures[..failures.len().min(8)].join("\n")
     );
+    let messages = ctx.finish();
+    assert!(messages.is_empty(), "validation: {messages:?}");
+}
+
+/// A kind no GLSL dispatcher knows gives NaN from eval, pdf and sample,
+/// never another BSDF's values (the kernel's explicit error path).
+#[test]
+fn an_unknown_kind_is_nan_on_the_gpu() {
+    let ctx = common::context();
+    let mut m = GpuMaterial::from(&Material {
+        name: String::new(),
+        bsdf: Bsdf::Diffuse {
+            reflectance: Vec3::splat(0.5),
+        },
+        emission: Vec3::ZERO,
+        double_sided: false,
+        absorption: Vec3::ZERO,
+    });
+    m.kind = glint_cpu::abi::KIND_COUNT;
+    let mats = [m];
+    let wo = Vec3::new(0.3, 0.2, 0.9).normalize();
+    let queries = [Query {
+        wo: [wo.x, wo.y, wo.z, 0.5],
+        wi: [-wo.x, -wo.y, wo.z, 0.5],
+        u: [0.5, f32::from_bits(0), 0.0, 0.0],
+    }];
+    let mut results = [GpuResult::default()];
+    ctx.run_kernel(
+        "tests/bsdf_test",
+        &[
+            bytemuck::cast_slice(&mats),
+            bytemuck::cast_slice(&queries),
+            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
+        ],
+        &mut [bytemuck::cast_slice_mut(&mut results)],
+        bytemuck::bytes_of(&1u32),
+        [1, 1, 1],
+    )
+    .unwrap();
+    let g = &results[0];
+    assert!(g.f_pdf.iter().all(|v| v.is_nan()), "eval, pdf: {g:?}");
+    assert_eq!(g.flags[0], 1, "the sample is reported: {g:?}");
+    assert!(g.s_weight_eta[..3].iter().all(|v| v.is_nan()), "{g:?}");
+    assert!(g.s_wi_pdf[3].is_nan(), "{g:?}");
     let messages = ctx.finish();
     assert!(messages.is_empty(), "validation: {messages:?}");
 }

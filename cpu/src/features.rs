@@ -8,57 +8,58 @@
 //! drops the code behind a false one. The generic kernel is the same SPIR-V
 //! with every bit set.
 
+use crate::abi;
 use crate::bsdf::{Bsdf, Roughness, SMOOTH_ALPHA_THRESHOLD, Shadowing};
 use crate::film::RenderOptions;
 use crate::scene::{PunctualLight, Scene};
 
-/// A set of kernel features. The bit values are shared with
-/// `shaders/features.glsl` (pinned by a test).
+/// A set of kernel features. The bit values are the device ABI's `F_*`
+/// (`crate::abi`, from which the GLSL `#define`s are generated).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub struct Features(pub u32);
 
 impl Features {
     /// Lambertian materials (and the diffuse lobe of glTF metallic < 1).
-    pub const DIFFUSE: u32 = 1 << 0;
+    pub const DIFFUSE: u32 = abi::F_DIFFUSE;
     /// Conductors (smooth or rough).
-    pub const CONDUCTOR: u32 = 1 << 1;
+    pub const CONDUCTOR: u32 = abi::F_CONDUCTOR;
     /// Dielectrics (smooth or rough).
-    pub const DIELECTRIC: u32 = 1 << 2;
+    pub const DIELECTRIC: u32 = abi::F_DIELECTRIC;
     /// glTF metallic-roughness blends (0 < metallic < 1).
-    pub const METALLIC: u32 = 1 << 3;
+    pub const METALLIC: u32 = abi::F_METALLIC;
     /// Any rough (GGX) lobe.
-    pub const ROUGH: u32 = 1 << 4;
+    pub const ROUGH: u32 = abi::F_ROUGH;
     /// A rough lobe with alpha_u != alpha_v.
-    pub const ANISOTROPIC: u32 = 1 << 5;
+    pub const ANISOTROPIC: u32 = abi::F_ANISOTROPIC;
     /// Height-correlated Smith G2.
-    pub const SMITH_CORRELATED: u32 = 1 << 6;
+    pub const SMITH_CORRELATED: u32 = abi::F_SMITH_CORRELATED;
     /// Separable Smith G1 G1.
-    pub const SMITH_SEPARABLE: u32 = 1 << 7;
+    pub const SMITH_SEPARABLE: u32 = abi::F_SMITH_SEPARABLE;
     /// Emissive triangles (area lights).
-    pub const AREA_LIGHTS: u32 = 1 << 8;
+    pub const AREA_LIGHTS: u32 = abi::F_AREA_LIGHTS;
     /// Point and spot lights.
-    pub const POINT_SPOT: u32 = 1 << 9;
+    pub const POINT_SPOT: u32 = abi::F_POINT_SPOT;
     /// Directional lights.
-    pub const DIRECTIONAL: u32 = 1 << 10;
+    pub const DIRECTIONAL: u32 = abi::F_DIRECTIONAL;
     /// A background that is not black: constant, or an environment map.
-    pub const BACKGROUND: u32 = 1 << 11;
+    pub const BACKGROUND: u32 = abi::F_BACKGROUND;
     /// Paths continue past the first hit (max depth other than 1).
-    pub const BOUNCES: u32 = 1 << 12;
+    pub const BOUNCES: u32 = abi::F_BOUNCES;
     /// Next-event estimation with something to sample.
-    pub const NEE: u32 = 1 << 13;
+    pub const NEE: u32 = abi::F_NEE;
     /// The glTF non-metal (a coat over a Lambertian base); the metallic
     /// blend's non-metal part comes with [`Features::METALLIC`].
-    pub const COATED: u32 = 1 << 14;
+    pub const COATED: u32 = abi::F_COATED;
     /// Mitsuba's `plastic` and `roughplastic`.
-    pub const PLASTIC: u32 = 1 << 15;
+    pub const PLASTIC: u32 = abi::F_PLASTIC;
     /// Mitsuba's `thindielectric`.
-    pub const THIN_DIELECTRIC: u32 = 1 << 16;
+    pub const THIN_DIELECTRIC: u32 = abi::F_THIN_DIELECTRIC;
     /// A normal-mapped material: where its BSDF has no transmission, it
     /// folds at the geometric surface ([`crate::bsdf::fold`]).
-    pub const NORMAL_MAP: u32 = 1 << 17;
+    pub const NORMAL_MAP: u32 = abi::F_NORMAL_MAP;
 
     /// Every feature: the generic kernel.
-    pub const ALL: Features = Features((1 << 18) - 1);
+    pub const ALL: Features = Features(abi::F_ALL);
 
     const NAMES: [(u32, &'static str); 18] = [
         (Self::DIFFUSE, "diffuse"),

@@ -62,9 +62,9 @@ impl Mis {
     /// The GPU's encoding (`Params.mis`).
     pub fn code(self) -> u32 {
         match self {
-            Mis::Power => 0,
-            Mis::Balance => 1,
-            Mis::None => 2,
+            Mis::Power => crate::abi::MIS_POWER,
+            Mis::Balance => crate::abi::MIS_BALANCE,
+            Mis::None => crate::abi::MIS_NONE,
         }
     }
     pub fn name(self) -> &'static str {
@@ -91,8 +91,8 @@ impl SamplerKind {
     /// The GPU's encoding (`Params.sampler`).
     pub fn code(self) -> u32 {
         match self {
-            SamplerKind::Independent => 0,
-            SamplerKind::Sobol => 1,
+            SamplerKind::Independent => crate::abi::SAMPLER_INDEPENDENT,
+            SamplerKind::Sobol => crate::abi::SAMPLER_SOBOL,
         }
     }
     pub fn name(self) -> &'static str {

@@ -4,6 +4,7 @@
 //! GPU-shared layouts, the glTF loader, the BVH, the BSDFs and the path tracer.
 //! No Vulkan.
 
+pub mod abi;
 pub mod adaptive;
 pub mod bsdf;
 pub mod bvh;

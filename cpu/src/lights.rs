@@ -24,9 +24,6 @@
 // `!(x > 0.0)` on floats is meant: it rejects NaN too.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-use std::mem::{offset_of, size_of};
-
-use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 
 use crate::envmap::EnvMap;
@@ -43,47 +40,8 @@ pub fn luminance(c: Vec3) -> f32 {
     0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }
 
-/// One emissive triangle in emitter order (`Triangle::light`), as the GPU
-/// reads it (std430, 16 bytes): `cdf` is the inclusive CDF of the power
-/// distribution at this entry, `pmf` its own probability.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuEmitter {
-    pub tri: u32,
-    pub cdf: f32,
-    pub pmf: f32,
-    pub area: f32,
-}
-const _: () = assert!(size_of::<GpuEmitter>() == 16);
-const _: () = assert!(offset_of!(GpuEmitter, cdf) == 4 && offset_of!(GpuEmitter, area) == 12);
-
-/// A punctual light as the GPU reads it (std430, 48 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuLight {
-    /// Position (point, spot); unused for directional.
-    pub position: [f32; 3],
-    /// One of `GpuLight::KIND_*`.
-    pub kind: u32,
-    /// Spot: the direction the light points to; directional: the direction
-    /// the light travels. Unit length.
-    pub direction: [f32; 3],
-    /// Spot: cos(outer cone angle).
-    pub cos_outer: f32,
-    /// Point, spot: radiant intensity; directional: irradiance.
-    pub intensity: [f32; 3],
-    /// Spot: cos(inner cone angle).
-    pub cos_inner: f32,
-}
-const _: () = assert!(size_of::<GpuLight>() == 48);
-const _: () =
-    assert!(offset_of!(GpuLight, direction) == 16 && offset_of!(GpuLight, intensity) == 32);
-
-impl GpuLight {
-    pub const KIND_POINT: u32 = 0;
-    pub const KIND_SPOT: u32 = 1;
-    pub const KIND_DIRECTIONAL: u32 = 2;
-}
+use crate::abi;
+pub use crate::abi::{GpuEmitter, GpuLight};
 
 impl From<&PunctualLight> for GpuLight {
     fn from(l: &PunctualLight) -> Self {
@@ -93,7 +51,7 @@ impl From<&PunctualLight> for GpuLight {
                 intensity,
             } => GpuLight {
                 position: position.into(),
-                kind: Self::KIND_POINT,
+                kind: abi::LIGHT_POINT,
                 intensity: intensity.into(),
                 ..Default::default()
             },
@@ -105,7 +63,7 @@ impl From<&PunctualLight> for GpuLight {
                 outer_cone_angle,
             } => GpuLight {
                 position: position.into(),
-                kind: Self::KIND_SPOT,
+                kind: abi::LIGHT_SPOT,
                 direction: direction.normalize_or(Vec3::NEG_Z).into(),
                 cos_outer: outer_cone_angle.cos(),
                 intensity: intensity.into(),
@@ -115,7 +73,7 @@ impl From<&PunctualLight> for GpuLight {
                 direction,
                 irradiance,
             } => GpuLight {
-                kind: Self::KIND_DIRECTIONAL,
+                kind: abi::LIGHT_DIRECTIONAL,
                 direction: direction.normalize_or(Vec3::NEG_Z).into(),
                 intensity: irradiance.into(),
                 ..Default::default()
@@ -288,7 +246,7 @@ impl Lights {
             let l = self.punctual[i];
             let sel = pr.punctual / n as f32;
             let intensity = Vec3::from(l.intensity);
-            let (wi, dist, li) = if l.kind == GpuLight::KIND_DIRECTIONAL {
+            let (wi, dist, li) = if l.kind == abi::LIGHT_DIRECTIONAL {
                 (-Vec3::from(l.direction), f32::INFINITY, intensity)
             } else {
                 let d = Vec3::from(l.position) - p;
@@ -299,7 +257,7 @@ impl Lights {
                 }
                 let wi = d / dist;
                 let mut li = intensity / dist2;
-                if l.kind == GpuLight::KIND_SPOT {
+                if l.kind == abi::LIGHT_SPOT {
                     let cos_a = Vec3::from(l.direction).dot(-wi);
                     li *= spot_falloff(cos_a, l.cos_inner, l.cos_outer);
                 }

@@ -1,52 +1,24 @@
 //! The scene model shared by both backends.
 //!
-//! Geometry is flattened to world-space triangles at load time. The `#[repr(C)]`
-//! structs here are uploaded to the GPU unchanged (std430 on the GLSL side, see
-//! `shaders/`); each has `const` size/offset assertions so a layout change
-//! cannot slip past the GLSL mirror unnoticed.
+//! Geometry is flattened to world-space triangles at load time. The
+//! `#[repr(C)]` records uploaded to the GPU unchanged ([`Triangle`],
+//! [`GpuMaterial`]) are declared in [`crate::abi`], which generates their
+//! GLSL; their methods are here.
 
-use std::mem::{offset_of, size_of};
-
-use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Vec3};
 
+use std::mem::size_of;
+
+use bytemuck::{Pod, Zeroable};
+
+use crate::abi;
 use crate::bsdf::clearcoat::encode_coat_normal;
 use crate::bsdf::{Bsdf, ConductorParams, Shadowing};
 use crate::bvh::Bvh4;
 
-/// Sentinel for "no emissive-triangle index".
-pub const NO_LIGHT: u32 = u32::MAX;
-/// `Triangle::flags` bit: the material emits on both faces (glTF doubleSided).
-pub const TRI_DOUBLE_SIDED: u32 = 1;
-/// `Triangle::flags` bit: the triangle has shading normals, three `vec4`s
-/// at its shading offset in [`Scene::shading`].
-pub const TRI_NORMALS: u32 = 1 << 1;
-/// `Triangle::flags` bit: the triangle has tangents, three `vec4`s after
-/// its normals (or at its offset when it has none).
-pub const TRI_TANGENTS: u32 = 1 << 2;
-/// `Triangle::flags >> TRI_SHADING_SHIFT`: the triangle's shading offset,
-/// in `vec4`s, into [`Scene::shading`] (meaningful with either bit above).
-pub const TRI_SHADING_SHIFT: u32 = 3;
-
-/// A world-space triangle as traversal reads it: three `vec4`s in std430,
-/// the integers riding in `.w` (read with `floatBitsToUint` in GLSL).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct Triangle {
-    pub p0: [f32; 3],
-    /// Index into `Scene::materials`.
-    pub material: u32,
-    pub p1: [f32; 3],
-    /// Index of this triangle in the emitter list, or [`NO_LIGHT`].
-    pub light: u32,
-    pub p2: [f32; 3],
-    /// Bit 0 ([`TRI_DOUBLE_SIDED`]): the triangle's material emits on
-    /// both sides; bits 1-2 ([`TRI_NORMALS`], [`TRI_TANGENTS`]): what
-    /// shading data it has; bits 3-31: where ([`TRI_SHADING_SHIFT`]).
-    pub flags: u32,
-}
-const _: () = assert!(size_of::<Triangle>() == 48);
-const _: () = assert!(offset_of!(Triangle, p1) == 16 && offset_of!(Triangle, p2) == 32);
+pub use crate::abi::{
+    GpuMaterial, NO_LIGHT, TRI_DOUBLE_SIDED, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS, Triangle,
+};
 
 impl Triangle {
     pub fn vertices(&self) -> [Vec3; 3] {
@@ -101,56 +73,6 @@ impl Material {
     }
 }
 
-/// A material as the GPU reads it (std430 `struct Material` in
-/// `shaders/bsdf/material.glsl`): 16 bytes of scalars, then `vec4`s.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuMaterial {
-    /// One of the `GpuMaterial::KIND_*` tags.
-    pub kind: u32,
-    /// Bit 0: separable G1 G1 (else height-correlated Smith G2); bit 1:
-    /// `multiscatter` energy compensation.
-    pub shadowing: u32,
-    /// GGX alphas; the smooth (delta) form when max < SMOOTH_ALPHA_THRESHOLD.
-    pub alpha_u: f32,
-    pub alpha_v: f32,
-    /// Diffuse reflectance (diffuse, metallic blend's base); `.w` = metallic weight.
-    pub reflectance: [f32; 4],
-    /// Conductor eta (rgb); dielectric: `.x` = int_ior / ext_ior. `.w` of
-    /// eta, k, specular: the conductor's F_avg (rgb) with `multiscatter`.
-    pub eta: [f32; 4],
-    /// Conductor k (rgb); dielectric: the interior's absorption sigma_a
-    /// (rgb, [`Material::absorption`]).
-    pub k: [f32; 4],
-    /// Conductor specular_reflectance (rgb).
-    pub specular: [f32; 4],
-    /// Emitted radiance (rgb); `.w` = 1 when emission leaves both faces.
-    pub emission: [f32; 4],
-    /// The non-metal's coat (coated, metallic blend): `KHR_materials_specular`
-    /// scale (rgb), `.w` = the coat's IOR.
-    pub coat: [f32; 4],
-    /// The non-metal's `.x` = thin-walled transmission probability
-    /// (`KHR_materials_transmission`); `.y` clear coat weight, `.z` its
-    /// alpha (`KHR_materials_clearcoat`, over the coated and metallic
-    /// kinds); `.w` its normal (`bsdf::clearcoat::encode_coat_normal`, 0:
-    /// the shading normal).
-    pub extra: [f32; 4],
-}
-const _: () = assert!(size_of::<GpuMaterial>() == 128);
-const _: () =
-    assert!(offset_of!(GpuMaterial, reflectance) == 16 && offset_of!(GpuMaterial, emission) == 80);
-
-impl GpuMaterial {
-    pub const KIND_DIFFUSE: u32 = 0;
-    pub const KIND_CONDUCTOR: u32 = 1;
-    pub const KIND_DIELECTRIC: u32 = 2;
-    pub const KIND_METALLIC: u32 = 3;
-    pub const KIND_COATED: u32 = 4;
-    pub const KIND_PLASTIC: u32 = 5;
-    pub const KIND_THIN_DIELECTRIC: u32 = 6;
-    pub const KIND_ROUGH_PLASTIC: u32 = 7;
-}
-
 /// The non-metal's coat as the record's `coat` (specular scale, IOR) and
 /// `extra` (transmission, clear coat weight, alpha and encoded normal).
 fn coat_record(coat: &crate::bsdf::coated::CoatParams) -> ([f32; 4], [f32; 4]) {
@@ -197,15 +119,15 @@ impl From<&Material> for GpuMaterial {
         };
         match &m.bsdf {
             Bsdf::Diffuse { reflectance } => {
-                g.kind = Self::KIND_DIFFUSE;
+                g.kind = abi::KIND_DIFFUSE;
                 g.reflectance = vec4(*reflectance, 0.0);
             }
             Bsdf::Conductor(c) => {
-                g.kind = Self::KIND_CONDUCTOR;
+                g.kind = abi::KIND_CONDUCTOR;
                 conductor(&mut g, c);
             }
             Bsdf::Dielectric { eta, roughness } => {
-                g.kind = Self::KIND_DIELECTRIC;
+                g.kind = abi::KIND_DIELECTRIC;
                 g.eta = [*eta, 0.0, 0.0, 0.0];
                 // k is the interior's absorption sigma_a for a dielectric.
                 g.k = vec4(m.absorption, 0.0);
@@ -216,14 +138,14 @@ impl From<&Material> for GpuMaterial {
             Bsdf::Plastic(p) => {
                 // .w of reflectance: nonlinear. F_dr and the sampling weight
                 // are computed per hit (a texture changes the diffuse part).
-                g.kind = Self::KIND_PLASTIC;
+                g.kind = abi::KIND_PLASTIC;
                 g.reflectance = vec4(p.diffuse, if p.nonlinear { 1.0 } else { 0.0 });
                 g.specular = vec4(p.specular, 0.0);
                 g.eta = [p.eta, 0.0, 0.0, 0.0];
             }
             Bsdf::RoughPlastic(rp) => {
                 let p = &rp.plastic;
-                g.kind = Self::KIND_ROUGH_PLASTIC;
+                g.kind = abi::KIND_ROUGH_PLASTIC;
                 g.reflectance = vec4(p.diffuse, if p.nonlinear { 1.0 } else { 0.0 });
                 g.specular = vec4(p.specular, 0.0);
                 g.eta = [p.eta, 0.0, 0.0, 0.0];
@@ -236,7 +158,7 @@ impl From<&Material> for GpuMaterial {
                 reflectance,
                 transmittance,
             } => {
-                g.kind = Self::KIND_THIN_DIELECTRIC;
+                g.kind = abi::KIND_THIN_DIELECTRIC;
                 g.eta = [*eta, 0.0, 0.0, 0.0];
                 g.specular = vec4(*reflectance, 0.0);
                 g.k = vec4(*transmittance, 0.0);
@@ -246,7 +168,7 @@ impl From<&Material> for GpuMaterial {
                 coat,
                 roughness,
             } => {
-                g.kind = Self::KIND_COATED;
+                g.kind = abi::KIND_COATED;
                 g.reflectance = vec4(*base, 0.0);
                 (g.coat, g.extra) = coat_record(coat);
                 g.alpha_u = roughness.alpha_u;
@@ -259,7 +181,7 @@ impl From<&Material> for GpuMaterial {
                 conductor: c,
                 coat,
             } => {
-                g.kind = Self::KIND_METALLIC;
+                g.kind = abi::KIND_METALLIC;
                 g.reflectance = vec4(*base, *metallic);
                 (g.coat, g.extra) = coat_record(coat);
                 conductor(&mut g, c);

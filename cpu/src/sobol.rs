@@ -35,10 +35,8 @@ use glam::Vec2;
 
 use crate::sampling::{Rng, pcg4d};
 
-/// Salt of the pair seeds' hash (keeps them apart from `Rng`'s stream).
-pub const SOBOL_SALT: u32 = 0x5f3c_9a1d;
-/// Sample indices per sequence: the direction tables' 16 bits.
-pub const SOBOL_BLOCK_BITS: u32 = 16;
+// The pair seeds' salt, the sequence length and the pairs per bounce.
+pub use crate::abi::{PAIRS_PER_BOUNCE, SOBOL_BLOCK_BITS, SOBOL_SALT};
 
 /// The seed of pair `pair` of sample `sample` in `pixel` under seed key
 /// `key` (`sampling::seed_key`).
@@ -108,9 +106,6 @@ pub struct BounceSamples {
     pub bsdf: Vec2,
     pub rr: f32,
 }
-
-/// Pairs per bounce.
-pub const PAIRS_PER_BOUNCE: u32 = 4;
 
 /// The first pair of bounce `bounce` (pair 0 is the pixel position).
 #[inline]

@@ -16,7 +16,6 @@
 
 use std::mem::size_of;
 
-use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 
 use crate::bsdf::coated::CoatParams;
@@ -24,8 +23,6 @@ use crate::bsdf::{Bsdf, Roughness, Shadowing};
 use crate::frame::Frame;
 use crate::loader::conductor_from_f0;
 
-/// "No texture" in a [`TexRef`].
-pub const NO_TEXTURE: u32 = u32::MAX;
 /// Largest image side glint decodes (checked from the header, before
 /// decoding).
 pub const MAX_TEXTURE_SIDE: u32 = 16384;
@@ -33,41 +30,10 @@ pub const MAX_TEXTURE_SIDE: u32 = 16384;
 /// RGBA8 would not fit a GPU buffer binding; 2^28 texels is 1 GiB).
 pub const MAX_TEXELS: u64 = 1 << 28;
 
-pub const WRAP_REPEAT: u32 = 0;
-pub const WRAP_CLAMP: u32 = 1;
-pub const WRAP_MIRROR: u32 = 2;
-/// `GpuTexture::flags` bit: nearest filtering (else bilinear).
-pub const TEX_NEAREST: u32 = 16;
-
-/// One image in the texel array (std430 `struct Texture`, 16 bytes).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuTexture {
-    /// First texel in the texel array.
-    pub offset: u32,
-    pub width: u32,
-    pub height: u32,
-    /// Bits 0-1: wrap S, bits 2-3: wrap T (`WRAP_*`), bit 4: [`TEX_NEAREST`].
-    pub flags: u32,
-}
-const _: () = assert!(size_of::<GpuTexture>() == 16);
-
-/// A material's use of a texture (glTF `textureInfo` with
-/// `KHR_texture_transform`), 48 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct TexRef {
-    /// Index into the texture table, or [`NO_TEXTURE`].
-    pub texture: u32,
-    /// Which TEXCOORD set (0 or 1).
-    pub tex_coord: u32,
-    /// normalTexture `scale` (1 elsewhere).
-    pub scale: f32,
-    pub _pad: u32,
-    /// UV transform rows: uv' = (r0.x u + r0.y v + r0.z, r1.x u + r1.y v + r1.z).
-    pub transform: [[f32; 4]; 2],
-}
-const _: () = assert!(size_of::<TexRef>() == 48);
+pub use crate::abi::{
+    GpuTexture, MAP_EXTRAS, MAP_GLTF, MAP_NONE, MaterialTextures, NO_TEXTURE, TEX_NEAREST, TexRef,
+    TriangleUv, WRAP_CLAMP, WRAP_MIRROR, WRAP_REPEAT,
+};
 
 impl Default for TexRef {
     fn default() -> Self {
@@ -108,58 +74,6 @@ impl TexRef {
         )
     }
 }
-
-/// How a material's textures modify its BSDF.
-pub const MAP_NONE: u32 = 0;
-/// glTF metallic-roughness mapping, recomputed per hit from the textured
-/// base colour, metallic and roughness.
-pub const MAP_GLTF: u32 = 1;
-/// `extras.bsdf`: baseColorTexture multiplies a diffuse `reflectance` or a
-/// conductor's `specular_reflectance`.
-pub const MAP_EXTRAS: u32 = 2;
-
-/// One material's textures and the factors they multiply (std430, 560 B).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct MaterialTextures {
-    /// `MAP_*`.
-    pub mode: u32,
-    /// alphaMode MASK: geometry with alpha below this is not there; a
-    /// negative value: opaque.
-    pub alpha_cutoff: f32,
-    /// baseColorFactor's alpha.
-    pub base_alpha: f32,
-    /// 1: alphaMode BLEND, as stochastic transparency (a hit is kept with
-    /// probability alpha, [`blend_random`]); 0 otherwise.
-    pub blend: u32,
-    /// baseColorFactor rgb (MAP_GLTF).
-    pub base_factor: [f32; 4],
-    /// metallicFactor, roughnessFactor, transmissionFactor, ior (MAP_GLTF).
-    pub mr_factor: [f32; 4],
-    /// clearcoatFactor, clearcoatRoughnessFactor, specularFactor, unused
-    /// (MAP_GLTF; the factors the coat textures multiply).
-    pub coat_factor: [f32; 4],
-    /// specularColorFactor rgb (MAP_GLTF).
-    pub specular_color_factor: [f32; 4],
-    pub base_color: TexRef,
-    pub metallic_roughness: TexRef,
-    pub normal: TexRef,
-    pub emissive: TexRef,
-    /// `transmissionTexture` (R x transmissionFactor).
-    pub transmission: TexRef,
-    /// `clearcoatTexture` (R x clearcoatFactor).
-    pub clearcoat: TexRef,
-    /// `clearcoatRoughnessTexture` (G x clearcoatRoughnessFactor).
-    pub clearcoat_roughness: TexRef,
-    /// `specularTexture` (A x specularFactor).
-    pub specular: TexRef,
-    /// `specularColorTexture` (sRGB rgb x specularColorFactor).
-    pub specular_color: TexRef,
-    /// `clearcoatNormalTexture` (its `scale` in the TexRef), on the
-    /// unmapped shading frame ([`clearcoat_normal`]).
-    pub clearcoat_normal: TexRef,
-}
-const _: () = assert!(size_of::<MaterialTextures>() == 560);
 
 impl Default for MaterialTextures {
     fn default() -> Self {
@@ -220,17 +134,6 @@ impl MaterialTextures {
         .any(|r| r.is_some())
     }
 }
-
-/// A triangle's texture coordinates (std430, 64 bytes): `uv[k]` holds
-/// vertex k's TEXCOORD_0 in `.xy` and TEXCOORD_1 in `.zw`; `extra.x` is
-/// the bitangent sign for normal mapping (B = sign * cross(N, T)).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct TriangleUv {
-    pub uv: [[f32; 4]; 3],
-    pub extra: [f32; 4],
-}
-const _: () = assert!(size_of::<TriangleUv>() == 64);
 
 impl TriangleUv {
     /// Interpolated texture coordinate set `set` at barycentrics (u, v).

@@ -1,6 +1,6 @@
 //! Regression tests for BSDF failures that other renderers met and fixed,
-//! each named by its issue, and the constants the Rust and GLSL sides both
-//! define, pinned equal by reading the GLSL source.
+//! each named by its issue, and the device ABI's literal constants checked
+//! against what they stand for.
 //!
 //! - pbrt-v3 #254: total internal reflection lost in rough glass when the
 //!   half vector is not flipped to the normal's side.
@@ -20,7 +20,6 @@ mod common;
 
 use common::*;
 use glam::{Vec2, Vec3};
-use glint_cpu::bsdf::microfacet::MIN_ALPHA;
 use glint_cpu::bsdf::{Bsdf, ETA_SMOOTH_THRESHOLD, Roughness, SMOOTH_ALPHA_THRESHOLD, Shadowing};
 
 const SHADOWINGS: [Shadowing; 2] = [Shadowing::Correlated, Shadowing::Separable];
@@ -328,49 +327,7 @@ fn cycles_near_equal_iors_sample_matches_pdf() {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-// ------------------------------------------------ constants of both languages
-
-fn glsl(path: &str) -> String {
-    let p = format!("{}/../shaders/{path}", env!("CARGO_MANIFEST_DIR"));
-    std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{p}: {e}"))
-}
-
-/// The value of `#define NAME value` in the GLSL file (first definition).
-fn define(src: &str, name: &str) -> String {
-    src.lines()
-        .find_map(|l| {
-            let mut it = l.split_whitespace();
-            (it.next() == Some("#define") && it.next() == Some(name))
-                .then(|| it.collect::<Vec<_>>().join(" "))
-        })
-        .unwrap_or_else(|| panic!("no #define {name}"))
-}
-
-fn define_f32(src: &str, name: &str) -> f32 {
-    let v = define(src, name);
-    v.parse::<f32>()
-        .unwrap_or_else(|e| panic!("#define {name} {v}: {e}"))
-}
-
-fn define_u32(src: &str, name: &str) -> u32 {
-    let v = define(src, name);
-    let t = v.trim_end_matches('u');
-    if let Some(h) = t.strip_prefix("0x") {
-        u32::from_str_radix(h, 16).unwrap()
-    } else {
-        t.parse::<u32>()
-            .unwrap_or_else(|e| panic!("#define {name} {v}: {e}"))
-    }
-}
-
-/// The bits of `#define NAME uintBitsToFloat(0x...u)`.
-fn define_float_bits(src: &str, name: &str) -> u32 {
-    let v = define(src, name);
-    let hex = v
-        .trim_start_matches("uintBitsToFloat(0x")
-        .trim_end_matches("u)");
-    u32::from_str_radix(hex, 16).unwrap_or_else(|e| panic!("#define {name} {v}: {e}"))
-}
+// ------------------------------------------------ the device ABI's derived constants
 
 /// 1 + 2 gamma(3) (Ize 2013), the CPU traversal's `SLAB_PAD`.
 fn slab_pad() -> f32 {
@@ -378,105 +335,34 @@ fn slab_pad() -> f32 {
     1.0 + 2.0 * (3.0 * eps / (1.0 - 3.0 * eps))
 }
 
+/// The constants both backends share are declared once, in
+/// `glint_cpu::abi` (build.rs generates their GLSL from it); here the ones
+/// written as literals are checked against what they stand for.
 #[test]
-fn constants_agree_with_the_glsl() {
-    use glint_cpu::integrator::{RAY_ERR_GAMMA, RR_DEPTH, RR_MAX_PROB, SHADOW_EPS};
-    use glint_cpu::{GpuMaterial, NO_LIGHT, TRI_DOUBLE_SIDED};
-    let bsdf = glsl("bsdf/bsdf.glsl");
-    let mf = glsl("bsdf/microfacet.glsl");
-    let mat = glsl("bsdf/material.glsl");
-    let pt = glsl("pathtrace.comp");
-    let bvh = glsl("bvh.glsl");
-    let lights = glsl("integrator/lights.glsl");
-    let bindings = glsl("bindings.glsl");
-    use glint_cpu::lights::GpuLight;
-    assert_eq!(define_u32(&bindings, "LIGHT_POINT"), GpuLight::KIND_POINT);
-    assert_eq!(define_u32(&bindings, "LIGHT_SPOT"), GpuLight::KIND_SPOT);
-    assert_eq!(
-        define_u32(&bindings, "LIGHT_DIRECTIONAL"),
-        GpuLight::KIND_DIRECTIONAL
-    );
-    assert_eq!(define_f32(&mf, "MIN_ALPHA"), MIN_ALPHA);
-    {
-        use glint_cpu::bsdf::clearcoat::{CLEARCOAT_IOR, COAT_NORMAL_STEPS, COAT_NORMAL_STRIDE};
-        assert_eq!(define_f32(&bsdf, "CLEARCOAT_IOR"), CLEARCOAT_IOR);
-        assert_eq!(define_u32(&mat, "COAT_NORMAL_STEPS"), COAT_NORMAL_STEPS);
-        assert_eq!(define_u32(&mat, "COAT_NORMAL_STRIDE"), COAT_NORMAL_STRIDE);
-    }
-    assert_eq!(
-        define_f32(&bsdf, "SMOOTH_ALPHA_THRESHOLD"),
-        SMOOTH_ALPHA_THRESHOLD
-    );
-    assert_eq!(
-        define_f32(&bsdf, "ETA_SMOOTH_THRESHOLD"),
-        ETA_SMOOTH_THRESHOLD
-    );
-    assert_eq!(define_u32(&pt, "RR_DEPTH"), RR_DEPTH);
-    assert_eq!(define_f32(&pt, "RAY_ERR_GAMMA"), RAY_ERR_GAMMA);
-    assert_eq!(define_f32(&pt, "SHADOW_EPS"), SHADOW_EPS);
-    assert_eq!(
-        define_f32(&pt, "RAY_ERR_TRI"),
-        glint_cpu::integrator::RAY_ERR_TRI
-    );
-    assert_eq!(glint_cpu::integrator::RAY_ERR_TRI, 32.0 * f32::EPSILON);
+fn the_abi_literals_are_what_they_stand_for() {
+    use glint_cpu::abi;
+    assert_eq!(abi::RAY_ERR_TRI, 32.0 * f32::EPSILON);
     // RAY_ERR_GAMMA is pbrt-v4's gamma(7) = 7 u / (1 - 7 u), u = 2^-24.
     let u = 2f64.powi(-24);
     let g7 = 7.0 * u / (1.0 - 7.0 * u);
     assert!(
-        (RAY_ERR_GAMMA as f64 - g7).abs() <= g7 * 1e-7,
-        "{RAY_ERR_GAMMA} vs {g7}"
+        (abi::RAY_ERR_GAMMA as f64 - g7).abs() <= g7 * 1e-7,
+        "{} vs {g7}",
+        abi::RAY_ERR_GAMMA
     );
-    assert_eq!(define_f32(&pt, "RR_MAX_PROB"), RR_MAX_PROB);
+    // 1 + 3 * 2^-23, as pbrt-v3 rounds it.
+    assert_eq!(abi::BVH_SLAB_PAD.to_bits(), 0x3f80_0003);
+    assert_eq!(abi::BVH_SLAB_PAD, slab_pad());
+    assert_eq!(abi::ONE_MINUS_EPS.to_bits(), 0x3f7f_ffff);
+    assert_eq!(abi::GLINT_PI, std::f32::consts::PI);
+    const { assert!(abi::BVH_STACK_SIZE > glint_cpu::bvh::MAX_DEPTH) };
+    // The Rust enums' GPU codes are the ABI's.
+    assert_eq!(glint_cpu::Mis::Power.code(), abi::MIS_POWER);
+    assert_eq!(glint_cpu::Mis::Balance.code(), abi::MIS_BALANCE);
+    assert_eq!(glint_cpu::Mis::None.code(), abi::MIS_NONE);
     assert_eq!(
-        define_u32(&bvh, "BVH_STACK_SIZE") as usize,
-        glint_cpu::bvh::STACK_SIZE
+        glint_cpu::SamplerKind::Independent.code(),
+        abi::SAMPLER_INDEPENDENT
     );
-    assert_eq!(
-        define_float_bits(&bvh, "BVH_SLAB_PAD"),
-        slab_pad().to_bits()
-    );
-    // conductor.rs ONE_MINUS_EPS, the largest f32 below 1.
-    assert_eq!(
-        define_float_bits(&bsdf, "ONE_MINUS_EPS"),
-        (1.0f32 - f32::EPSILON / 2.0).to_bits()
-    );
-    assert_eq!(
-        define_u32(&mat, "SHADOWING_MULTISCATTER"),
-        2,
-        "GpuMaterial::shadowing bit 1"
-    );
-    for (src, name, want) in [
-        (&mat, "KIND_DIFFUSE", GpuMaterial::KIND_DIFFUSE),
-        (&mat, "KIND_CONDUCTOR", GpuMaterial::KIND_CONDUCTOR),
-        (&mat, "KIND_DIELECTRIC", GpuMaterial::KIND_DIELECTRIC),
-        (&mat, "KIND_METALLIC", GpuMaterial::KIND_METALLIC),
-        (&mat, "SHADOWING_CORRELATED", 0),
-        (&mat, "SHADOWING_SEPARABLE", 1),
-        (&lights, "NO_LIGHT", NO_LIGHT),
-        (&lights, "TRI_DOUBLE_SIDED", TRI_DOUBLE_SIDED),
-        (&bindings, "TRI_NORMALS", glint_cpu::TRI_NORMALS),
-        (&bindings, "TRI_TANGENTS", glint_cpu::TRI_TANGENTS),
-        (&bindings, "TRI_SHADING_SHIFT", glint_cpu::TRI_SHADING_SHIFT),
-    ] {
-        assert_eq!(define_u32(src, name), want, "{name}");
-    }
-    for (name, m) in [
-        ("MIS_POWER", glint_cpu::Mis::Power),
-        ("MIS_BALANCE", glint_cpu::Mis::Balance),
-        ("MIS_NONE", glint_cpu::Mis::None),
-    ] {
-        assert_eq!(define_u32(&lights, name), m.code(), "{name}");
-    }
-    let sobol = glsl("integrator/sobol.glsl");
-    for (name, k) in [
-        ("SAMPLER_INDEPENDENT", glint_cpu::SamplerKind::Independent),
-        ("SAMPLER_SOBOL", glint_cpu::SamplerKind::Sobol),
-    ] {
-        assert_eq!(define_u32(&sobol, name), k.code(), "{name}");
-    }
-    assert_eq!(define_f32(&mf, "GLINT_PI"), std::f32::consts::PI);
-    assert_eq!(
-        define_f32(&bsdf, "GLINT_INV_PI"),
-        std::f32::consts::FRAC_1_PI
-    );
+    assert_eq!(glint_cpu::SamplerKind::Sobol.code(), abi::SAMPLER_SOBOL);
 }

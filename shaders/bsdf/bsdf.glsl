@@ -16,14 +16,10 @@
 #include "bsdf/multiscatter.glsl"
 #include "integrator/frame.glsl"
 
-#define GLINT_INV_PI 0.31830988618379067154
-
-// GGX alphas below this are rendered as the smooth (delta) counterpart
-// (SMOOTH_ALPHA_THRESHOLD in cpu/src/bsdf/mod.rs).
-#define SMOOTH_ALPHA_THRESHOLD 1e-3
-// A rough dielectric with |eta - 1| below this is rendered smooth
-// (ETA_SMOOTH_THRESHOLD in cpu/src/bsdf/mod.rs).
-#define ETA_SMOOTH_THRESHOLD 1e-2
+// GLINT_INV_PI, SMOOTH_ALPHA_THRESHOLD (GGX alphas below it are rendered
+// as the smooth counterpart), ETA_SMOOTH_THRESHOLD (a rough dielectric with
+// |eta - 1| below it is rendered smooth), ONE_MINUS_EPS and CLEARCOAT_IOR:
+// glint_abi.glsl.
 
 struct BsdfSample {
     vec3 wi;      // sampled incident direction (local frame)
@@ -97,9 +93,6 @@ bool diffuse_sample(vec3 rho, vec3 wo, vec2 u, out BsdfSample s) {
 }
 
 // ---------------------------------------------------------------- conductor
-
-// The largest float below 1: a rescaled random number stays in [0, 1).
-#define ONE_MINUS_EPS uintBitsToFloat(0x3f7fffffu)
 
 // F_avg x specular_reflectance of the Kulla-Conty lobe: GpuMaterial
 // carries F_avg (glint_cpu::bsdf::multiscatter::fresnel_conductor_avg) in
@@ -470,8 +463,6 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
 // f = c f_cc + w(mu_o) w(mu_i) f_inner, w(mu) = 1 - c E_cc(mu), the coat's
 // terms about its own normal, its lobe carrying the coat's cosine.
 
-#define CLEARCOAT_IOR 1.5
-
 bool cc_smooth(Material m) {
     return !HAS(F_ROUGH) || m.extra.z < SMOOTH_ALPHA_THRESHOLD;
 }
@@ -671,6 +662,11 @@ bool gltf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
 
 // ---------------------------------------------------------------- dispatch
 
+// Each dispatcher names every kind and ends in this error value: a kind no
+// branch knows (a tag added on the Rust side only) gives NaN, which the
+// per-call test (tests/gpu_bsdf.rs) sees, never another BSDF's values.
+#define BSDF_UNKNOWN_KIND uintBitsToFloat(0x7fc00000u)
+
 vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
     if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return diffuse_eval(m.reflectance.xyz, wo, wi);
@@ -686,11 +682,10 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return roughplastic_eval(m, wo, wi);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return vec3(0.0);
-    }
-    if (HAS(F_METALLIC)) {
+    } else if (HAS(F_METALLIC) && m.kind == KIND_METALLIC) {
         return gltf_eval(m, wo, wi);
     }
-    return vec3(0.0);
+    return vec3(BSDF_UNKNOWN_KIND);
 }
 
 float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
@@ -708,11 +703,10 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return roughplastic_pdf(m, wo, wi);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return 0.0;
-    }
-    if (HAS(F_METALLIC)) {
+    } else if (HAS(F_METALLIC) && m.kind == KIND_METALLIC) {
         return gltf_pdf(m, wo, wi);
     }
-    return 0.0;
+    return BSDF_UNKNOWN_KIND;
 }
 
 bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
@@ -730,11 +724,15 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         return roughplastic_sample(m, wo, uc, u, s);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return thin_sample(m, wo, uc, s);
-    }
-    if (HAS(F_METALLIC)) {
+    } else if (HAS(F_METALLIC) && m.kind == KIND_METALLIC) {
         return gltf_sample(m, wo, uc, u, s);
     }
-    return false;
+    s.wi = vec3(0.0, 0.0, 1.0);
+    s.weight = vec3(BSDF_UNKNOWN_KIND);
+    s.pdf = BSDF_UNKNOWN_KIND;
+    s.eta = 1.0;
+    s.delta = false;
+    return true;
 }
 
 bool bsdf_is_delta(Material m) {
@@ -752,7 +750,7 @@ bool bsdf_is_delta(Material m) {
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return true;
     }
-    return HAS(F_METALLIC) && (m.reflectance.w >= 1.0 || m.extra.x >= 1.0)
+    return HAS(F_METALLIC) && m.kind == KIND_METALLIC && (m.reflectance.w >= 1.0 || m.extra.x >= 1.0)
         && roughness_is_smooth(m.alpha_u, m.alpha_v) && (m.extra.y <= 0.0 || cc_smooth(m));
 }
 

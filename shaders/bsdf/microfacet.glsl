@@ -4,12 +4,8 @@
 #ifndef GLINT_BSDF_MICROFACET_GLSL
 #define GLINT_BSDF_MICROFACET_GLSL
 
-#ifndef GLINT_PI
-#define GLINT_PI 3.14159265358979323846
-#endif
-
-// Rough alphas are clamped to at least this (pbrt-v4 does the same).
-#define MIN_ALPHA 1e-4
+#include "glint_abi.glsl" // generated from cpu/src/abi.rs
+// GLINT_PI; MIN_ALPHA: rough alphas are clamped to at least it.
 
 float ggx_d(vec3 wm, float ax, float ay) {
     float x = wm.x / ax;

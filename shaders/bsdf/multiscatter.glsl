@@ -8,31 +8,10 @@
 #ifndef GLINT_BSDF_MULTISCATTER_GLSL
 #define GLINT_BSDF_MULTISCATTER_GLSL
 
-// glint_cpu::bsdf::ms_tables::{MS_N, MS_T_N} and the offsets of
-// gpu_tables(): MS_E[0], MS_E[1] (MS_N^2 each), MS_E_AVG[0], MS_E_AVG[1]
-// (MS_N each), MS_T[0], MS_T[1] (MS_T_N^3 each; correlated, separable).
-#define MS_N 32u
-#define MS_T_N 24u
-#define MS_OFF_E 0u
-#define MS_OFF_E_AVG 2048u
-#define MS_OFF_T 2112u
-// glint_cpu::bsdf::coated: the glTF non-metal's coat tables at MS_OFF_COAT:
-// E[sqrt x][sqrt alpha][mu^(1/4)], x = (eta - 1) / (eta + 1) (COAT_E_LEN floats), then E_avg[x][sqrt alpha].
-#define MS_OFF_COAT 29760u
-#define COAT_N_MU 64u
-#define COAT_N_ALPHA 64u
-#define COAT_N_ETA 32u
-#define COAT_E_LEN 131072u
-// glint_cpu::bsdf::roughplastic: T[form][sqrt x][sqrt alpha][mu] (RP_T_LEN
-// floats per Smith form, correlated first), then R_int[form][sqrt x][sqrt alpha].
-#define MS_OFF_RP 162880u
-#define RP_N_MU 64u
-#define RP_N_ALPHA 32u
-#define RP_N_ETA 32u
-#define RP_T_LEN 65536u
-#define RP_R_LEN 1024u
-#define MS_T_ETA_MIN (1.0 / 3.0)
-#define MS_T_ETA_MAX 3.0
+#include "glint_abi.glsl" // generated from cpu/src/abi.rs
+// The tables' sizes and offsets (MS_N, MS_T_N, MS_OFF_*, COAT_*, RP_*) and
+// the dielectric table's eta' range (MS_T_ETA_MIN, MS_T_ETA_MAX):
+// glint_abi.glsl, from glint_cpu::abi's TABLE_CONSTANTS.
 
 #ifdef MS_TABLE
 #define MS_AT(i) MS_TABLE(i)

@@ -2,9 +2,7 @@
 #ifndef GLINT_BSDF_WARP_GLSL
 #define GLINT_BSDF_WARP_GLSL
 
-#ifndef GLINT_PI
-#define GLINT_PI 3.14159265358979323846
-#endif
+#include "glint_abi.glsl" // generated from cpu/src/abi.rs
 
 vec2 square_to_concentric_disk(vec2 u) {
     vec2 o = 2.0 * u - vec2(1.0);

@@ -5,10 +5,10 @@
 #ifndef GLINT_INTEGRATOR_LIGHTS_GLSL
 #define GLINT_INTEGRATOR_LIGHTS_GLSL
 
+#include "glint_abi.glsl" // generated from cpu/src/abi.rs
+// TRI_DOUBLE_SIDED, NO_LIGHT, MIS_*: glint_abi.glsl.
 #define GLINT_FLT_MAX 3.402823466e+38
 #define UNIFORM_SPHERE_PDF (1.0 / (4.0 * 3.14159265358979323846))
-#define TRI_DOUBLE_SIDED 1u
-#define NO_LIGHT 0xffffffffu
 
 vec3 square_to_uniform_sphere(vec2 u) {
     float z = 1.0 - 2.0 * u.x;
@@ -49,10 +49,6 @@ float balance_heuristic(float a, float b) {
     }
     return 0.0;
 }
-
-#define MIS_POWER 0u
-#define MIS_BALANCE 1u
-#define MIS_NONE 2u
 
 // glint_cpu::sampling::mis_light: weight of a light sample.
 float mis_light(uint mode, float light_pdf, float bsdf_pdf) {
@@ -187,6 +183,8 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
             li = l.intensity / dist2;
             if (l.kind == LIGHT_SPOT) {
                 li *= spot_falloff(dot(l.direction, -ls.wi), l.cos_inner, l.cos_outer);
+            } else if (l.kind != LIGHT_POINT) {
+                li = vec3(uintBitsToFloat(0x7fc00000u)); // an unknown kind: NaN, no point light
             }
         }
         if (max(li.x, max(li.y, li.z)) <= 0.0) {

@@ -8,14 +8,7 @@
 
 #include "rng.glsl"
 
-// glint_cpu::sobol constants.
-#define SOBOL_SALT 0x5f3c9a1du
-#define SOBOL_BLOCK_BITS 16u
-#define PAIRS_PER_BOUNCE 4u
-
-// glint_cpu::SamplerKind::code.
-#define SAMPLER_INDEPENDENT 0u
-#define SAMPLER_SOBOL 1u
+#include "glint_abi.glsl" // SOBOL_SALT, SOBOL_BLOCK_BITS, PAIRS_PER_BOUNCE, SAMPLER_*
 
 // sobol_burley::parts::hash.
 uint sobol_hash(uint n) {

@@ -1,16 +1,11 @@
 //! The path tracer's host side: upload the scene once, dispatch batches of
 //! samples, read the film back.
 //!
-//! The binding table is `shaders/bindings.glsl` (set 0): 0 uniform Params,
-//! 1 triangles, 2 bvh_nodes, 3 shading, 4 materials, 5 emitters, 6 lights,
-//! 7 accum (four `vec4` per pixel: sum, sum of squares, the variance
-//! batch's running sum, the sum of squared batch sums; `Film`'s fields,
-//! continued by every dispatch), 8 ray_counts (one `uint` per pixel, added to), 9 texels,
-//! 10 textures, 11 material_textures, 12 triangle_uvs, 13 env_texels,
-//! 14 env_dist, 15 ms_tables (the multiscatter albedo tables, the same
-//! for every scene). Push constants:
-//! `uint sample_start; uint sample_count;`. One invocation per pixel, local
-//! size 8x8.
+//! The binding table is [`glint_cpu::abi::PATH_TRACER_BINDINGS`] (set 0),
+//! from which build.rs generates the kernel's declarations: the descriptor
+//! set layout here is built from the same table, and each binding's
+//! buffer is found by the table's name ([`FilmBuffers::get`]). Push
+//! constants: [`SamplePush`]. One invocation per pixel, local size 8x8.
 //!
 //! Batching: one dispatch renders `sample_count` samples of every pixel. A
 //! dispatch that runs for seconds can trip a desktop driver's watchdog
@@ -21,8 +16,8 @@
 use std::time::Instant;
 
 use ash::vk;
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
+use glint_cpu::abi::{self, Resource};
 use glint_cpu::features::Features;
 use glint_cpu::integrator::{GpuParams, GpuSceneData, gpu_scene_data};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
@@ -40,13 +35,7 @@ pub const TARGET_BATCH_SECONDS: f64 = 0.25;
 /// The path tracing kernels' workgroup size (8x8 pixels).
 pub const LOCAL_SIZE: u32 = 8;
 
-/// `uint sample_start; uint sample_count;`
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct SamplePush {
-    pub sample_start: u32,
-    pub sample_count: u32,
-}
+pub use glint_cpu::abi::SamplePush;
 
 /// The bytes of bindings 0..=6 and 9..=12, ready to upload. Arrays may be empty (they
 /// get a minimal buffer; the kernel learns real counts from Params).
@@ -259,13 +248,13 @@ pub struct KernelConfig<'k> {
     /// Hardware traversal (a ray-query kernel such as `pathtrace_rq`):
     /// whether each triangle is alpha-tested. The render then builds the
     /// acceleration structures over the triangles and binds the tri_map
-    /// (binding 17) and the TLAS (18; shaders/bindings.glsl). `None`: the
+    /// (binding 17) and the TLAS (18; `abi::PATH_TRACER_BINDINGS`). `None`: the
     /// software BVH.
     pub hardware: Option<&'k [bool]>,
 }
 
-/// The buffers one film render binds (shaders/bindings.glsl, 0-15), but
-/// for the active-pixel mask and the ray-query ones.
+/// The buffers one film render binds (`abi::PATH_TRACER_BINDINGS` 0-15),
+/// but for the active-pixel mask and the ray-query ones.
 struct FilmBuffers<'c> {
     params: Buffer<'c>,
     triangles: Buffer<'c>,
@@ -344,26 +333,27 @@ impl<'c> FilmBuffers<'c> {
         })
     }
 
-    /// In binding order.
-    fn bindings(&self) -> Vec<&Buffer<'c>> {
-        vec![
-            &self.params,
-            &self.triangles,
-            &self.nodes,
-            &self.shading,
-            &self.materials,
-            &self.emitters,
-            &self.lights,
-            &self.accum,
-            &self.rays,
-            &self.texels,
-            &self.textures,
-            &self.material_textures,
-            &self.uvs,
-            &self.env_texels,
-            &self.env_dist,
-            &self.ms_tables,
-        ]
+    /// The buffer of the binding named `name` in the table.
+    fn get(&self, name: &str) -> Option<&Buffer<'c>> {
+        Some(match name {
+            "params" => &self.params,
+            "triangles" => &self.triangles,
+            "bvh_nodes" => &self.nodes,
+            "shading" => &self.shading,
+            "materials" => &self.materials,
+            "emitters" => &self.emitters,
+            "lights" => &self.lights,
+            "accum" => &self.accum,
+            "ray_counts" => &self.rays,
+            "texels" => &self.texels,
+            "textures" => &self.textures,
+            "material_textures" => &self.material_textures,
+            "triangle_uvs" => &self.uvs,
+            "env_texels" => &self.env_texels,
+            "env_dist" => &self.env_dist,
+            "ms_tables" => &self.ms_tables,
+            _ => return None,
+        })
     }
 }
 
@@ -432,8 +422,6 @@ pub fn render_film_range(
         }
         None => None,
     };
-    let mut bindings = vec![BufferKind::Uniform];
-    bindings.extend([BufferKind::Storage; 16]);
     let active = Buffer::from_slice(
         ctx,
         &format!("active pixels ({width}x{height})"),
@@ -442,15 +430,29 @@ pub fn render_film_range(
     )?;
     let mut options = kernel_cfg.options;
     if let Some(a) = &accel {
-        bindings.push(BufferKind::Storage);
         options.acceleration_structure = a.tlas();
     }
-    let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &bindings, 8, &options)?;
-    let mut buffers = b.bindings();
-    buffers.push(&active);
-    if let Some(a) = &accel {
-        buffers.push(&a.tri_map);
+    // The table's buffers in binding order (the acceleration structure,
+    // the last binding, goes through `options`).
+    let mut kinds = Vec::new();
+    let mut buffers = Vec::new();
+    for binding in abi::path_tracer_bindings(accel.is_some()) {
+        let buffer = match (binding.name, &accel) {
+            (_, _) if binding.resource == Resource::AccelerationStructure => continue,
+            ("active_pixels", _) => &active,
+            ("tri_map", Some(a)) => &a.tri_map,
+            (name, _) => b.get(name).ok_or_else(|| {
+                GpuError::Invalid(format!("binding {}: no buffer for {name}", binding.binding))
+            })?,
+        };
+        kinds.push(match binding.resource {
+            Resource::Uniform => BufferKind::Uniform,
+            _ => BufferKind::Storage,
+        });
+        buffers.push(buffer);
     }
+    let push_size = size_of::<SamplePush>() as u32;
+    let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &kinds, push_size, &options)?;
     kernel.bind(&buffers)?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 

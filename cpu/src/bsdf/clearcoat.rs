@@ -33,7 +33,7 @@ use super::{BsdfSample, SMOOTH_ALPHA_THRESHOLD};
 use crate::frame::Frame;
 
 /// The clear coat's IOR (glTF: fixed at 1.5).
-pub const CLEARCOAT_IOR: f32 = 1.5;
+pub use crate::abi::CLEARCOAT_IOR;
 
 /// A clear coat: weight (clearcoatFactor), GGX alpha and normal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,9 +115,9 @@ pub fn coat_normal(xy: Vec2) -> Vec3 {
 
 /// Grid steps per unit of the coat normal's x and y (GLSL
 /// `COAT_NORMAL_STEPS`, pinned by `cpu/tests/bsdf_regressions.rs`).
-pub const COAT_NORMAL_STEPS: u32 = 2047;
+pub use crate::abi::COAT_NORMAL_STEPS;
 /// Values of q per axis, 2 STEPS + 1 (GLSL `COAT_NORMAL_STRIDE`).
-pub const COAT_NORMAL_STRIDE: u32 = 2 * COAT_NORMAL_STEPS + 1;
+pub use crate::abi::COAT_NORMAL_STRIDE;
 
 /// `clearcoat_normal` encoding of the GPU record (`GpuMaterial::extra.w`):
 /// 0 for no tilt, else 1 + qx STRIDE + qy, q = floor((x + 1) STEPS + 1/2)

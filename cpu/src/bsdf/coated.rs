@@ -99,15 +99,11 @@ impl CoatParams {
     }
 }
 
-/// Grid sizes of the coat tables: mu^(1/4), sqrt(alpha) and
-/// x = (eta - 1) / (eta + 1), each uniform over [0, 1].
-pub const COAT_N_MU: usize = 64;
-pub const COAT_N_ALPHA: usize = 64;
-pub const COAT_N_ETA: usize = 32;
-/// Floats in the E table (`[x][alpha][mu]`) and in the E_avg table
-/// (`[x][alpha]`), which follows it.
-pub const COAT_E_LEN: usize = COAT_N_MU * COAT_N_ALPHA * COAT_N_ETA;
-pub const COAT_E_AVG_LEN: usize = COAT_N_ALPHA * COAT_N_ETA;
+// Grid sizes of the coat tables: mu^(1/4), sqrt(alpha) and
+// x = (eta - 1) / (eta + 1), each uniform over [0, 1]; floats in the E
+// table (`[x][alpha][mu]`) and in the E_avg table (`[x][alpha]`), which
+// follows it.
+pub use crate::abi::{COAT_E_AVG_LEN, COAT_E_LEN, COAT_N_ALPHA, COAT_N_ETA, COAT_N_MU};
 
 /// The binary tables ([`decode_table`]'s format, tag "GLCT"): E, then E_avg.
 const COAT_TABLE_BYTES: &[u8] = include_bytes!("coat_tables.bin");
@@ -543,8 +539,8 @@ pub fn coated_sample(
     })
 }
 
-/// The largest f32 below 1: a rescaled random number stays in [0, 1).
-const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+// The largest f32 below 1: a rescaled random number stays in [0, 1).
+use crate::abi::ONE_MINUS_EPS;
 
 /// The coat's selection probability at wo (for tests and the blend).
 pub fn coated_coat_probability(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> f32 {

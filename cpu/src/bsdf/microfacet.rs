@@ -19,7 +19,7 @@ use std::f32::consts::PI;
 /// Rough alphas are clamped to at least this (pbrt-v4's
 /// `TrowbridgeReitzDistribution` does the same) so that an anisotropic
 /// surface with one alpha near 0 and the other large stays finite.
-pub const MIN_ALPHA: f32 = 1e-4;
+pub use crate::abi::MIN_ALPHA;
 
 /// GGX normal distribution D(wm) (Walter et al. 2007 eq. 33, anisotropic
 /// form of Heitz 2014 eq. 85): 1 / (pi ax ay ((x/ax)^2 + (y/ay)^2 + z^2)^2).

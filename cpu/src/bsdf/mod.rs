@@ -53,7 +53,7 @@ pub enum Shadowing {
 
 /// GGX alphas below this are rendered as the smooth (delta) counterpart
 /// (pbrt-v4's choice; alpha = 0.01 is still rough).
-pub const SMOOTH_ALPHA_THRESHOLD: f32 = 1e-3;
+pub use crate::abi::SMOOTH_ALPHA_THRESHOLD;
 
 /// A rough dielectric whose relative IOR is within this of 1 is rendered as
 /// the smooth interface. The generalised half vector eta wi + wo of a
@@ -65,7 +65,7 @@ pub const SMOOTH_ALPHA_THRESHOLD: f32 = 1e-3;
 /// (alpha <= 1): as narrow as what the alpha threshold already treats as a
 /// delta. IOR exactly 1 gave NaN in Unity's and Blender's GGX BTDFs, and
 /// Cycles' sampled pdf disagreed with its evaluated pdf near equal IORs.
-pub const ETA_SMOOTH_THRESHOLD: f32 = 1e-2;
+pub use crate::abi::ETA_SMOOTH_THRESHOLD;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Roughness {

@@ -16,8 +16,7 @@ use std::sync::LazyLock;
 
 use super::coated::{decode_table, encode_table};
 
-pub const MS_N: usize = 32;
-pub const MS_T_N: usize = 24;
+pub use crate::abi::{MS_N, MS_T_N};
 
 const E_LEN: usize = MS_N * MS_N;
 const T_LEN: usize = MS_T_N * MS_T_N * MS_T_N;

@@ -133,19 +133,10 @@ pub fn gpu_tables() -> Vec<f32> {
     v
 }
 
-/// Offset of MS_E_AVG in [`gpu_tables`].
-pub const MS_OFF_E_AVG: usize = 2 * MS_N * MS_N;
-/// Offset of MS_T in [`gpu_tables`].
-pub const MS_OFF_T: usize = MS_OFF_E_AVG + 2 * MS_N;
-/// Offset of the coat tables (E, then E_avg) in [`gpu_tables`].
-pub const MS_OFF_COAT: usize = MS_OFF_T + 2 * MS_T_N * MS_T_N * MS_T_N;
-/// Offset of `roughplastic`'s tables (`roughplastic::roughplastic_tables`).
-pub const MS_OFF_RP: usize =
-    MS_OFF_COAT + super::coated::COAT_E_LEN + super::coated::COAT_E_AVG_LEN;
-
-/// The dielectric table's eta' grid: log-uniform over [1/3, 3].
-pub const MS_T_ETA_MIN: f32 = 1.0 / 3.0;
-pub const MS_T_ETA_MAX: f32 = 3.0;
+// The offsets of MS_E_AVG, MS_T, the coat tables (E, then E_avg) and
+// `roughplastic`'s tables in [`gpu_tables`]; the dielectric table's eta'
+// grid, log-uniform over [MS_T_ETA_MIN, MS_T_ETA_MAX] = [1/3, 3].
+pub use crate::abi::{MS_OFF_COAT, MS_OFF_E_AVG, MS_OFF_RP, MS_OFF_T, MS_T_ETA_MAX, MS_T_ETA_MIN};
 
 /// eta' of grid index j of an `n`-point grid (the table's: `MS_T_N`; the
 /// generator passes the size it writes, which may not be the one compiled

@@ -41,15 +41,11 @@ use super::plastic::PlasticParams;
 use super::warp::square_to_cosine_hemisphere;
 use super::{BsdfSample, Roughness, Shadowing};
 
-/// Grids: mu uniform (Mitsuba's 64 nodes), sqrt(alpha), sqrt(x) with
-/// x = (eta - 1) / (eta + 1) (as the coat tables, `coated.rs`).
-pub const RP_N_MU: usize = 64;
-pub const RP_N_ALPHA: usize = 32;
-pub const RP_N_ETA: usize = 32;
-/// Floats of one Smith form's T table (`[eta][alpha][mu]`); the tables hold
-/// T for both forms, then R_int (`[form][eta][alpha]`).
-pub const RP_T_LEN: usize = RP_N_MU * RP_N_ALPHA * RP_N_ETA;
-pub const RP_R_LEN: usize = RP_N_ALPHA * RP_N_ETA;
+// Grids: mu uniform (Mitsuba's 64 nodes), sqrt(alpha), sqrt(x) with
+// x = (eta - 1) / (eta + 1) (as the coat tables, `coated.rs`); floats of
+// one Smith form's T table (`[eta][alpha][mu]`) and of R_int.
+pub use crate::abi::{RP_N_ALPHA, RP_N_ETA, RP_N_MU, RP_R_LEN, RP_T_LEN};
+/// The tables hold T for both forms, then R_int (`[form][eta][alpha]`).
 pub const RP_LEN: usize = 2 * (RP_T_LEN + RP_R_LEN);
 
 const RP_TABLE_BYTES: &[u8] = include_bytes!("roughplastic_tables.bin");

@@ -22,9 +22,6 @@ mod traverse;
 mod wide;
 mod wide_traverse;
 
-use std::mem::size_of;
-
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use crate::scene::Triangle;
@@ -38,26 +35,13 @@ pub use wide_traverse::Kernel;
 /// Entries of the traversal stack (CPU and GPU). The builder guarantees every
 /// leaf is at depth `<= MAX_DEPTH < STACK_SIZE`, and front-to-back traversal
 /// pushes at most one node per level, so the stack never overflows.
-pub const STACK_SIZE: usize = 64;
+pub const STACK_SIZE: usize = crate::abi::BVH_STACK_SIZE;
 /// Deepest node the builder creates (root at depth 0).
 pub const MAX_DEPTH: usize = 48;
 /// The builder never makes leaves larger than this.
 pub const MAX_LEAF_SIZE: usize = 4;
 
-/// tinybvh's 32-byte node, read unchanged by the GPU as two `vec4`s (the
-/// integers in `.w` through `floatBitsToUint`). Leaf when `tri_count > 0`:
-/// triangles `[left_or_first, left_or_first + tri_count)` of the (reordered)
-/// triangle array. Interior: children `left_or_first` and `left_or_first + 1`.
-/// Node 0 is the root.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub aabb_min: [f32; 3],
-    pub left_or_first: u32,
-    pub aabb_max: [f32; 3],
-    pub tri_count: u32,
-}
-const _: () = assert!(size_of::<BvhNode>() == 32);
+pub use crate::abi::BvhNode;
 
 impl BvhNode {
     pub fn is_leaf(&self) -> bool {

@@ -6,14 +6,8 @@ use glam::{BVec3, Vec3};
 use super::{BvhNode, Hit, Ray, STACK_SIZE};
 use crate::scene::Triangle;
 
-/// Ize 2013 ("Robust BVH ray traversal", JCGT 2(2)), as pbrt-v3 applies it:
-/// scaling the far slab distance by 1 + 2 gamma(3), gamma(n) = n eps / (1 - n eps)
-/// with eps = 2^-24, makes the rounded slab test conservative, so a box is
-/// never missed when a triangle inside it is hit.
-pub const SLAB_PAD: f32 = {
-    let eps = f32::EPSILON * 0.5;
-    1.0 + 2.0 * (3.0 * eps / (1.0 - 3.0 * eps))
-};
+/// Ize 2013's conservative slab padding ([`crate::abi::BVH_SLAB_PAD`]).
+pub const SLAB_PAD: f32 = crate::abi::BVH_SLAB_PAD;
 
 /// Per-ray constants of the slab and watertight triangle tests.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -2,8 +2,8 @@
 //! the boxes of up to four children side by side, one coordinate per
 //! `[f32; 4]`, so one SIMD instruction tests a coordinate of all four boxes
 //! (the layout of Embree's BVH4 and of Wald, Benthin, Boulos 2008, "Getting
-//! rid of packets"). The GPU reads the same bytes (`Bvh4Node` in
-//! `shaders/bvh_types.glsl`).
+//! rid of packets"). The GPU reads the same bytes (`Bvh4Node`,
+//! declared in [`crate::abi`], which generates its GLSL).
 //!
 //! Why collapse our own tree instead of taking `obvhs` (PLOC + CWBVH) or
 //! `tinybvh-rs`: the collapse keeps the binary tree's leaves, triangle order
@@ -21,9 +21,6 @@
 //! interior nodes with 8 well-filled grandchildren-of-grandchildren, so an
 //! 8-wide node is mostly empty slots on meshes the size of ours.
 
-use std::mem::{offset_of, size_of};
-
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 use super::{BvhNode, MAX_DEPTH, MAX_LEAF_SIZE};
@@ -31,13 +28,14 @@ use super::{BvhNode, MAX_DEPTH, MAX_LEAF_SIZE};
 /// Children per node.
 pub const WIDTH: usize = 4;
 /// A child slot that holds nothing. Empty slots are always the last ones.
-pub const SLOT_EMPTY: u32 = u32::MAX;
+pub const SLOT_EMPTY: u32 = crate::abi::BVH4_SLOT_EMPTY;
 /// Set in a child reference to a leaf: bits 0..27 are the first triangle,
 /// bits 27..31 the triangle count minus 1.
-pub const LEAF_BIT: u32 = 1 << 31;
+pub const LEAF_BIT: u32 = crate::abi::BVH4_LEAF_BIT;
 const LEAF_FIRST_BITS: u32 = 27;
 /// Triangles a leaf reference can address.
-pub const MAX_LEAF_FIRST: u32 = (1 << LEAF_FIRST_BITS) - 1;
+pub const MAX_LEAF_FIRST: u32 = crate::abi::BVH4_LEAF_FIRST_MASK;
+const _: () = assert!(MAX_LEAF_FIRST == (1 << LEAF_FIRST_BITS) - 1);
 
 /// Deepest wide node on any path (root = 0): the collapse puts interior
 /// children at least two binary levels below their parent, and the binary
@@ -47,40 +45,11 @@ pub const MAX_WIDE_DEPTH: usize = (MAX_DEPTH - 1) / 2;
 /// Entries of the wide traversal stack (CPU and GPU): a node visited pushes
 /// at most `WIDTH - 1` children (the nearest is visited at once), and at most
 /// `MAX_WIDE_DEPTH + 1` nodes lie on the path to the current one.
-pub const WIDE_STACK_SIZE: usize = (WIDTH - 1) * (MAX_WIDE_DEPTH + 1);
-const _: () = assert!(WIDE_STACK_SIZE == 72);
+pub const WIDE_STACK_SIZE: usize = crate::abi::BVH4_STACK_SIZE;
+const _: () = assert!(WIDE_STACK_SIZE == (WIDTH - 1) * (MAX_WIDE_DEPTH + 1));
 const _: () = assert!(MAX_LEAF_SIZE <= 1 << (31 - LEAF_FIRST_BITS));
 
-/// One node of the 4-wide BVH: 128 bytes, two cache lines. Slot i's box is
-/// `(lo_x[i], lo_y[i], lo_z[i])..(hi_x[i], hi_y[i], hi_z[i])`, copied
-/// unchanged from the binary node it stands for; `child[i]` is a node index
-/// (bit 31 clear), a leaf reference ([`LEAF_BIT`] set, see [`leaf_ref`]) or
-/// [`SLOT_EMPTY`]. Node 0 is the root. Empty slots have the empty box
-/// (+inf..-inf), and are masked out by their reference, not their box.
-///
-/// GLSL (`Bvh4Node` in `shaders/bvh_types.glsl`) reads it as six `vec4`s
-/// and two `uvec4`s in this order.
-#[repr(C, align(64))]
-#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
-pub struct Bvh4Node {
-    pub lo_x: [f32; 4],
-    pub hi_x: [f32; 4],
-    pub lo_y: [f32; 4],
-    pub hi_y: [f32; 4],
-    pub lo_z: [f32; 4],
-    pub hi_z: [f32; 4],
-    pub child: [u32; 4],
-    /// Pads the node to two 64-byte cache lines; always zero.
-    pub _pad: [u32; 4],
-}
-const _: () = assert!(size_of::<Bvh4Node>() == 128);
-const _: () = assert!(offset_of!(Bvh4Node, hi_x) == 16);
-const _: () = assert!(offset_of!(Bvh4Node, lo_y) == 32);
-const _: () = assert!(offset_of!(Bvh4Node, hi_y) == 48);
-const _: () = assert!(offset_of!(Bvh4Node, lo_z) == 64);
-const _: () = assert!(offset_of!(Bvh4Node, hi_z) == 80);
-const _: () = assert!(offset_of!(Bvh4Node, child) == 96);
-const _: () = assert!(offset_of!(Bvh4Node, _pad) == 112);
+pub use crate::abi::Bvh4Node;
 
 impl Default for Bvh4Node {
     fn default() -> Self {

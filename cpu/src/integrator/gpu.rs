@@ -1,10 +1,6 @@
 //! What the GPU path tracer reads besides the scene's own arrays: the
-//! `Params` uniform (binding 0 of `shaders/bindings.glsl`), the emitter
+//! `Params` uniform (binding 0 of `abi::PATH_TRACER_BINDINGS`), the emitter
 //! table (binding 5) and the punctual lights (binding 6).
-
-use std::mem::{offset_of, size_of};
-
-use bytemuck::{Pod, Zeroable};
 
 use super::{PathTracer, RenderError};
 use crate::film::RenderOptions;
@@ -12,65 +8,7 @@ use crate::lights::{GpuEmitter, GpuLight};
 use crate::scene::{GpuMaterial, Scene};
 use crate::texture::{GpuTexture, MaterialTextures, TriangleUv};
 
-/// Mirror of `uniform Params` in `shaders/bindings.glsl` (std140: the
-/// `vec4`s first, then scalars in groups of four, so std140 and C agree).
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct GpuParams {
-    /// Camera origin (xyz), see `PinholeCamera`.
-    pub cam_origin: [f32; 4],
-    /// Camera right axis scaled by tan(yfov/2) * aspect.
-    pub cam_right: [f32; 4],
-    /// Camera up axis scaled by tan(yfov/2).
-    pub cam_up: [f32; 4],
-    /// Camera viewing direction (the camera's -Z).
-    pub cam_forward: [f32; 4],
-    /// Constant background radiance (rgb).
-    pub background: [f32; 4],
-    pub width: u32,
-    pub height: u32,
-    /// Total samples per pixel of the render (dispatches cover sub-ranges).
-    pub spp: u32,
-    /// Mitsuba's max_depth, unbounded (-1) as 0xffffffff.
-    pub max_depth: u32,
-    /// `sampling::seed_key(seed)`.
-    pub seed_key: u32,
-    pub triangle_count: u32,
-    pub bvh_node_count: u32,
-    pub emitter_count: u32,
-    pub light_count: u32,
-    /// 1: next-event estimation on (`RenderOptions::nee`).
-    pub nee: u32,
-    /// `Mis::code`: 0 power, 1 balance, 2 none.
-    pub mis: u32,
-    /// `SamplerKind::code`.
-    pub sampler: u32,
-    /// Light category probabilities (see `lights`).
-    pub p_area: f32,
-    pub p_punctual: f32,
-    pub p_background: f32,
-    /// Samples per variance batch (`RenderOptions::batch`, `Film::batch`).
-    pub variance_batch: u32,
-    /// 1: some material has textures (bindings 9-12 hold them).
-    pub textured: u32,
-    /// 1: some material has an alpha mask (traversal tests it).
-    pub masked: u32,
-    /// Environment map size (0: none; bindings 13-14 hold it).
-    pub env_width: u32,
-    pub env_height: u32,
-    /// The environment map's rotation about +Y.
-    pub env_rot_sin: f32,
-    pub env_rot_cos: f32,
-    pub env_pad: [u32; 2],
-}
-const _: () = assert!(size_of::<GpuParams>() == 176);
-const _: () = assert!(offset_of!(GpuParams, textured) == 144);
-const _: () = assert!(offset_of!(GpuParams, env_rot_sin) == 160);
-const _: () = assert!(offset_of!(GpuParams, background) == 64);
-const _: () = assert!(offset_of!(GpuParams, width) == 80);
-const _: () = assert!(offset_of!(GpuParams, seed_key) == 96);
-const _: () = assert!(offset_of!(GpuParams, light_count) == 112);
-const _: () = assert!(offset_of!(GpuParams, p_area) == 128);
+pub use crate::abi::GpuParams;
 
 /// Everything `gpu_scene_data` prepares for the host to upload.
 #[derive(Clone, Debug)]

@@ -74,24 +74,8 @@ use crate::scene::{NO_LIGHT, Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS
 use crate::sobol::PathSampler;
 use crate::texture::{MaterialTextures, clearcoat_normal, normal_mapped, textured_bsdf};
 
-/// Mitsuba's default `rr_depth`.
-pub const RR_DEPTH: u32 = 5;
-/// Largest survival probability of Russian roulette (Mitsuba's 0.95).
-pub const RR_MAX_PROB: f32 = 0.95;
-/// pbrt-v4's gamma(7) = 7 u / (1 - 7 u), u = 2^-24 (the unit roundoff):
-/// the error bound factor of a point interpolated from three vertices.
-/// `shaders/pathtrace.comp` writes the same literal (pinned by a test).
-pub const RAY_ERR_GAMMA: f32 = 4.172_326_8e-7;
-/// Relative margin for the watertight triangle test's own rounding: a ray
-/// leaving a triangle at a grazing angle meets its plane again at a t
-/// whose rounding error is a few tens of ulps of the triangle's size
-/// (pbrt-v4 rejects such hits with a conservative t > deltaT; glint's
-/// triangle test has no such margin, so the offset carries it). 64 unit
-/// roundoffs; the literal is pinned against the GLSL by a test.
-pub const RAY_ERR_TRI: f32 = 3.814_697_3e-6;
-/// Shadow rays stop this fraction of their length short of the light
-/// point (pbrt-v4's `ShadowEpsilon`).
-pub const SHADOW_EPS: f32 = 1e-4;
+// Russian roulette and the ray offsets, shared with the kernel.
+pub use crate::abi::{RAY_ERR_GAMMA, RAY_ERR_TRI, RR_DEPTH, RR_MAX_PROB, SHADOW_EPS};
 /// A scene whose ray-offset bound at its farthest point exceeds this
 /// fraction of its median triangle size gets a precision warning.
 /// (A tenth: neighbouring triangles then start to shadow each other and
