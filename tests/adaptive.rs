@@ -15,7 +15,7 @@ fn asset(name: &str) -> PathBuf {
 }
 
 fn scene(name: &str) -> Scene {
-    glint::cpu::loader::load(&asset(name)).unwrap()
+    glint::cpu::prepare::prepare_default(&asset(name)).unwrap()
 }
 
 fn render(s: &Scene, o: &RenderOptions) -> Film {

@@ -642,7 +642,7 @@ fn info_bytes_per_triangle_match_the_uploaded_buffers() {
             .unwrap()
             .parse()
             .unwrap();
-        let scene = glint::cpu::loader::load(&asset).unwrap();
+        let scene = glint::cpu::prepare::prepare_default(&asset).unwrap();
         let opts = glint::cpu::RenderOptions::new(8, 8);
         let data = glint::cpu::integrator::gpu_scene_data(&scene, &opts).unwrap();
         let b = glint::gpu::render::SceneBytes::new(&scene, &data);

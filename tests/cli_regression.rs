@@ -127,7 +127,7 @@ fn exr_records_attributes_variance_and_a_success_line() {
     let var = img.variance.as_ref().unwrap();
     assert!(var.iter().any(|v| v.x > 0.0) && var.iter().all(|v| v.min_element() >= 0.0));
     // The same render through the library: same means, same variances.
-    let scene = glint::cpu::loader::load(&cornell()).unwrap();
+    let scene = glint::cpu::prepare::prepare_default(&cornell()).unwrap();
     let opts = RenderOptions {
         spp: 8,
         seed: 7,
@@ -350,7 +350,7 @@ fn diff_false_positive_rate_is_calibrated() {
     // bound at 1e-3), at the default alpha and at 0.05 (where a rate is
     // measurable).
     let dir = scratch("calib");
-    let scene = glint::cpu::loader::load(&cornell()).unwrap();
+    let scene = glint::cpu::prepare::prepare_default(&cornell()).unwrap();
     const PAIRS: u64 = 200;
     for &(sampler, spp) in SAMPLERS {
         let mut fails = [0usize; 2];

@@ -34,7 +34,7 @@ fn both(
     spp: u32,
     seed: u64,
 ) -> [(&'static str, Film); 2] {
-    let scene: Scene = glint::cpu::loader::load(path).unwrap_or_else(|e| panic!("{e}"));
+    let scene: Scene = glint::cpu::prepare::prepare_default(path).unwrap_or_else(|e| panic!("{e}"));
     let gpu = render_on(ctx, &scene, &options(size, spp, seed), &|_, _| {})
         .unwrap_or_else(|e| panic!("GPU render failed: {e}"))
         .film;

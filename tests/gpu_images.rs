@@ -98,8 +98,8 @@ fn compare_scene(
     perturb: Option<&dyn Fn(&mut Scene)>,
 ) -> CompareReport {
     let ctx = common::context();
-    let mut scene =
-        glint::cpu::loader::load(&asset(file)).unwrap_or_else(|e| panic!("{file}: {e}"));
+    let mut scene = glint::cpu::prepare::prepare_default(&asset(file))
+        .unwrap_or_else(|e| panic!("{file}: {e}"));
     prepare(&mut scene);
     let cpu = cpu_film(&scene);
     let gpu = match perturb {

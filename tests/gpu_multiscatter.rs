@@ -25,7 +25,7 @@ fn furnace(asset: &str, bsdf: Bsdf) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets")
         .join(asset);
-    let mut s = glint::cpu::loader::load(&path).unwrap();
+    let mut s = glint::cpu::prepare::prepare_default(&path).unwrap();
     if matches!(bsdf, Bsdf::Dielectric { .. }) {
         let glass: Vec<bool> = s
             .materials

@@ -290,7 +290,7 @@ fn load(name: &str) -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("assets")
         .join(name);
-    glint::cpu::loader::load(&path).unwrap()
+    glint::cpu::prepare::prepare_default(&path).unwrap()
 }
 
 /// The kernel specialised to the scene, as renders use by default: the

@@ -81,7 +81,7 @@ fn specialised_and_generic_kernels_give_the_same_image() {
         ("textured.gltf", -1, true),
     ];
     for (file, max_depth, nee) in cases {
-        let mut scene = glint::cpu::loader::load(&asset(file)).unwrap();
+        let mut scene = glint::cpu::prepare::prepare_default(&asset(file)).unwrap();
         if scene.lights.is_empty() && scene.emitter_triangles().is_empty() {
             scene.background = glam::Vec3::ONE;
         }

@@ -73,7 +73,7 @@ fn gpu(ctx: &common::ValidatedContext, scene: &Scene, o: &RenderOptions) -> Film
 }
 
 fn load(file: &str) -> Scene {
-    let mut s = glint::cpu::loader::load(&asset(file)).unwrap();
+    let mut s = glint::cpu::prepare::prepare_default(&asset(file)).unwrap();
     if s.lights.is_empty() && s.emitter_triangles().is_empty() {
         s.background = glam::Vec3::ONE;
     }

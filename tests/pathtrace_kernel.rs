@@ -59,7 +59,7 @@ fn gpu_kernel_traces_the_cpu_paths() {
         let path = Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets")
             .join(file);
-        let mut scene = glint::cpu::loader::load(&path).unwrap();
+        let mut scene = glint::cpu::prepare::prepare_default(&path).unwrap();
         if ms {
             let mut rough = 0;
             for m in &mut scene.materials {

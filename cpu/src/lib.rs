@@ -19,6 +19,7 @@ pub mod integrator;
 pub mod lights;
 pub mod loader;
 pub mod metrics;
+pub mod prepare;
 pub mod quadrature;
 pub mod safe_fs;
 pub mod sampling;

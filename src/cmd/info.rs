@@ -14,8 +14,8 @@ use crate::cli::InfoArgs;
 
 pub fn run(args: &InfoArgs) -> Result<()> {
     check_scene_path(&args.scene)?;
-    let mut scene = load_quiet(&args.scene, args.allow_any_path, args.background)?;
-    let simplified = glint::cpu::features::simplify(&mut scene);
+    let prepared = load_quiet(&args.scene, args.allow_any_path, args.background)?;
+    let (scene, simplified) = (prepared.scene, prepared.simplified);
     if args.strict
         && let Some(w) = scene.warnings.first()
     {

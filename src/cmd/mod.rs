@@ -19,8 +19,10 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Result, anyhow, bail};
+use glam::Vec3;
 use glint::backend::{self, Backend, BackendRender, GpuOptions};
 use glint::cpu::exr_file::{RadianceImage, RenderMeta};
+use glint::cpu::prepare::{EnvmapSource, PrepareOptions, Prepared};
 use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -225,49 +227,31 @@ pub fn load(path: &Path, o: &RenderOpts) -> Result<Scene> {
 /// [`load`], and every file it read: the scene, its external buffers and
 /// images (real paths) and the environment map. No output may name one.
 pub fn load_with_inputs(path: &Path, o: &RenderOpts) -> Result<(Scene, Vec<PathBuf>)> {
+    let prepared = prepare(path, o)?;
+    report_warnings(path, &prepared.scene, o.strict)?;
+    Ok((prepared.scene, prepared.inputs))
+}
+
+/// The library's one scene preparation ([`glint::cpu::prepare`]) with the
+/// options as the CLI gives them, checked first; warnings not printed.
+pub fn prepare(path: &Path, o: &RenderOpts) -> Result<Prepared> {
     check_envmap_opts(o)?;
     check_scene_path(path)?;
-    let options = glint::cpu::loader::LoadOptions {
+    Ok(glint::cpu::prepare::prepare(path, &prepare_options(o))?)
+}
+
+/// What of `o` changes the scene.
+pub fn prepare_options(o: &RenderOpts) -> PrepareOptions {
+    PrepareOptions {
         allow_any_path: o.allow_any_path,
         multiscatter: o.multiscatter == OnOff::On,
-    };
-    let (mut scene, mut inputs) = glint::cpu::loader::load_with_inputs(path, options)?;
-    inputs.push(path.to_path_buf());
-    if let Some(bg) = o.background {
-        scene.background = bg.into();
+        background: o.background.map(Vec3::from),
+        envmap: o.envmap.as_ref().map(|path| EnvmapSource {
+            path: path.clone(),
+            scale: o.envmap_scale,
+            rotate_degrees: o.envmap_rotate,
+        }),
     }
-    if let Some(env) = &o.envmap {
-        let (map, bad) =
-            glint::cpu::envmap::EnvMap::load_checked(env, o.envmap_scale, o.envmap_rotate)
-                .map_err(|e| anyhow!("{}: {e}", env.display()))?;
-        if bad > 0 {
-            scene.warnings.push(format!(
-                "{}: {bad} texel(s) not finite (NaN or infinite{}); they emit nothing",
-                env.display(),
-                if o.envmap_scale != 1.0 {
-                    ", after --envmap-scale"
-                } else {
-                    ""
-                }
-            ));
-        }
-        scene.background = glam::Vec3::ZERO;
-        scene.envmap = Some(std::sync::Arc::new(map));
-        inputs.push(env.clone());
-    }
-    // Exact simplifications (glint_cpu::features::simplify): they shrink
-    // what the specialised kernel carries without changing the image.
-    glint::cpu::features::simplify(&mut scene);
-    // The default lighting applies to the file alone: a background the
-    // user gives (even --background 0,0,0, a dark scene) replaces it.
-    if o.background.is_none() && o.envmap.is_none() {
-        scene.light_if_unlit();
-    }
-    if let Some(w) = glint::cpu::integrator::precision_warning(&scene) {
-        scene.warnings.push(w);
-    }
-    report_warnings(path, &scene, o.strict)?;
-    Ok((scene, inputs))
 }
 
 fn check_envmap_opts(o: &RenderOpts) -> Result<()> {
@@ -289,25 +273,21 @@ fn check_envmap_opts(o: &RenderOpts) -> Result<()> {
     Ok(())
 }
 
-/// [`load`] without printing the warnings (they stay in `Scene::warnings`).
+/// The prepared scene of `path` with `--allow-any-path` and
+/// `--background` as given and the other options at their defaults,
+/// without printing the warnings (they stay in `Scene::warnings`).
 pub fn load_quiet(
     path: &Path,
     allow_any_path: bool,
     background: Option<[f32; 3]>,
-) -> Result<Scene> {
+) -> Result<Prepared> {
     check_scene_path(path)?;
-    let options = glint::cpu::loader::LoadOptions {
+    let options = PrepareOptions {
         allow_any_path,
+        background: background.map(Vec3::from),
         ..Default::default()
     };
-    let mut scene = glint::cpu::loader::load_with(path, options)?;
-    match background {
-        Some(bg) => scene.background = bg.into(),
-        None => {
-            scene.light_if_unlit();
-        }
-    }
-    Ok(scene)
+    Ok(glint::cpu::prepare::prepare(path, &options)?)
 }
 
 /// Print each warning as `glint: warning: FILE: ...`; with `strict`, the

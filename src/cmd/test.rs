@@ -373,7 +373,7 @@ fn material_changes(c: &Case) -> Result<Vec<detect::Change>> {
     use clap::Parser;
     let v = crate::cli::VariantCli::try_parse_from(&c.render_opts)
         .map_err(|e| anyhow!("options: {}", super::one_line(&e.to_string())))?;
-    let scene = super::load_quiet(&c.file, v.opts.allow_any_path, None)?;
+    let scene = super::prepare(&c.file, &v.opts)?.scene;
     let opts = super::render_options(&scene, &c.file, 1, &v.opts)?;
     detect::material_changes(&scene, &opts)
 }
