@@ -4,6 +4,8 @@
 
 use std::path::PathBuf;
 
+use glint_cpu::{RenderOptions, Scene};
+
 pub fn cache_dir() -> Option<PathBuf> {
     if let Some(d) = std::env::var_os("GLINT_CACHE_DIR").filter(|d| !d.is_empty()) {
         return Some(PathBuf::from(d));
@@ -54,5 +56,68 @@ impl Fnv {
 impl Default for Fnv {
     fn default() -> Self {
         Self::new()
+    }
+}
+
+/// What a [`render_key`] covers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KeyScope {
+    /// What defines the expected image apart from its samples: the loaded
+    /// scene, size, camera, depth and methods. Shards of one image share
+    /// it; `merge` checks seeds, samplers and sample ranges on their own,
+    /// so it can say which one differs.
+    Image,
+    /// One render exactly: the image's key plus the sample count, seed,
+    /// sampler, first sample and glint's version (the converge reference
+    /// cache).
+    Render,
+}
+
+/// The one content key of a render (16 hex digits): what the loaded
+/// scene holds (so external buffers and images count, not only the file's
+/// bytes) and the options in `scope`.
+pub fn render_key(scene: &Scene, opts: &RenderOptions, scope: KeyScope) -> String {
+    let mut h = Fnv::new();
+    if scope == KeyScope::Render {
+        h.add(env!("CARGO_PKG_VERSION").as_bytes());
+    }
+    hash_scene(&mut h, scene);
+    h.add(
+        format!(
+            "{}x{} depth {} camera {} {:?} {:?}",
+            opts.width, opts.height, opts.max_depth, opts.camera, opts.nee, opts.mis
+        )
+        .as_bytes(),
+    );
+    if scope == KeyScope::Render {
+        h.add(
+            format!(
+                "spp {} seed {} {:?} from {}",
+                opts.spp, opts.seed, opts.sampler, opts.sample_start
+            )
+            .as_bytes(),
+        );
+    }
+    format!("{:016x}", h.0)
+}
+
+/// Add what the loaded scene holds to `h`: geometry, shading data,
+/// materials, lights, cameras, background, textures and environment map.
+fn hash_scene(h: &mut Fnv, scene: &Scene) {
+    h.add(bytemuck::cast_slice(&scene.triangles));
+    h.add(bytemuck::cast_slice(&scene.shading));
+    h.add(
+        format!(
+            "{:?}|{:?}|{:?}|{:?}",
+            scene.materials, scene.lights, scene.cameras, scene.background
+        )
+        .as_bytes(),
+    );
+    let t = &scene.textures;
+    h.add(bytemuck::cast_slice(&t.texels));
+    h.add(format!("{:?}|{:?}|{:?}", t.table, t.materials, t.uvs).as_bytes());
+    if let Some(e) = &scene.envmap {
+        h.add(bytemuck::cast_slice(&e.texels));
+        h.add(format!("{}x{} {}", e.width, e.height, e.rotation).as_bytes());
     }
 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use clap::{Parser, Subcommand, ValueEnum};
 use glint::backend::Backend;
 use glint::cpu::{Mis, SamplerKind};
+use serde::Serialize;
 
 #[derive(Parser, Debug)]
 #[command(
@@ -88,14 +89,16 @@ pub struct InfoArgs {
 }
 
 /// `--nee on|off`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
 pub enum OnOff {
     On,
     Off,
 }
 
 /// `--mis power|balance|none`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
 pub enum MisArg {
     /// Power heuristic, beta 2 (Mitsuba 3's choice).
     Power,
@@ -116,7 +119,8 @@ impl From<MisArg> for Mis {
 }
 
 /// `--sampler`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
 pub enum SamplerArg {
     /// Owen-scrambled Sobol points (Burley 2020), scrambled per pixel.
     Sobol,
@@ -134,7 +138,8 @@ impl From<SamplerArg> for SamplerKind {
 }
 
 /// `--kernel`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
 pub enum KernelArg {
     /// Built for the scene's features (Vulkan specialization constants).
     Specialized,
@@ -152,7 +157,8 @@ impl From<KernelArg> for glint::backend::KernelChoice {
 }
 
 /// `--traversal`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
 pub enum TraversalArg {
     /// glint's BVH, walked in the compute kernel.
     Software,
@@ -171,10 +177,11 @@ impl From<TraversalArg> for glint::backend::Traversal {
 }
 
 /// Render options every verb shares (all but the scene, the sample count
-/// and the outputs). `to_args` writes them back as arguments, so converge
-/// can lay a variant's options over them: an option added here must be
-/// added there too.
-#[derive(clap::Args, Clone, Debug)]
+/// and the outputs). [`RenderOpts::to_args`] writes them back as arguments
+/// (from their serde form, whose names are clap's), so converge can lay a
+/// variant's options over them.
+#[derive(clap::Args, Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's long names
 pub struct RenderOpts {
     /// Image width in pixels (1..=16384); alone, the height follows the
     /// camera's aspect ratio. Default 512.
@@ -331,57 +338,34 @@ fn parse_camera(s: &str) -> Result<String, String> {
 }
 
 impl RenderOpts {
-    /// These options as command-line arguments (every one explicit).
-    pub fn to_args(&self) -> Vec<String> {
-        let mut a = Vec::new();
-        let mut push = |k: &str, v: String| {
-            a.push(format!("--{k}"));
-            a.push(v);
+    /// These options as command-line arguments, every one explicit: each
+    /// field of the serde form as `--name value` (`--name` alone for a
+    /// true flag, nothing for an unset option or a false flag; arrays as
+    /// `a,b,c`). The names are clap's (kebab-case fields and values), so
+    /// an option added to the struct is serialised with no code here.
+    pub fn to_args(&self) -> anyhow::Result<Vec<String>> {
+        use serde_json::Value;
+        let Value::Object(fields) = serde_json::to_value(self)? else {
+            anyhow::bail!("render options do not serialise to a map");
         };
-        if let Some(w) = self.width {
-            push("width", w.to_string());
-        }
-        if let Some(h) = self.height {
-            push("height", h.to_string());
-        }
-        push("max-depth", self.max_depth.to_string());
-        push("seed", self.seed.to_string());
-        if let Some(c) = &self.camera {
-            push("camera", c.clone());
-        }
-        if let Some(d) = &self.device {
-            push("device", d.clone());
-        }
-        let name = |v: &dyn Fn() -> Option<clap::builder::PossibleValue>| {
-            v().map(|p| p.get_name().to_string()).unwrap_or_default()
+        let text = |v: &Value| match v {
+            Value::String(s) => Ok(s.clone()),
+            Value::Number(n) => Ok(n.to_string()),
+            other => Err(anyhow::anyhow!("unexpected option value {other}")),
         };
-        push("nee", name(&|| self.nee.to_possible_value()));
-        push("mis", name(&|| self.mis.to_possible_value()));
-        push(
-            "multiscatter",
-            name(&|| self.multiscatter.to_possible_value()),
-        );
-        push("sampler", name(&|| self.sampler.to_possible_value()));
-        push("kernel", name(&|| self.kernel.to_possible_value()));
-        push("traversal", name(&|| self.traversal.to_possible_value()));
-        if let Some(t) = self.time_limit {
-            push("time-limit", t.to_string());
+        let mut args = Vec::new();
+        for (name, value) in fields {
+            match value {
+                Value::Null | Value::Bool(false) => {}
+                Value::Bool(true) => args.push(format!("--{name}")),
+                Value::Array(items) => {
+                    let items: anyhow::Result<Vec<String>> = items.iter().map(text).collect();
+                    args.extend([format!("--{name}"), items?.join(",")]);
+                }
+                v => args.extend([format!("--{name}"), text(&v)?]),
+            }
         }
-        if let Some([r, g, b]) = self.background {
-            push("background", format!("{r},{g},{b}"));
-        }
-        if let Some(e) = &self.envmap {
-            push("envmap", e.display().to_string());
-        }
-        push("envmap-scale", self.envmap_scale.to_string());
-        push("envmap-rotate", self.envmap_rotate.to_string());
-        if self.strict {
-            a.push("--strict".into());
-        }
-        if self.allow_any_path {
-            a.push("--allow-any-path".into());
-        }
-        a
+        Ok(args)
     }
 }
 
@@ -665,4 +649,67 @@ pub struct TestArgs {
     /// Seed of the test renders (independent re-renders: other seeds).
     #[arg(long, value_name = "S", default_value_t = 1, value_parser = parse_seed)]
     pub seed: u64,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(args: &[String]) -> RenderOpts {
+        VariantCli::try_parse_from(args)
+            .unwrap_or_else(|e| panic!("{args:?}: {e}"))
+            .opts
+    }
+
+    /// Every option, at its default and away from it, survives `to_args`
+    /// and clap's parser unchanged: the serde names are clap's.
+    #[test]
+    fn render_opts_round_trip_through_their_arguments() {
+        let defaults = parse(&[]);
+        assert_eq!(parse(&defaults.to_args().unwrap()), defaults);
+        let all = RenderOpts {
+            width: Some(33),
+            height: Some(17),
+            max_depth: 4,
+            seed: 123_456_789_012,
+            camera: Some("side view".into()),
+            device: Some("llvmpipe".into()),
+            nee: OnOff::Off,
+            mis: MisArg::Balance,
+            multiscatter: OnOff::On,
+            sampler: SamplerArg::Independent,
+            kernel: KernelArg::Generic,
+            traversal: TraversalArg::Hardware,
+            time_limit: Some(2.5),
+            background: Some([0.1, 0.25, 3.0]),
+            envmap: Some(PathBuf::from("sky dir/sky.hdr")),
+            envmap_scale: 0.3,
+            envmap_rotate: -45.5,
+            strict: true,
+            allow_any_path: true,
+        };
+        let args = all.to_args().unwrap();
+        assert_eq!(parse(&args), all, "{args:?}");
+        // A variant's options laid over them win.
+        let mut over = args.clone();
+        over.extend(["--mis".into(), "none".into(), "--width".into(), "8".into()]);
+        let o = parse(&over);
+        assert_eq!((o.mis, o.width, o.seed), (MisArg::None, Some(8), all.seed));
+    }
+
+    /// The serde names of the value enums are clap's value names.
+    #[test]
+    fn value_enum_names_are_the_serde_names() {
+        fn check<T: ValueEnum + Serialize>() {
+            for v in T::value_variants() {
+                let clap = v.to_possible_value().unwrap().get_name().to_string();
+                assert_eq!(serde_json::to_value(v).unwrap(), clap);
+            }
+        }
+        check::<OnOff>();
+        check::<MisArg>();
+        check::<SamplerArg>();
+        check::<KernelArg>();
+        check::<TraversalArg>();
+    }
 }

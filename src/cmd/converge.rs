@@ -11,7 +11,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::Parser;
 use glam::Vec3;
 use glint::backend::{Backend, BackendRender};
-use glint::cache::Fnv;
+use glint::cache::{KeyScope, render_key};
 use glint::chart::{ChartSpec, Curve};
 use glint::cpu::exr_file::{RadianceImage, RenderMeta};
 use glint::cpu::metrics::{self, ImageRef, Metrics};
@@ -47,7 +47,7 @@ pub fn parse_variant(spec: &str, shared: &RenderOpts) -> Result<Variant> {
     {
         bail!("--variant '{spec}': the name must be letters, digits and - _ . + (it names files)");
     }
-    let mut argv = shared.to_args();
+    let mut argv = shared.to_args()?;
     argv.extend(options.split_whitespace().map(str::to_string));
     let v = VariantCli::try_parse_from(&argv).map_err(|e| {
         let text = e.to_string();
@@ -221,51 +221,9 @@ pub fn markdown(title: &str, command: &str, rows: &[Row], variants: &[Variant]) 
     s
 }
 
-/// Add what the loaded scene holds to `h`: geometry, shading data,
-/// materials, lights, cameras, background, textures and environment map.
-pub(super) fn hash_scene(h: &mut Fnv, scene: &Scene) {
-    h.add(bytemuck::cast_slice(&scene.triangles));
-    h.add(bytemuck::cast_slice(&scene.shading));
-    h.add(
-        format!(
-            "{:?}|{:?}|{:?}|{:?}",
-            scene.materials, scene.lights, scene.cameras, scene.background
-        )
-        .as_bytes(),
-    );
-    let t = &scene.textures;
-    h.add(bytemuck::cast_slice(&t.texels));
-    h.add(format!("{:?}|{:?}|{:?}", t.table, t.materials, t.uvs).as_bytes());
-    if let Some(e) = &scene.envmap {
-        h.add(bytemuck::cast_slice(&e.texels));
-        h.add(format!("{}x{} {}", e.width, e.height, e.rotation).as_bytes());
-    }
-}
-
-/// The reference's cache key: what the loaded scene holds (so external
-/// buffers count, not only the file's bytes), the options that shape the
-/// image, and glint's version.
+/// The reference's cache key: one exact render ([`KeyScope::Render`]).
 pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
-    let mut h = Fnv::new();
-    h.add(env!("CARGO_PKG_VERSION").as_bytes());
-    hash_scene(&mut h, scene);
-    h.add(
-        format!(
-            "{}x{} spp {} depth {} seed {} camera {} {:?} {:?} {:?} {}",
-            opts.width,
-            opts.height,
-            opts.spp,
-            opts.max_depth,
-            opts.seed,
-            opts.camera,
-            opts.nee,
-            opts.mis,
-            opts.sampler,
-            opts.sample_start
-        )
-        .as_bytes(),
-    );
-    format!("{:016x}", h.0)
+    render_key(scene, opts, KeyScope::Render)
 }
 
 /// Read a linear RGB EXR (or any image the `image` crate decodes).

@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use glint::cpu::exr_file::RenderMeta;
 use glint::cpu::{RenderOptions, Scene};
 
-use glint::cache::Fnv;
+use glint::cache::{KeyScope, render_key};
 
 /// Shard `index` of `count` (0-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -84,21 +84,10 @@ pub fn apply(opts: &mut RenderOptions, shard: Shard) -> Result<()> {
     Ok(())
 }
 
-/// A content key of what defines the image apart from its samples: the
-/// loaded scene (external buffers included), size, camera, depth and
-/// methods. Seeds, samplers and sample ranges are recorded and checked on
-/// their own, so `merge` can say which one differs.
+/// The key of what defines the image apart from its samples
+/// ([`KeyScope::Image`]), recorded in every shard's EXR.
 pub fn image_key(scene: &Scene, opts: &RenderOptions) -> String {
-    let mut h = Fnv::new();
-    super::converge::hash_scene(&mut h, scene);
-    h.add(
-        format!(
-            "{}x{} depth {} camera {} {:?} {:?}",
-            opts.width, opts.height, opts.max_depth, opts.camera, opts.nee, opts.mis
-        )
-        .as_bytes(),
-    );
-    format!("{:016x}", h.0)
+    render_key(scene, opts, KeyScope::Image)
 }
 
 /// What an `.exr` of a finished render records; `spp` is the samples
