@@ -38,13 +38,7 @@ fn main() {
     println!("cargo:rerun-if-changed=shaders");
     println!("cargo:rerun-if-changed=build.rs");
     println!("cargo:rerun-if-changed=cpu/src/abi.rs");
-    let generated_dir = out_dir.join("glsl");
-    fs::create_dir_all(&generated_dir).expect("create OUT_DIR/glsl");
-    write_if_changed(&generated_dir.join("glint_abi.glsl"), &abi::glsl_types());
-    write_if_changed(
-        &generated_dir.join("glint_bindings.glsl"),
-        &abi::glsl_bindings(),
-    );
+    let generated_dir = generate_abi_glsl(&out_dir);
     let mut files = Vec::new();
     if shader_root.is_dir() {
         walk(&shader_root, &mut files);
@@ -65,22 +59,7 @@ fn main() {
     let spv_dir = out_dir.join("spirv");
     fs::create_dir_all(&spv_dir).expect("create OUT_DIR/spirv");
 
-    let mut jobs = Vec::new();
-    for path in &kernels {
-        let rel = path.strip_prefix(&shader_root).expect("under shaders/");
-        let name = rel
-            .with_extension("")
-            .components()
-            .map(|c| c.as_os_str().to_string_lossy().into_owned())
-            .collect::<Vec<_>>()
-            .join("/");
-        for &(base, variant, define) in VARIANTS {
-            if name == base {
-                jobs.push((variant.to_string(), path, rel, Some(define)));
-            }
-        }
-        jobs.push((name, path, rel, None));
-    }
+    let jobs = kernel_jobs(&shader_root, &kernels);
 
     for (i, (name, path, rel, define)) in jobs.iter().enumerate() {
         let display = format!("shaders/{}", rel.display());
@@ -91,22 +70,8 @@ fn main() {
                 continue;
             }
         };
-        let mut options = shaderc::CompileOptions::new().expect("shaderc options");
-        options.set_target_env(
-            shaderc::TargetEnv::Vulkan,
-            shaderc::EnvVersion::Vulkan1_2 as u32,
-        );
-        options.set_target_spirv(shaderc::SpirvVersion::V1_5);
-        options.set_source_language(shaderc::SourceLanguage::GLSL);
-        if let Some(d) = define {
-            options.add_macro_definition(d, None);
-        }
-        options.set_optimization_level(shaderc::OptimizationLevel::Performance);
         let roots = [shader_root.clone(), generated_dir.clone()];
-        let manifest_dir = manifest.clone();
-        options.set_include_callback(move |requested, kind, requester, _depth| {
-            resolve_include(&roots, &manifest_dir, requested, kind, requester)
-        });
+        let options = compile_options(*define, roots, manifest.clone());
         match compiler.compile_into_spirv(
             &source,
             shaderc::ShaderKind::Compute,
@@ -152,6 +117,65 @@ fn main() {
          static KERNELS: &[(&str, &Aligned<[u8]>)] = &[\n{table}];\n"
     );
     fs::write(out_dir.join("shaders.rs"), generated).expect("write shaders.rs");
+}
+
+/// shaderc's options for one kernel: Vulkan 1.2, SPIR-V 1.5, optimised,
+/// `define` set, includes looked up in `roots` (see [`resolve_include`]).
+fn compile_options(
+    define: Option<&str>,
+    roots: [PathBuf; 2],
+    manifest: PathBuf,
+) -> shaderc::CompileOptions<'static> {
+    let mut options = shaderc::CompileOptions::new().expect("shaderc options");
+    options.set_target_env(
+        shaderc::TargetEnv::Vulkan,
+        shaderc::EnvVersion::Vulkan1_2 as u32,
+    );
+    options.set_target_spirv(shaderc::SpirvVersion::V1_5);
+    options.set_source_language(shaderc::SourceLanguage::GLSL);
+    if let Some(d) = define {
+        options.add_macro_definition(d, None);
+    }
+    options.set_optimization_level(shaderc::OptimizationLevel::Performance);
+    options.set_include_callback(move |requested, kind, requester, _depth| {
+        resolve_include(&roots, &manifest, requested, kind, requester)
+    });
+    options
+}
+
+/// The device ABI's GLSL (`cpu/src/abi.rs`) in `OUT_DIR/glsl`, the last
+/// folder includes are looked up in.
+fn generate_abi_glsl(out_dir: &Path) -> PathBuf {
+    let dir = out_dir.join("glsl");
+    fs::create_dir_all(&dir).expect("create OUT_DIR/glsl");
+    write_if_changed(&dir.join("glint_abi.glsl"), &abi::glsl_types());
+    write_if_changed(&dir.join("glint_bindings.glsl"), &abi::glsl_bindings());
+    dir
+}
+
+/// (kernel name, source, its path under shaders/, macro defined): every
+/// kernel, and its [`VARIANTS`].
+fn kernel_jobs<'p>(
+    shader_root: &Path,
+    kernels: &[&'p PathBuf],
+) -> Vec<(String, &'p PathBuf, &'p Path, Option<&'static str>)> {
+    let mut jobs = Vec::new();
+    for &path in kernels {
+        let rel = path.strip_prefix(&shader_root).expect("under shaders/");
+        let name = rel
+            .with_extension("")
+            .components()
+            .map(|c| c.as_os_str().to_string_lossy().into_owned())
+            .collect::<Vec<_>>()
+            .join("/");
+        for &(base, variant, define) in VARIANTS {
+            if name == base {
+                jobs.push((variant.to_string(), path, rel, Some(define)));
+            }
+        }
+        jobs.push((name, path, rel, None));
+    }
+    jobs
 }
 
 fn walk(dir: &Path, out: &mut Vec<PathBuf>) {

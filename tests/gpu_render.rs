@@ -47,6 +47,7 @@ fn plumbing(ctx: common::ValidatedContext) {
         uvs: &[],
         env_texels: &[],
         env_dist: &[],
+        variance_batch: 1,
     };
     let calls = std::cell::RefCell::new(Vec::new());
     let r = render_film(&ctx, "tests/render_plumbing", &scene, w, h, spp, &|d, t| {
@@ -128,6 +129,7 @@ fn empty_scene_arrays_and_tiny_images_render() {
         uvs: &[],
         env_texels: &[],
         env_dist: &[],
+        variance_batch: 1,
     };
     let r = render_film(&ctx, "tests/render_plumbing", &scene, 1, 1, 1, &|_, _| {}).unwrap();
     assert_eq!(r.film.sum.len(), 1);

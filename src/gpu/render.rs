@@ -19,7 +19,7 @@ use ash::vk;
 use glam::Vec3;
 use glint_cpu::abi::{self, Resource};
 use glint_cpu::features::Features;
-use glint_cpu::integrator::{GpuParams, GpuSceneData, gpu_scene_data};
+use glint_cpu::integrator::{GpuSceneData, gpu_scene_data};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::accel::Accel;
@@ -56,6 +56,9 @@ pub struct SceneBytes<'d> {
     /// Bindings 13-14: environment map texels and distribution.
     pub env_texels: &'d [u8],
     pub env_dist: &'d [u8],
+    /// Samples per variance batch (`RenderOptions::batch`; `params`
+    /// holds it too, for the kernel): the film's batch sums.
+    pub variance_batch: u32,
 }
 
 impl<'d> SceneBytes<'d> {
@@ -76,6 +79,7 @@ impl<'d> SceneBytes<'d> {
             uvs: bytemuck::cast_slice(&data.uvs),
             env_texels: bytemuck::cast_slice(&data.env_texels),
             env_dist: bytemuck::cast_slice(&data.env_dist),
+            variance_batch: data.params.variance_batch,
         }
     }
 }
@@ -205,18 +209,6 @@ pub fn render_film(
         hardware: None,
     };
     render_film_range(ctx, &kernel, scene, width, height, range, progress)
-}
-
-/// `Params.variance_batch` of the uploaded parameters (1 for parameter
-/// blocks of another layout: kernel tests).
-fn variance_batch(params: &[u8]) -> u32 {
-    if params.len() == std::mem::size_of::<GpuParams>() {
-        bytemuck::pod_read_unaligned::<GpuParams>(params)
-            .variance_batch
-            .max(1)
-    } else {
-        1
-    }
 }
 
 /// The film of the accumulation buffer's sums (binding 7).
@@ -393,6 +385,56 @@ fn timed_dispatch(
     Ok((wall, seconds))
 }
 
+/// The acceleration structures over the `count` `triangles` (hardware
+/// traversal), `masked[i]` saying whether triangle i is alpha-tested.
+fn build_accel<'c>(
+    ctx: &'c Context,
+    triangles: &Buffer<'c>,
+    count: u32,
+    masked: &[bool],
+) -> Result<Accel<'c>, GpuError> {
+    let alpha = |i: u32| masked.get(i as usize).copied().unwrap_or(false);
+    Accel::build(ctx, triangles, count, &alpha)
+}
+
+/// The path-tracing kernel `cfg` names, its descriptor set laid out from
+/// `abi::PATH_TRACER_BINDINGS` and bound to `b`'s buffers by the table's
+/// names (the acceleration structure, the last binding, goes through the
+/// kernel options).
+fn path_tracer_kernel<'c>(
+    ctx: &'c Context,
+    cfg: &KernelConfig<'_>,
+    b: &FilmBuffers<'_>,
+    active: &Buffer<'_>,
+    accel: Option<&Accel<'_>>,
+) -> Result<Kernel<'c>, GpuError> {
+    let mut options = cfg.options;
+    if let Some(a) = accel {
+        options.acceleration_structure = a.tlas();
+    }
+    let mut kinds = Vec::new();
+    let mut buffers = Vec::new();
+    for binding in abi::path_tracer_bindings(accel.is_some()) {
+        let buffer = match (binding.name, accel) {
+            (_, _) if binding.resource == Resource::AccelerationStructure => continue,
+            ("active_pixels", _) => active,
+            ("tri_map", Some(a)) => &a.tri_map,
+            (name, _) => b.get(name).ok_or_else(|| {
+                GpuError::Invalid(format!("binding {}: no buffer for {name}", binding.binding))
+            })?,
+        };
+        kinds.push(match binding.resource {
+            Resource::Uniform => BufferKind::Uniform,
+            _ => BufferKind::Storage,
+        });
+        buffers.push(buffer);
+    }
+    let push_size = size_of::<SamplePush>() as u32;
+    let mut kernel = Kernel::with_options(ctx, cfg.name, &kinds, push_size, &options)?;
+    kernel.bind(&buffers)?;
+    Ok(kernel)
+}
+
 /// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
 /// of samples taken.
 pub fn render_film_range(
@@ -416,9 +458,8 @@ pub fn render_film_range(
     let (triangles, accum, rays) = (&b.triangles, &b.accum, &b.rays);
     let accel = match kernel_cfg.hardware {
         Some(masked) => {
-            let count = (scene.triangles.len() / 48) as u32;
-            let alpha = |i: u32| masked.get(i as usize).copied().unwrap_or(false);
-            Some(Accel::build(ctx, triangles, count, &alpha)?)
+            let count = scene.triangles.len() / size_of::<glint_cpu::Triangle>();
+            Some(build_accel(ctx, triangles, count as u32, masked)?)
         }
         None => None,
     };
@@ -428,32 +469,7 @@ pub fn render_film_range(
         BufferKind::Storage,
         &vec![1u32; pixels as usize],
     )?;
-    let mut options = kernel_cfg.options;
-    if let Some(a) = &accel {
-        options.acceleration_structure = a.tlas();
-    }
-    // The table's buffers in binding order (the acceleration structure,
-    // the last binding, goes through `options`).
-    let mut kinds = Vec::new();
-    let mut buffers = Vec::new();
-    for binding in abi::path_tracer_bindings(accel.is_some()) {
-        let buffer = match (binding.name, &accel) {
-            (_, _) if binding.resource == Resource::AccelerationStructure => continue,
-            ("active_pixels", _) => &active,
-            ("tri_map", Some(a)) => &a.tri_map,
-            (name, _) => b.get(name).ok_or_else(|| {
-                GpuError::Invalid(format!("binding {}: no buffer for {name}", binding.binding))
-            })?,
-        };
-        kinds.push(match binding.resource {
-            Resource::Uniform => BufferKind::Uniform,
-            _ => BufferKind::Storage,
-        });
-        buffers.push(buffer);
-    }
-    let push_size = size_of::<SamplePush>() as u32;
-    let mut kernel = Kernel::with_options(ctx, kernel_cfg.name, &kinds, push_size, &options)?;
-    kernel.bind(&buffers)?;
+    let kernel = path_tracer_kernel(ctx, kernel_cfg, &b, &active, accel.as_ref())?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 
     // Drivers compile the pipeline at its first dispatch (lavapipe: LLVM,
@@ -467,7 +483,7 @@ pub fn render_film_range(
     let setup_seconds = setup_start.elapsed().as_secs_f64();
 
     let mut done = 0u32;
-    let batch_size = variance_batch(scene.params);
+    let batch_size = scene.variance_batch.max(1);
     let mut mask = vec![1u32; pixels as usize];
     let mut counts = Vec::new();
     let mut batch = range.control.map_or(1, |c| c.step);

@@ -2,9 +2,12 @@
 //! `Params` uniform (binding 0 of `abi::PATH_TRACER_BINDINGS`), the emitter
 //! table (binding 5) and the punctual lights (binding 6).
 
-use super::{PathTracer, RenderError};
+use super::{RenderError, depth_limit, validate_options};
+use crate::camera::{PinholeCamera, scene_camera};
 use crate::film::RenderOptions;
+use crate::lights::Lights;
 use crate::lights::{GpuEmitter, GpuLight};
+use crate::sampling::seed_key;
 use crate::scene::{GpuMaterial, Scene};
 use crate::texture::{GpuTexture, MaterialTextures, TriangleUv};
 
@@ -44,32 +47,34 @@ fn padded<T: Default + Clone>(mut v: Vec<T>) -> Vec<T> {
 }
 
 /// The uniform parameters and the light tables for a GPU render of
-/// `scene` with `opts`, exactly as the CPU path tracer sets itself up.
+/// `scene` with `opts`, from the constructors the CPU path tracer sets
+/// itself up with (the camera, the light distributions, the seed key).
 pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneData, RenderError> {
-    let pt = PathTracer::new(scene, opts)?;
-    let c = &pt.camera;
+    validate_options(scene, opts)?;
+    let c = &PinholeCamera::new(&scene_camera(scene, opts.camera), opts.width, opts.height);
+    let lights = Lights::new(scene);
     let params = GpuParams {
         cam_origin: v4(c.origin),
         cam_right: v4(c.right),
         cam_up: v4(c.up),
         cam_forward: v4(c.forward),
-        background: v4(pt.lights.background),
+        background: v4(lights.background),
         width: opts.width,
         height: opts.height,
         spp: opts.spp,
-        max_depth: pt.max_depth,
-        seed_key: pt.key,
+        max_depth: depth_limit(opts.max_depth),
+        seed_key: seed_key(opts.seed),
         triangle_count: scene.triangles.len() as u32,
         bvh_node_count: scene.bvh.nodes.len() as u32,
-        emitter_count: pt.lights.emitters.len() as u32,
-        light_count: pt.lights.punctual.len() as u32,
+        emitter_count: lights.emitters.len() as u32,
+        light_count: lights.punctual.len() as u32,
         nee: opts.nee as u32,
         mis: opts.mis.code(),
         sampler: opts.sampler.code(),
-        p_area: pt.lights.probs.area,
-        p_punctual: pt.lights.probs.punctual,
-        p_background: pt.lights.probs.background,
-        variance_batch: pt.batch,
+        p_area: lights.probs.area,
+        p_punctual: lights.probs.punctual,
+        p_background: lights.probs.background,
+        variance_batch: opts.batch(),
         textured: !scene.textures.is_empty() as u32,
         masked: scene.textures.has_masks() as u32,
         env_width: scene.envmap.as_ref().map_or(0, |e| e.width),
@@ -81,8 +86,8 @@ pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneDat
     Ok(GpuSceneData {
         params,
         materials: padded(scene.materials.iter().map(GpuMaterial::from).collect()),
-        emitters: padded(pt.lights.emitters.clone()),
-        lights: padded(pt.lights.punctual.clone()),
+        emitters: padded(lights.emitters.clone()),
+        lights: padded(lights.punctual.clone()),
         texels: padded(scene.textures.texels.clone()),
         textures: padded(scene.textures.table.clone()),
         material_textures: padded(scene.textures.materials.clone()),

@@ -91,6 +91,12 @@ pub enum RenderError {
 }
 
 /// Check the options against the contract's ranges.
+/// Mitsuba's `max_depth` as the integrators count it: unbounded (-1, any
+/// negative) as `u32::MAX`.
+pub fn depth_limit(max_depth: i32) -> u32 {
+    u32::try_from(max_depth).unwrap_or(u32::MAX)
+}
+
 pub fn validate_options(scene: &Scene, opts: &RenderOptions) -> Result<(), RenderError> {
     let bad = |m: String| Err(RenderError::InvalidOptions(m));
     if !(1..=16384).contains(&opts.width) || !(1..=16384).contains(&opts.height) {
@@ -365,11 +371,7 @@ impl<'a> PathTracer<'a> {
             scene,
             lights: Lights::new(scene),
             camera,
-            max_depth: if opts.max_depth < 0 {
-                u32::MAX
-            } else {
-                opts.max_depth as u32
-            },
+            max_depth: depth_limit(opts.max_depth),
             key: seed_key(opts.seed),
             nee: opts.nee,
             mis: opts.mis,
