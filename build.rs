@@ -161,7 +161,7 @@ fn kernel_jobs<'p>(
 ) -> Vec<(String, &'p PathBuf, &'p Path, Option<&'static str>)> {
     let mut jobs = Vec::new();
     for &path in kernels {
-        let rel = path.strip_prefix(&shader_root).expect("under shaders/");
+        let rel = path.strip_prefix(shader_root).expect("under shaders/");
         let name = rel
             .with_extension("")
             .components()

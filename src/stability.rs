@@ -46,14 +46,13 @@
 
 #![allow(clippy::neg_cmp_op_on_partial_ord)] // `!(x > 0.0)` also catches NaN
 
-use std::f32::consts::TAU;
-
 use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3};
 use glint_cpu::bsdf::{
     Bsdf, ConductorParams, ETA_SMOOTH_THRESHOLD, Roughness, SMOOTH_ALPHA_THRESHOLD, Shadowing,
     named_metal,
 };
+use glint_cpu::sampling::Pcg32;
 use glint_cpu::{GpuMaterial, Material};
 use rayon::prelude::*;
 
@@ -374,36 +373,13 @@ fn aniso_points(add: &mut Add<'_>) {
     }
 }
 
-/// PCG32, deterministic per point (and the query stream of
-/// `tests/gpu_bsdf.rs`).
-pub struct Rng(pub u64);
-impl Rng {
-    pub fn u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
-    }
-    pub fn f32(&mut self) -> f32 {
-        (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-    pub fn dir(&mut self) -> Vec3 {
-        let z = 2.0 * self.f32() - 1.0;
-        let phi = TAU * self.f32();
-        let s = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(s * phi.cos(), s * phi.sin(), z)
-    }
-}
-
 /// The largest random number a 24-bit sampler produces, 1 - 2^-24.
 pub const U_MAX: f32 = 1.0 - f32::EPSILON / 2.0;
 
 /// Random numbers with the corners 0 and 1 - 2^-24 mixed in (1 in 8 of
 /// each coordinate).
-fn u_corner(rng: &mut Rng) -> f32 {
-    match rng.u32() % 16 {
+fn u_corner(rng: &mut Pcg32) -> f32 {
+    match rng.next_u32() % 16 {
         0 => 0.0,
         1 => U_MAX,
         _ => rng.f32(),
@@ -484,7 +460,7 @@ fn finite_ok(f: Vec3, p: f32) -> bool {
 pub fn measure_cpu(pt: &Point, size: Size, seed: u64) -> Row {
     let b = &pt.bsdf;
     let wo = pt.wo;
-    let mut rng = Rng(seed.wrapping_mul(0x9e3779b97f4a7c15) | 1);
+    let mut rng = Pcg32::from_state(seed.wrapping_mul(0x9e3779b97f4a7c15) | 1);
     let mut row = Row {
         finite: true,
         ..Row::default()
@@ -559,7 +535,7 @@ pub fn measure_cpu(pt: &Point, size: Size, seed: u64) -> Row {
 /// Finiteness and reciprocity at wi = wo, wi = -wo and `size.pairs()`
 /// random pairs: `row.finite` cleared on a non-finite value, `row.recip`
 /// the largest relative reciprocity error.
-fn reciprocity(b: &Bsdf, wo: Vec3, size: Size, rng: &mut Rng, row: &mut Row) {
+fn reciprocity(b: &Bsdf, wo: Vec3, size: Size, rng: &mut Pcg32, row: &mut Row) {
     // wi = wo and wi = -wo, then random pairs: finiteness and reciprocity.
     let mut recip = 0.0f64;
     for k in 0..size.pairs() + 2 {
@@ -718,7 +694,7 @@ fn as_gpu(c: &CpuOut) -> GpuResult {
 /// Whether the CPU result itself moves beyond the tolerance under a
 /// few-ulp jitter of the directions and 1e-6 of the random numbers (the
 /// size of the two implementations' rounding differences).
-fn sensitive(b: &Bsdf, q: &Query, rng: &mut Rng) -> bool {
+fn sensitive(b: &Bsdf, q: &Query, rng: &mut Pcg32) -> bool {
     let base = cpu_out(b, q);
     for _ in 0..8 {
         let mut j = *q;
@@ -753,7 +729,7 @@ pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>,
         })
         .collect();
     let per = size.gpu_queries();
-    let mut rng = Rng(0x5eed);
+    let mut rng = Pcg32::from_state(0x5eed);
     let mut queries = Vec::with_capacity(pts.len() * per);
     for (i, p) in pts.iter().enumerate() {
         for k in 0..per {
@@ -797,7 +773,7 @@ pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>,
         .par_iter()
         .enumerate()
         .map(|(i, p)| {
-            let mut rng = Rng(i as u64 * 7 + 1);
+            let mut rng = Pcg32::from_state(i as u64 * 7 + 1);
             let mut bad = 0usize;
             for k in 0..per {
                 let q = &queries[i * per + k];

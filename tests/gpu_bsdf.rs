@@ -21,7 +21,8 @@ use glint_cpu::bsdf::coated::CoatParams;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::{GpuMaterial, Material};
 
-use glint::stability::{GpuResult, Query, Rng};
+use glint::cpu::sampling::Pcg32;
+use glint::stability::{GpuResult, Query};
 
 fn rough(au: f32, av: f32, separable: bool) -> Roughness {
     Roughness {
@@ -186,7 +187,7 @@ fn materials() -> Vec<(u32, Bsdf)> {
     v
 }
 
-fn random_dir(rng: &mut Rng) -> Vec3 {
+fn random_dir(rng: &mut Pcg32) -> Vec3 {
     // Mixture: uniform on the sphere, and |cos| log-uniform in [1e-6, 1]
     // on either side (grazing angles), and cos = +-1e-4 exactly.
     let x = rng.f32();
@@ -272,11 +273,11 @@ fn as_gpu(c: &Cpu) -> GpuResult {
 /// few ulps of the directions, and 1e-6 of the sample's random numbers
 /// (the device's sin/cos are less exact than libm's). Returns (eval/pdf
 /// sensitive, sample sensitive).
-fn sensitive(b: &Bsdf, q: &Query, rng: &mut Rng) -> (bool, bool) {
+fn sensitive(b: &Bsdf, q: &Query, rng: &mut Pcg32) -> (bool, bool) {
     let base = cpu(b, v3(q.wo), v3(q.wi), q.wo[3], Vec2::new(q.wi[3], q.u[0]));
     let ulps =
-        |x: f32, rng: &mut Rng| x + x.abs().max(1e-30) * (rng.f32() - 0.5) * 8.0 * f32::EPSILON;
-    let abs = |x: f32, rng: &mut Rng| (x + (rng.f32() - 0.5) * 2e-6).clamp(0.0, 0.999_999_94);
+        |x: f32, rng: &mut Pcg32| x + x.abs().max(1e-30) * (rng.f32() - 0.5) * 8.0 * f32::EPSILON;
+    let abs = |x: f32, rng: &mut Pcg32| (x + (rng.f32() - 0.5) * 2e-6).clamp(0.0, 0.999_999_94);
     let (mut ef, mut s) = (false, false);
     for _ in 0..8 {
         let wo = Vec3::new(ulps(q.wo[0], rng), ulps(q.wo[1], rng), ulps(q.wo[2], rng));
@@ -311,7 +312,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
         })
         .collect();
     let per_kind = 16_384;
-    let mut rng = Rng(0x9e3779b97f4a7c15);
+    let mut rng = Pcg32::from_state(0x9e3779b97f4a7c15);
     let mut queries = Vec::new();
     // Every kind of the device ABI, as the Rust packs it (GpuMaterial::kind),
     // reaches the GLSL and must agree there: a kind added on one side only
@@ -322,7 +323,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
             .collect();
         assert!(!ids.is_empty(), "no material of kind {kind} under test");
         for _ in 0..per_kind {
-            let id = ids[(rng.u32() as usize) % ids.len()];
+            let id = ids[(rng.next_u32() as usize) % ids.len()];
             let wo = random_dir(&mut rng);
             let (uc, u) = (rng.f32(), Vec2::new(rng.f32(), rng.f32()));
             // Half the eval points on the sampled lobe, where values are large.

@@ -175,14 +175,14 @@ fn off_plane(tri: &Triangle, ray: &Ray, t: f32) -> f64 {
 fn compare(name: &str, tris: &[Triangle], rays: &[Ray], hw: &Traced, sw: &Traced) -> usize {
     let (mut hit, mut differ, mut occl) = (0, 0, 0);
     let (mut worst_hw, mut worst_sw) = (0f64, 0f64);
-    for i in 0..hw.hits.len() {
+    for (i, ray) in rays.iter().enumerate().take(hw.hits.len()) {
         let (h, s) = (hw.hits[i], sw.hits[i]);
         let (th, ts) = (f32::from_bits(h[0]), f32::from_bits(s[0]));
         match (h[1], s[1]) {
             (u32::MAX, u32::MAX) => {}
             (a, b) if a == b || tris[a as usize].vertices() == tris[b as usize].vertices() => {
                 let tri = &tris[b as usize];
-                let (eh, es) = (off_plane(tri, &rays[i], th), off_plane(tri, &rays[i], ts));
+                let (eh, es) = (off_plane(tri, ray, th), off_plane(tri, ray, ts));
                 worst_hw = worst_hw.max(eh);
                 worst_sw = worst_sw.max(es);
                 assert!(

@@ -6,54 +6,42 @@
 
 mod common;
 
+use glint::cpu::sampling::Pcg32;
 use glint::gpu::groups;
 use glint_cpu::SamplerKind;
 use glint_cpu::sampling::seed_key;
 use glint_cpu::sobol::{PathSampler, sobol_sample};
-
-/// Deterministic PCG32, as in the other GPU tests.
-struct Pcg(u64);
-impl Pcg {
-    fn u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
-    }
-}
 
 const N: usize = 1_000_000;
 
 #[test]
 fn glsl_sobol_returns_the_cpu_bits() {
     let ctx = common::context();
-    let mut rng = Pcg(0x853c_49e6_748f_ea9b);
+    let mut rng = Pcg32::from_state(0x853c_49e6_748f_ea9b);
     let keys = [seed_key(0), seed_key(1), seed_key(7), 0, u32::MAX];
     let mut queries = Vec::with_capacity(N);
     for _ in 0..N {
-        let r = rng.u32();
+        let r = rng.next_u32();
         let key = if r % 4 == 0 {
-            rng.u32()
+            rng.next_u32()
         } else {
             keys[(r >> 2) as usize % keys.len()]
         };
         let pixel = match (r >> 8) % 3 {
-            0 => rng.u32() % 4096,
-            1 => rng.u32() % (16384 * 16384),
-            _ => rng.u32(),
+            0 => rng.next_u32() % 4096,
+            1 => rng.next_u32() % (16384 * 16384),
+            _ => rng.next_u32(),
         };
         let sample = match (r >> 12) % 4 {
-            0 => rng.u32() % 256,
-            1 => rng.u32() % 65536,
-            2 => 65536 * (1 + rng.u32() % 8) + rng.u32() % 4096,
-            _ => rng.u32(),
+            0 => rng.next_u32() % 256,
+            1 => rng.next_u32() % 65536,
+            2 => 65536 * (1 + rng.next_u32() % 8) + rng.next_u32() % 4096,
+            _ => rng.next_u32(),
         };
         let dim = match (r >> 16) % 4 {
-            0 | 1 => rng.u32() % 64,
-            2 => rng.u32() % 4096,
-            _ => rng.u32(),
+            0 | 1 => rng.next_u32() % 64,
+            2 => rng.next_u32() % 4096,
+            _ => rng.next_u32(),
         };
         queries.push([key, pixel, sample, dim]);
     }

@@ -11,6 +11,7 @@ use bytemuck::{Pod, Zeroable};
 use glam::{Vec2, Vec3, Vec4};
 use glint::gpu::groups;
 use glint_cpu::Bsdf;
+use glint_cpu::sampling::Pcg32;
 use glint_cpu::scene::GpuMaterial;
 use glint_cpu::texture::{
     GpuTexture, MAP_GLTF, MaterialTextures, SceneTextures, TEX_NEAREST, TexRef, TriangleUv,
@@ -37,29 +38,14 @@ struct GpuResult {
     extra: [f32; 4],
 }
 
-struct Rng(u64);
-impl Rng {
-    fn u32(&mut self) -> u32 {
-        let old = self.0;
-        self.0 = old
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let x = (((old >> 18) ^ old) >> 27) as u32;
-        x.rotate_right((old >> 59) as u32)
-    }
-    fn f32(&mut self) -> f32 {
-        (self.u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-}
-
 /// Random images of odd sizes with every wrap/filter combination.
-fn textures(rng: &mut Rng) -> SceneTextures {
+fn textures(rng: &mut Pcg32) -> SceneTextures {
     let mut st = SceneTextures::default();
     let sizes = [(1, 1), (2, 2), (3, 5), (7, 2), (16, 9)];
     for (k, &(w, h)) in sizes.iter().cycle().take(18).enumerate() {
         let offset = st.texels.len() as u32;
         for _ in 0..w * h {
-            st.texels.push(rng.u32());
+            st.texels.push(rng.next_u32());
         }
         let wrap_s = (k % 3) as u32;
         let wrap_t = ((k / 3) % 3) as u32;
@@ -77,7 +63,7 @@ fn textures(rng: &mut Rng) -> SceneTextures {
 #[test]
 fn glsl_texture_lookups_match_the_cpu_crate() {
     let ctx = common::context();
-    let mut rng = Rng(0x2545f4914f6cdd1d);
+    let mut rng = Pcg32::from_state(0x2545f4914f6cdd1d);
     let mut st = textures(&mut rng);
     // Materials: glTF mapping with base colour and metallicRoughness
     // textures, transformed UVs on set 0 or 1, masked or not.
@@ -139,9 +125,9 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
     let queries: Vec<Query> = (0..n)
         .map(|i| {
             // Mostly near [0, 1], some far out, some exactly on texel edges.
-            let coord = |rng: &mut Rng| match i % 4 {
+            let coord = |rng: &mut Pcg32| match i % 4 {
                 0 => rng.f32() * 40.0 - 20.0,
-                1 => (rng.u32() % 33) as f32 / 16.0 - 0.5,
+                1 => (rng.next_u32() % 33) as f32 / 16.0 - 0.5,
                 _ => rng.f32() * 1.4 - 0.2,
             };
             let (u, v) = (coord(&mut rng), coord(&mut rng));
@@ -149,7 +135,12 @@ fn glsl_texture_lookups_match_the_cpu_crate() {
             let b = if b.x + b.y > 1.0 { Vec2::ONE - b } else { b };
             Query {
                 uv_srgb: [u, v, (i % 2) as f32, 0.0],
-                ids: [rng.u32() % 18, rng.u32() % 6, rng.u32() % 32, 0],
+                ids: [
+                    rng.next_u32() % 18,
+                    rng.next_u32() % 6,
+                    rng.next_u32() % 32,
+                    0,
+                ],
                 bary: [b.x, b.y, rng.f32() * 8.0 - 4.0, rng.f32() * 2.0 - 1.0],
             }
         })

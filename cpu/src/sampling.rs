@@ -87,6 +87,91 @@ impl Rng {
     }
 }
 
+/// PCG32 (O'Neill 2014, XSH-RR output): the one deterministic generator
+/// of glint's tests and tools (the stability sweeps, fuzzers, per-call
+/// agreement queries, random rays). The renderer's own numbers are Sobol
+/// points and the counter-based [`Rng`]; nothing here reaches an image.
+#[derive(Clone, Debug)]
+pub struct Pcg32 {
+    state: u64,
+    inc: u64,
+}
+
+impl Pcg32 {
+    /// The increment of PCG's default stream.
+    pub const DEFAULT_INC: u64 = 1_442_695_040_888_963_407;
+
+    /// O'Neill's `pcg32_srandom`: `seed` on stream `stream`.
+    pub fn new(seed: u64, stream: u64) -> Self {
+        let mut r = Self {
+            state: 0,
+            inc: (stream << 1) | 1,
+        };
+        r.next_u32();
+        r.state = r.state.wrapping_add(seed);
+        r.next_u32();
+        r
+    }
+
+    /// The default stream from the raw state `state`.
+    pub fn from_state(state: u64) -> Self {
+        Self {
+            state,
+            inc: Self::DEFAULT_INC,
+        }
+    }
+
+    pub fn next_u32(&mut self) -> u32 {
+        let old = self.state;
+        self.state = old
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(self.inc);
+        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
+        xorshifted.rotate_right((old >> 59) as u32)
+    }
+
+    pub fn next_u64(&mut self) -> u64 {
+        let hi = self.next_u32() as u64;
+        (hi << 32) | self.next_u32() as u64
+    }
+
+    /// Uniform in [0, 1) with 24 bits (every value exactly representable).
+    pub fn f32(&mut self) -> f32 {
+        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
+    }
+
+    pub fn vec2(&mut self) -> Vec2 {
+        Vec2::new(self.f32(), self.f32())
+    }
+
+    /// Uniform in [lo, hi).
+    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
+        lo + (hi - lo) * self.f32()
+    }
+
+    /// Uniform in 0..n (0 for n = 0; the modulo bias is below 2^-32 n).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next_u64() % n.max(1) as u64) as usize
+    }
+
+    /// Uniform in the box lo..hi.
+    pub fn vec_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+        Vec3::new(
+            self.range(lo.x, hi.x),
+            self.range(lo.y, hi.y),
+            self.range(lo.z, hi.z),
+        )
+    }
+
+    /// Uniform on the unit sphere.
+    pub fn dir(&mut self) -> Vec3 {
+        let z = 2.0 * self.f32() - 1.0;
+        let phi = std::f32::consts::TAU * self.f32();
+        let s = (1.0 - z * z).max(0.0).sqrt();
+        Vec3::new(s * phi.cos(), s * phi.sin(), z)
+    }
+}
+
 /// Shirley & Chiu's concentric square-to-disk map ("A Low Distortion Map
 /// Between Disk and Square", JGT 1997), in pbrt-v4's branch form.
 pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {

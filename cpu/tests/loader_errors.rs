@@ -4,6 +4,7 @@
 #[path = "fixtures/gltf_builder.rs"]
 mod builder;
 
+use glint_cpu::sampling::Pcg32;
 use std::path::{Path, PathBuf};
 
 use builder::{Doc, temp_dir};
@@ -646,20 +647,6 @@ fn bad_lights_and_background() {
     doc_err("bg_neg", &d, "values must be finite and >= 0");
 }
 
-/// xorshift64*: a fixed-seed generator, so a failure reproduces exactly.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_F491_4F6C_DD1D)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
-    }
-}
-
 #[test]
 fn mutated_files_never_panic() {
     // A document touching most of the loader: indices, normals, UVs,
@@ -682,7 +669,7 @@ fn mutated_files_never_panic() {
     let glb = d.glb_bytes();
     let gltf = std::fs::read(d.write_gltf(&dir, "seed")).unwrap();
     assert!(parse(&write(&dir, "seed.glb", &glb)).is_ok());
-    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut rng = Pcg32::from_state(0x9E37_79B9_7F4A_7C15);
     let mut failures = 0;
     for round in 0..6000 {
         let (mut bytes, ext) = if round % 2 == 0 {
@@ -695,7 +682,7 @@ fn mutated_files_never_panic() {
             match rng.below(4) {
                 // Digits keep JSON parseable while changing numbers and indices.
                 0 | 1 => bytes[at] = b"0123456789"[rng.below(10)],
-                2 => bytes[at] = rng.next() as u8,
+                2 => bytes[at] = rng.next_u64() as u8,
                 _ => bytes.truncate(at.max(1)),
             }
         }

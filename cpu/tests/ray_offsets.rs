@@ -143,6 +143,9 @@ fn precision_warning_only_where_f32_runs_out() {
 #[test]
 fn offset_origins_never_self_intersect() {
     use glint_cpu::bvh::{PreparedRay, intersect_triangle};
+    // Its own LCG, not glint_cpu::sampling::Pcg32: on PCG32's stream this
+    // test meets a steep ray leaving a 1e5-sized triangle 1e6 from the
+    // origin that re-hits it (an open finding; see support/geometry.rs).
     struct R(u64);
     impl R {
         fn f(&mut self) -> f32 {

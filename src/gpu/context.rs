@@ -251,93 +251,7 @@ impl Context {
         let loader_seconds = t0.elapsed().as_secs_f64();
 
         let t1 = Instant::now();
-        let layers = unsafe { entry.enumerate_instance_layer_properties() }
-            .map_err(vk_err("vkEnumerateInstanceLayerProperties"))?;
-        let have_validation = layers
-            .iter()
-            .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
-        let validate = match desc.validation {
-            Validation::Off => false,
-            Validation::IfAvailable => have_validation,
-            Validation::Required if have_validation => true,
-            Validation::Required => return Err(GpuError::ValidationUnavailable),
-        };
-
-        let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
-            .map_err(vk_err("vkEnumerateInstanceExtensionProperties"))?;
-        let has_ext = |name: &CStr| {
-            extensions
-                .iter()
-                .any(|e| e.extension_name_as_c_str() == Ok(name))
-        };
-        let mut ext_names: Vec<*const std::ffi::c_char> = Vec::new();
-        let mut flags = vk::InstanceCreateFlags::empty();
-        // Lets the loader list portability drivers (MoltenVK) as well.
-        if has_ext(ash::khr::portability_enumeration::NAME) {
-            ext_names.push(ash::khr::portability_enumeration::NAME.as_ptr());
-            flags |= vk::InstanceCreateFlags::ENUMERATE_PORTABILITY_KHR;
-        }
-        let layer_names: Vec<*const std::ffi::c_char> = if validate {
-            // The validation layer implements VK_EXT_debug_utils itself.
-            ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
-            vec![VALIDATION_LAYER.as_ptr()]
-        } else {
-            Vec::new()
-        };
-
-        let log = validate.then(|| {
-            Arc::new(ValidationLog {
-                echo: true,
-                ..Default::default()
-            })
-        });
-        let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
-            .message_severity(
-                vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
-                    | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
-            )
-            .message_type(
-                vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
-                    | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
-                    | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
-            )
-            .pfn_user_callback(Some(debug_callback));
-        if let Some(log) = &log {
-            messenger_info = messenger_info.user_data(Arc::as_ptr(log) as *mut c_void);
-        }
-
-        let app_name = c"glint";
-        let app = vk::ApplicationInfo::default()
-            .application_name(app_name)
-            .application_version(1)
-            .engine_name(app_name)
-            .engine_version(1)
-            .api_version(vk::API_VERSION_1_2);
-        let mut instance_info = vk::InstanceCreateInfo::default()
-            .application_info(&app)
-            .enabled_layer_names(&layer_names)
-            .enabled_extension_names(&ext_names)
-            .flags(flags);
-        if validate {
-            instance_info = instance_info.push_next(&mut messenger_info);
-        }
-        let instance = match unsafe { entry.create_instance(&instance_info, None) } {
-            Ok(i) => i,
-            Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => return Err(GpuError::NoDriver),
-            Err(e) => return Err(GpuError::from_vk("vkCreateInstance", e)),
-        };
-        // From here on, failures must destroy what exists: the guard does
-        // it, and is defused once the context owns everything.
-        let mut guard = InstanceGuard {
-            instance: Some(instance.clone()),
-            debug: None,
-        };
-        if validate {
-            let du = ash::ext::debug_utils::Instance::new(&entry, &instance);
-            let messenger = unsafe { du.create_debug_utils_messenger(&messenger_info, None) }
-                .map_err(vk_err("vkCreateDebugUtilsMessengerEXT"))?;
-            guard.debug = Some((du, messenger));
-        }
+        let (instance, mut guard, log) = create_instance(&entry, desc.validation)?;
         let instance_seconds = t1.elapsed().as_secs_f64();
 
         let t2 = Instant::now();
@@ -350,37 +264,8 @@ impl Context {
         let device = create_device(&instance, pd, queue_family, ray_query, &candidate.name)?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
-        let pool_info = vk::CommandPoolCreateInfo::default()
-            .queue_family_index(queue_family)
-            .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
-        let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
-            Ok(p) => p,
-            Err(e) => {
-                unsafe { device.destroy_device(None) };
-                return Err(GpuError::from_vk("vkCreateCommandPool", e));
-            }
-        };
-
-        let allocator = match Allocator::new(&AllocatorCreateDesc {
-            instance: instance.clone(),
-            device: device.clone(),
-            physical_device: pd,
-            debug_settings: Default::default(),
-            buffer_device_address: ray_query,
-            allocation_sizes: Default::default(),
-        }) {
-            Ok(a) => a,
-            Err(e) => {
-                unsafe {
-                    device.destroy_command_pool(command_pool, None);
-                    device.destroy_device(None);
-                }
-                return Err(GpuError::Allocation {
-                    what: "allocator".into(),
-                    source: e,
-                });
-            }
-        };
+        let (command_pool, allocator) =
+            command_pool_and_allocator(&instance, &device, pd, queue_family, ray_query)?;
 
         let unified_memory = unified_memory(&instance, pd);
 
@@ -566,6 +451,148 @@ fn check_ray_query(
 }
 
 /// Destroys the instance (and messenger) when device setup fails part way.
+/// The instance, with the validation layer and its messenger where
+/// `validation` asks for them (the log the messenger writes to), and the
+/// guard that destroys both on a later failure.
+fn create_instance(
+    entry: &ash::Entry,
+    validation: Validation,
+) -> Result<(ash::Instance, InstanceGuard, Option<Arc<ValidationLog>>), GpuError> {
+    let layers = unsafe { entry.enumerate_instance_layer_properties() }
+        .map_err(vk_err("vkEnumerateInstanceLayerProperties"))?;
+    let have_validation = layers
+        .iter()
+        .any(|l| l.layer_name_as_c_str() == Ok(VALIDATION_LAYER));
+    let validate = match validation {
+        Validation::Off => false,
+        Validation::IfAvailable => have_validation,
+        Validation::Required if have_validation => true,
+        Validation::Required => return Err(GpuError::ValidationUnavailable),
+    };
+
+    let extensions = unsafe { entry.enumerate_instance_extension_properties(None) }
+        .map_err(vk_err("vkEnumerateInstanceExtensionProperties"))?;
+    let has_ext = |name: &CStr| {
+        extensions
+            .iter()
+            .any(|e| e.extension_name_as_c_str() == Ok(name))
+    };
+    let mut ext_names: Vec<*const std::ffi::c_char> = Vec::new();
+    let mut flags = vk::InstanceCreateFlags::empty();
+    // Lets the loader list portability drivers (MoltenVK) as well.
+    if has_ext(ash::khr::portability_enumeration::NAME) {
+        ext_names.push(ash::khr::portability_enumeration::NAME.as_ptr());
+        flags |= vk::InstanceCreateFlags::ENUMERATE_PORTABILITY_KHR;
+    }
+    let layer_names: Vec<*const std::ffi::c_char> = if validate {
+        // The validation layer implements VK_EXT_debug_utils itself.
+        ext_names.push(ash::ext::debug_utils::NAME.as_ptr());
+        vec![VALIDATION_LAYER.as_ptr()]
+    } else {
+        Vec::new()
+    };
+
+    let log = validate.then(|| {
+        Arc::new(ValidationLog {
+            echo: true,
+            ..Default::default()
+        })
+    });
+    let mut messenger_info = vk::DebugUtilsMessengerCreateInfoEXT::default()
+        .message_severity(
+            vk::DebugUtilsMessageSeverityFlagsEXT::WARNING
+                | vk::DebugUtilsMessageSeverityFlagsEXT::ERROR,
+        )
+        .message_type(
+            vk::DebugUtilsMessageTypeFlagsEXT::GENERAL
+                | vk::DebugUtilsMessageTypeFlagsEXT::VALIDATION
+                | vk::DebugUtilsMessageTypeFlagsEXT::PERFORMANCE,
+        )
+        .pfn_user_callback(Some(debug_callback));
+    if let Some(log) = &log {
+        messenger_info = messenger_info.user_data(Arc::as_ptr(log) as *mut c_void);
+    }
+
+    let app_name = c"glint";
+    let app = vk::ApplicationInfo::default()
+        .application_name(app_name)
+        .application_version(1)
+        .engine_name(app_name)
+        .engine_version(1)
+        .api_version(vk::API_VERSION_1_2);
+    let mut instance_info = vk::InstanceCreateInfo::default()
+        .application_info(&app)
+        .enabled_layer_names(&layer_names)
+        .enabled_extension_names(&ext_names)
+        .flags(flags);
+    if validate {
+        instance_info = instance_info.push_next(&mut messenger_info);
+    }
+    let instance = match unsafe { entry.create_instance(&instance_info, None) } {
+        Ok(i) => i,
+        Err(vk::Result::ERROR_INCOMPATIBLE_DRIVER) => return Err(GpuError::NoDriver),
+        Err(e) => return Err(GpuError::from_vk("vkCreateInstance", e)),
+    };
+    // From here on, failures must destroy what exists: the guard does
+    // it, and is defused once the context owns everything.
+    let mut guard = InstanceGuard {
+        instance: Some(instance.clone()),
+        debug: None,
+    };
+    if validate {
+        let du = ash::ext::debug_utils::Instance::new(entry, &instance);
+        let messenger = unsafe { du.create_debug_utils_messenger(&messenger_info, None) }
+            .map_err(vk_err("vkCreateDebugUtilsMessengerEXT"))?;
+        guard.debug = Some((du, messenger));
+    }
+    Ok((instance, guard, log))
+}
+
+/// The command pool on `queue_family` and the memory allocator (with
+/// buffer device addresses for ray queries); on failure, what exists is
+/// destroyed, the device included.
+fn command_pool_and_allocator(
+    instance: &ash::Instance,
+    device: &ash::Device,
+    pd: vk::PhysicalDevice,
+    queue_family: u32,
+    ray_query: bool,
+) -> Result<(vk::CommandPool, Allocator), GpuError> {
+    let pool_info = vk::CommandPoolCreateInfo::default()
+        .queue_family_index(queue_family)
+        .flags(vk::CommandPoolCreateFlags::RESET_COMMAND_BUFFER);
+    let command_pool = match unsafe { device.create_command_pool(&pool_info, None) } {
+        Ok(p) => p,
+        Err(e) => {
+            unsafe { device.destroy_device(None) };
+            return Err(GpuError::from_vk("vkCreateCommandPool", e));
+        }
+    };
+
+    let allocator = match Allocator::new(&AllocatorCreateDesc {
+        instance: instance.clone(),
+        device: device.clone(),
+        physical_device: pd,
+        debug_settings: Default::default(),
+        buffer_device_address: ray_query,
+        allocation_sizes: Default::default(),
+    }) {
+        Ok(a) => a,
+        Err(e) => {
+            unsafe {
+                device.destroy_command_pool(command_pool, None);
+                device.destroy_device(None);
+            }
+            return Err(GpuError::Allocation {
+                what: "allocator".into(),
+                source: e,
+            });
+        }
+    };
+
+    Ok((command_pool, allocator))
+}
+
 struct InstanceGuard {
     instance: Option<ash::Instance>,
     debug: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,

@@ -8,40 +8,7 @@ use std::f64::consts::PI;
 use glam::{Vec2, Vec3};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-/// PCG32 (O'Neill 2014), XSH-RR output: deterministic per seed, no
-/// dependency.
-#[derive(Clone, Debug)]
-pub struct Pcg32 {
-    state: u64,
-    inc: u64,
-}
-
-impl Pcg32 {
-    pub fn new(seed: u64, stream: u64) -> Self {
-        let mut r = Self {
-            state: 0,
-            inc: (stream << 1) | 1,
-        };
-        r.next_u32();
-        r.state = r.state.wrapping_add(seed);
-        r.next_u32();
-        r
-    }
-    pub fn next_u32(&mut self) -> u32 {
-        let old = self.state;
-        self.state = old.wrapping_mul(6364136223846793005).wrapping_add(self.inc);
-        let xorshifted = (((old >> 18) ^ old) >> 27) as u32;
-        let rot = (old >> 59) as u32;
-        xorshifted.rotate_right(rot)
-    }
-    /// Uniform in [0, 1) with 24 bits (every value exactly representable).
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u32() >> 8) as f32 * (1.0 / 16_777_216.0)
-    }
-    pub fn vec2(&mut self) -> Vec2 {
-        Vec2::new(self.f32(), self.f32())
-    }
-}
+pub use glint_cpu::sampling::Pcg32;
 
 /// Unit direction from spherical angles (theta from +z, phi from +x).
 pub fn sph(theta: f64, phi: f64) -> Vec3 {

@@ -9,6 +9,12 @@ use glam::Vec3;
 use glint_cpu::{Hit, Ray, Triangle};
 
 /// SplitMix64: a small, seedable generator, so each test has its own stream.
+/// The one generator besides `glint_cpu::sampling::Pcg32` that tests keep:
+/// on PCG32's stream the BVH and ray-offset tests meet two inputs their
+/// current streams never drew (a ray through a vertex of a collinear
+/// triangle that the brute-force test hits and the BVH does not; a steep
+/// ray leaving a 1e5-sized triangle 1e6 from the origin that re-hits it),
+/// which are open findings, not something a stream change should decide.
 pub struct Rng(pub u64);
 
 impl Rng {
