@@ -11,10 +11,15 @@ use glint_cpu::{Hit, Ray, Triangle};
 /// SplitMix64: a small, seedable generator, so each test has its own stream.
 /// The one generator besides `glint_cpu::sampling::Pcg32` that tests keep:
 /// on PCG32's stream the BVH and ray-offset tests meet two inputs their
-/// current streams never drew (a ray through a vertex of a collinear
-/// triangle that the brute-force test hits and the BVH does not; a steep
-/// ray leaving a 1e5-sized triangle 1e6 from the origin that re-hits it),
-/// which are open findings, not something a stream change should decide.
+/// current streams never drew, open findings that a stream change should
+/// not decide: `intersect_triangle` reports a hit on a collinear triangle
+/// (p1 the midpoint of p0 and p2) 0.42 away from it when two of its edge
+/// functions round to exactly 0 (the brute-force reference takes it, the
+/// BVH's box rightly culls it; Woop et al.'s fp64 recomputation, left out
+/// for GPU parity, or pbrt-v4's DifferenceOfProducts would reject it), and
+/// a steep ray leaving a 1e5-sized triangle 1e6 from the origin re-hits it
+/// (the triangle test's t error there exceeds the fixed RAY_ERR_TRI margin;
+/// pbrt-v4 bounds it per hit).
 pub struct Rng(pub u64);
 
 impl Rng {
