@@ -29,56 +29,11 @@ fn install_signal_handlers() {
 }
 
 fn main() -> ExitCode {
-    // Last resort: a bug must still end in one line, not a backtrace.
-    std::panic::set_hook(Box::new(|info| {
-        let msg = info
-            .payload()
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| info.payload().downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "unknown panic".into());
-        // Rust ignores SIGPIPE, so a closed stdout makes print! panic: end
-        // as a filter does, not as a bug.
-        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
-            cmd::outputs::on_broken_pipe();
-        }
-        let at = info
-            .location()
-            .map(|l| format!(" at {}:{}", l.file(), l.line()))
-            .unwrap_or_default();
-        eprintln!("glint: internal error: {}{at}", one_line(&msg));
-    }));
-
+    install_panic_hook();
     install_signal_handlers();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
-        Err(e) => {
-            use clap::error::ErrorKind;
-            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
-                let _ = e.print();
-                return ExitCode::SUCCESS;
-            }
-            if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
-                eprintln!(
-                    "glint: missing command: one of {} (see glint --help)",
-                    cli::VERBS.join(", ")
-                );
-                return ExitCode::from(2);
-            }
-            // clap's first paragraph is the error itself (a list of
-            // missing arguments may follow its first line); then usage.
-            let text = e.to_string();
-            let first: Vec<&str> = text
-                .lines()
-                .take_while(|l| !l.trim().is_empty())
-                .map(str::trim)
-                .collect();
-            eprintln!(
-                "glint: {} (see glint --help)",
-                first.join(" ").trim_start_matches("error: ")
-            );
-            return ExitCode::from(2);
-        }
+        Err(e) => return parse_error(e),
     };
     // A panic unwinds through `Outputs::drop` (removing partial files), is
     // reported by the hook above, and ends here with status 101.
@@ -129,4 +84,57 @@ fn main() -> ExitCode {
         }
         Err(_) => ExitCode::from(101),
     }
+}
+
+/// A bug must still end in one line, not a backtrace: the last-resort
+/// panic hook.
+fn install_panic_hook() {
+    std::panic::set_hook(Box::new(|info| {
+        let msg = info
+            .payload()
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| info.payload().downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "unknown panic".into());
+        // Rust ignores SIGPIPE, so a closed stdout makes print! panic: end
+        // as a filter does, not as a bug.
+        if msg.starts_with("failed printing to stdout") && msg.contains("Broken pipe") {
+            cmd::outputs::on_broken_pipe();
+        }
+        let at = info
+            .location()
+            .map(|l| format!(" at {}:{}", l.file(), l.line()))
+            .unwrap_or_default();
+        eprintln!("glint: internal error: {}{at}", one_line(&msg));
+    }));
+}
+
+/// clap's error as one line (help and version print and succeed; a
+/// missing verb lists the verbs), exit 2.
+fn parse_error(e: clap::Error) -> ExitCode {
+    use clap::error::ErrorKind;
+    if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+        let _ = e.print();
+        return ExitCode::SUCCESS;
+    }
+    if e.kind() == ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand {
+        eprintln!(
+            "glint: missing command: one of {} (see glint --help)",
+            cli::VERBS.join(", ")
+        );
+        return ExitCode::from(2);
+    }
+    // clap's first paragraph is the error itself (a list of
+    // missing arguments may follow its first line); then usage.
+    let text = e.to_string();
+    let first: Vec<&str> = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect();
+    eprintln!(
+        "glint: {} (see glint --help)",
+        first.join(" ").trim_start_matches("error: ")
+    );
+    ExitCode::from(2)
 }

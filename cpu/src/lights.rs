@@ -213,99 +213,117 @@ impl Lights {
     ) -> Option<LightSample> {
         let pr = self.probs;
         if u_cat < pr.area {
-            let n = self.emitters.len() as u32;
-            let i = sample_cdf(|k| self.emitters[k as usize].cdf, n, u_idx);
-            let e = self.emitters[i as usize];
-            let t = &scene.triangles[e.tri as usize];
-            let b = square_to_uniform_triangle(u);
-            let [a0, a1, a2] = t.vertices();
-            let q = (1.0 - b.x - b.y) * a0 + b.x * a1 + b.y * a2;
-            let d = q - p;
+            self.sample_emitter(scene, p, u_idx, u)
+        } else if u_cat < pr.area + pr.punctual {
+            self.sample_punctual(p, u_idx)
+        } else if pr.background > 0.0 {
+            self.sample_background(bg_normal, u)
+        } else {
+            None
+        }
+    }
+
+    /// An emissive triangle by power (`u_idx`), a point on it by area (`u`).
+    fn sample_emitter(&self, scene: &Scene, p: Vec3, u_idx: f32, u: Vec2) -> Option<LightSample> {
+        let pr = self.probs;
+        let n = self.emitters.len() as u32;
+        let i = sample_cdf(|k| self.emitters[k as usize].cdf, n, u_idx);
+        let e = self.emitters[i as usize];
+        let t = &scene.triangles[e.tri as usize];
+        let b = square_to_uniform_triangle(u);
+        let [a0, a1, a2] = t.vertices();
+        let q = (1.0 - b.x - b.y) * a0 + b.x * a1 + b.y * a2;
+        let d = q - p;
+        let dist2 = d.length_squared();
+        let dist = dist2.sqrt();
+        if !(dist > 0.0) {
+            return None;
+        }
+        let wi = d / dist;
+        let le = emitted(scene, e.tri, b.x, b.y, -wi)?;
+        let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
+        let pdf = pr.area * e.pmf / e.area * dist2 / cos_l;
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some(LightSample {
+            wi,
+            dist,
+            weight: le / pdf,
+            pdf,
+            delta: false,
+        })
+    }
+
+    /// A punctual light, uniformly (`u_idx`).
+    fn sample_punctual(&self, p: Vec3, u_idx: f32) -> Option<LightSample> {
+        let n = self.punctual.len();
+        let i = ((u_idx * n as f32) as usize).min(n - 1);
+        let l = self.punctual[i];
+        let sel = self.probs.punctual / n as f32;
+        let intensity = Vec3::from(l.intensity);
+        let (wi, dist, li) = if l.kind == abi::LIGHT_DIRECTIONAL {
+            (-Vec3::from(l.direction), f32::INFINITY, intensity)
+        } else {
+            let d = Vec3::from(l.position) - p;
             let dist2 = d.length_squared();
             let dist = dist2.sqrt();
             if !(dist > 0.0) {
                 return None;
             }
             let wi = d / dist;
-            let le = emitted(scene, e.tri, b.x, b.y, -wi)?;
-            let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
-            let pdf = pr.area * e.pmf / e.area * dist2 / cos_l;
-            if !(pdf > 0.0 && pdf.is_finite()) {
-                return None;
+            let mut li = intensity / dist2;
+            if l.kind == abi::LIGHT_SPOT {
+                let cos_a = Vec3::from(l.direction).dot(-wi);
+                li *= spot_falloff(cos_a, l.cos_inner, l.cos_outer);
             }
-            Some(LightSample {
-                wi,
-                dist,
-                weight: le / pdf,
-                pdf,
-                delta: false,
-            })
-        } else if u_cat < pr.area + pr.punctual {
-            let n = self.punctual.len();
-            let i = ((u_idx * n as f32) as usize).min(n - 1);
-            let l = self.punctual[i];
-            let sel = pr.punctual / n as f32;
-            let intensity = Vec3::from(l.intensity);
-            let (wi, dist, li) = if l.kind == abi::LIGHT_DIRECTIONAL {
-                (-Vec3::from(l.direction), f32::INFINITY, intensity)
-            } else {
-                let d = Vec3::from(l.position) - p;
-                let dist2 = d.length_squared();
-                let dist = dist2.sqrt();
-                if !(dist > 0.0) {
-                    return None;
-                }
-                let wi = d / dist;
-                let mut li = intensity / dist2;
-                if l.kind == abi::LIGHT_SPOT {
-                    let cos_a = Vec3::from(l.direction).dot(-wi);
-                    li *= spot_falloff(cos_a, l.cos_inner, l.cos_outer);
-                }
-                (wi, dist, li)
-            };
-            if li.max_element() <= 0.0 {
-                return None;
-            }
-            Some(LightSample {
-                wi,
-                dist,
-                weight: li / sel,
-                pdf: 0.0,
-                delta: true,
-            })
-        } else if pr.background > 0.0 {
-            if let Some(env) = &self.envmap {
-                let es = env.sample(u)?;
-                let pdf = pr.background * es.pdf;
-                return Some(LightSample {
-                    wi: es.wi,
-                    dist: f32::INFINITY,
-                    weight: es.radiance / pdf,
-                    pdf,
-                    delta: false,
-                });
-            }
-            let (wi, dir_pdf) = if bg_normal == Vec3::ZERO {
-                (square_to_uniform_sphere(u), UNIFORM_SPHERE_PDF)
-            } else {
-                let local = square_to_cosine_hemisphere(u);
-                let wi = Frame::from_normal(bg_normal).to_world(local);
-                (wi, cosine_hemisphere_pdf(local.z))
-            };
-            let pdf = pr.background * dir_pdf;
-            if !(pdf > 0.0) {
-                return None;
-            }
-            Some(LightSample {
-                wi,
-                dist: f32::INFINITY,
-                weight: self.background / pdf,
-                pdf,
-                delta: false,
-            })
-        } else {
-            None
+            (wi, dist, li)
+        };
+        if li.max_element() <= 0.0 {
+            return None;
         }
+        Some(LightSample {
+            wi,
+            dist,
+            weight: li / sel,
+            pdf: 0.0,
+            delta: true,
+        })
+    }
+
+    /// The environment map by its distribution, or the constant background
+    /// (cosine lobe about `bg_normal`, or the uniform sphere).
+    fn sample_background(&self, bg_normal: Vec3, u: Vec2) -> Option<LightSample> {
+        let pr = self.probs;
+        if let Some(env) = &self.envmap {
+            let es = env.sample(u)?;
+            let pdf = pr.background * es.pdf;
+            return Some(LightSample {
+                wi: es.wi,
+                dist: f32::INFINITY,
+                weight: es.radiance / pdf,
+                pdf,
+                delta: false,
+            });
+        }
+        let (wi, dir_pdf) = if bg_normal == Vec3::ZERO {
+            (square_to_uniform_sphere(u), UNIFORM_SPHERE_PDF)
+        } else {
+            let local = square_to_cosine_hemisphere(u);
+            let wi = Frame::from_normal(bg_normal).to_world(local);
+            (wi, cosine_hemisphere_pdf(local.z))
+        };
+        let pdf = pr.background * dir_pdf;
+        if !(pdf > 0.0) {
+            return None;
+        }
+        Some(LightSample {
+            wi,
+            dist: f32::INFINITY,
+            weight: self.background / pdf,
+            pdf,
+            delta: false,
+        })
     }
 
     /// Solid-angle density with which [`Lights::sample`] picks the point

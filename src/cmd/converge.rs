@@ -423,6 +423,27 @@ fn variant_options(
     Ok(opts)
 }
 
+/// The chart of relMSE against render time, one curve per variant.
+fn chart_spec(title: &str, rows: &[Row], variants: &[Variant]) -> ChartSpec {
+    ChartSpec {
+        title: title.to_string(),
+        x_label: "render time (seconds, log)".into(),
+        y_label: "relMSE (log)".into(),
+        curves: variants
+            .iter()
+            .map(|v| Curve {
+                label: v.name.clone(),
+                points: rows
+                    .iter()
+                    .filter(|r| r.variant == v.name)
+                    .map(|r| (r.seconds, r.metrics.relmse))
+                    .collect(),
+            })
+            .collect(),
+        guides: true,
+    }
+}
+
 fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &Path) -> Result<()> {
     let mut outputs = Outputs::new();
     let csv_slot = outputs.reserve(&dir.join("converge.csv"))?;
@@ -494,23 +515,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
 
     let command = std::env::args().collect::<Vec<_>>().join(" ");
     let title = title(&args.scene, &devices);
-    let spec = ChartSpec {
-        title: title.clone(),
-        x_label: "render time (seconds, log)".into(),
-        y_label: "relMSE (log)".into(),
-        curves: variants
-            .iter()
-            .map(|v| Curve {
-                label: v.name.clone(),
-                points: rows
-                    .iter()
-                    .filter(|r| r.variant == v.name)
-                    .map(|r| (r.seconds, r.metrics.relmse))
-                    .collect(),
-            })
-            .collect(),
-        guides: true,
-    };
+    let spec = chart_spec(&title, &rows, variants);
     let md = markdown(&title, &command, &rows, variants);
     let svg = glint::chart::svg(&spec)?;
     let png = glint::chart::png(&spec)?;

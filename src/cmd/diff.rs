@@ -226,6 +226,40 @@ fn json_report(
     j
 }
 
+/// Warnings from the two images' glint metadata: different scenes or
+/// options, or the same seed and samples (not independent renders).
+fn warn_on_metadata(a: &RadianceImage, b: &RadianceImage, an: &str, bn: &str) {
+    let (Some(ma), Some(mb)) = (&a.meta, &b.meta) else {
+        return;
+    };
+    if ma.scene.is_some() && mb.scene.is_some() && ma.scene != mb.scene {
+        eprintln!("glint: warning: {an}: rendered from a different scene or options than {bn}");
+    }
+    let overlap = ma
+        .samples
+        .iter()
+        .any(|x| mb.samples.iter().any(|y| x.0 < y.1 && y.0 < x.1));
+    if ma.seed == mb.seed && ma.sampler == mb.sampler && overlap {
+        eprintln!(
+            "glint: warning: {an}: same seed and samples as {bn}: not independent renders, \
+             so the test is conservative (use another --seed for the reference)"
+        );
+    }
+}
+
+/// The threshold line: which limits were given and whether they hold.
+fn print_thresholds(args: &DiffArgs, hold: bool) {
+    let limits: Vec<String> = [("relMSE", args.max_relmse), ("FLIP", args.max_flip)]
+        .iter()
+        .filter_map(|(n, x)| x.map(|x| format!("{n} <= {x:e}")))
+        .collect();
+    println!(
+        "thresholds {}: {}",
+        limits.join(", "),
+        if hold { "met" } else { "not met" }
+    );
+}
+
 pub fn run(args: &DiffArgs) -> Result<bool> {
     check_args(args)?;
     let thresholds = args.max_relmse.is_some() || args.max_flip.is_some();
@@ -255,21 +289,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
             bail!("{name}: {why}; no verdict");
         }
     }
-    if let (Some(ma), Some(mb)) = (&a.meta, &b.meta) {
-        if ma.scene.is_some() && mb.scene.is_some() && ma.scene != mb.scene {
-            eprintln!("glint: warning: {an}: rendered from a different scene or options than {bn}");
-        }
-        let overlap = ma
-            .samples
-            .iter()
-            .any(|x| mb.samples.iter().any(|y| x.0 < y.1 && y.0 < x.1));
-        if ma.seed == mb.seed && ma.sampler == mb.sampler && overlap {
-            eprintln!(
-                "glint: warning: {an}: same seed and samples as {bn}: not independent renders, \
-                 so the test is conservative (use another --seed for the reference)"
-            );
-        }
-    }
+    warn_on_metadata(&a, &b, &an.to_string(), &bn.to_string());
     let ia = ImageRef::new(a.width, a.height, &a.mean)?;
     let ib = ImageRef::new(b.width, b.height, &b.mean)?;
     let m = metrics::compute(&ia, &ib)?;
@@ -313,15 +333,7 @@ pub fn run(args: &DiffArgs) -> Result<bool> {
         println!("{}: {r}", if r.pass { "agree" } else { "differ" });
     }
     if thresholds {
-        let limits: Vec<String> = [("relMSE", args.max_relmse), ("FLIP", args.max_flip)]
-            .iter()
-            .filter_map(|(n, x)| x.map(|x| format!("{n} <= {x:e}")))
-            .collect();
-        println!(
-            "thresholds {}: {}",
-            limits.join(", "),
-            if thresholds_hold { "met" } else { "not met" }
-        );
+        print_thresholds(args, thresholds_hold);
     }
     match pass {
         Some(p) => Ok(p),

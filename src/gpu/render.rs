@@ -435,6 +435,37 @@ fn path_tracer_kernel<'c>(
     Ok(kernel)
 }
 
+/// Drivers compile the pipeline at its first dispatch (lavapipe: LLVM,
+/// 0.1-0.5 s cold): do that in setup with an empty batch on one group, so
+/// it neither counts as render time nor skews the first batch size; then
+/// zero the film, whatever the kernel wrote.
+fn warm_up(kernel: &Kernel<'_>, accum: &Buffer<'_>, rays: &Buffer<'_>) -> Result<(), GpuError> {
+    kernel.dispatch(bytemuck::bytes_of(&SamplePush::default()), [1, 1, 1])?;
+    accum.fill_zero()?;
+    rays.fill_zero()
+}
+
+/// The batch after one of `count` samples that took `wall_batch` seconds,
+/// `left` samples to go: sized from wall time toward
+/// [`TARGET_BATCH_SECONDS`] (what a watchdog and a progress bar see), and
+/// to what fits the `seconds_left` of a time limit (`None`: nothing more
+/// fits).
+fn following_batch(
+    count: u32,
+    wall_batch: f64,
+    left: u32,
+    seconds_left: Option<f64>,
+) -> Option<u32> {
+    let batch = next_batch(count, wall_batch, left.max(1));
+    match seconds_left {
+        None => Some(batch),
+        Some(s) => match glint_cpu::integrator::next_pass(count, wall_batch, s, left) {
+            0 => None,
+            fit => Some(batch.min(fit)),
+        },
+    }
+}
+
 /// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
 /// of samples taken.
 pub fn render_film_range(
@@ -472,13 +503,7 @@ pub fn render_film_range(
     let kernel = path_tracer_kernel(ctx, kernel_cfg, &b, &active, accel.as_ref())?;
     let grid = [groups(width, LOCAL_SIZE), groups(height, LOCAL_SIZE), 1];
 
-    // Drivers compile the pipeline at its first dispatch (lavapipe: LLVM,
-    // 0.1-0.5 s cold): do that in setup with an empty batch on one group,
-    // so it neither counts as render time nor skews the first batch size.
-    kernel.dispatch(bytemuck::bytes_of(&SamplePush::default()), [1, 1, 1])?;
-    // Zero the film after the warm-up, whatever the kernel wrote.
-    accum.fill_zero()?;
-    rays.fill_zero()?;
+    warm_up(&kernel, accum, rays)?;
     let timer = Timer::new(ctx)?;
     let setup_seconds = setup_start.elapsed().as_secs_f64();
 
@@ -517,15 +542,10 @@ pub fn render_film_range(
             active.write(&mask)?;
             continue;
         }
-        // Size from wall time: it is what a watchdog and a progress bar see.
-        batch = next_batch(count, wall_batch, spp.saturating_sub(done).max(1));
-        if let Some(limit) = range.time_limit {
-            let left = limit - wall.elapsed().as_secs_f64();
-            let fit = glint_cpu::integrator::next_pass(count, wall_batch, left, spp - done);
-            if fit == 0 {
-                break;
-            }
-            batch = batch.min(fit);
+        let left = range.time_limit.map(|l| l - wall.elapsed().as_secs_f64());
+        match following_batch(count, wall_batch, spp - done, left) {
+            Some(b) => batch = b,
+            None => break,
         }
     }
     if timer.is_none() {

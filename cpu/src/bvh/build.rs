@@ -172,6 +172,44 @@ fn ceil_log2(n: usize) -> usize {
     (usize::BITS - (n.max(1) - 1).leading_zeros()) as usize
 }
 
+/// The cheapest plane between the bins of one axis (the first of equal
+/// costs) and its unnormalised SAH cost A_L N_L + A_R N_R; `None` where
+/// every plane leaves one side empty.
+fn best_plane(
+    bin_bounds: &[Aabb; BINS],
+    bin_count: &[usize; BINS],
+    count: usize,
+) -> Option<(f32, usize)> {
+    // Sweep from the right: cost of the right side of plane i (bins > i).
+    let mut right_cost = [0.0f32; BINS];
+    let mut acc = Aabb::EMPTY;
+    let mut n = 0;
+    for plane in (0..BINS - 1).rev() {
+        acc.grow(&bin_bounds[plane + 1]);
+        n += bin_count[plane + 1];
+        right_cost[plane] = if n > 0 {
+            acc.half_area() * n as f32
+        } else {
+            f32::NAN
+        };
+    }
+    let mut best: Option<(f32, usize)> = None;
+    let mut acc = Aabb::EMPTY;
+    let mut n = 0;
+    for plane in 0..BINS - 1 {
+        acc.grow(&bin_bounds[plane]);
+        n += bin_count[plane];
+        if n == 0 || n == count {
+            continue;
+        }
+        let cost = acc.half_area() * n as f32 + right_cost[plane];
+        if best.is_none_or(|(c, _)| cost < c) {
+            best = Some((cost, plane));
+        }
+    }
+    best
+}
+
 /// `None` makes a leaf.
 fn choose_split(
     prims: &[Prim],
@@ -224,32 +262,10 @@ fn choose_split(
         if !binned[axis] {
             continue;
         }
-        let (bin_bounds, bin_count) = (&all_bounds[axis], &all_counts[axis]);
-        // Sweep from the right: cost of the right side of plane i (bins > i).
-        let mut right_cost = [0.0f32; BINS];
-        let mut acc = Aabb::EMPTY;
-        let mut n = 0;
-        for plane in (0..BINS - 1).rev() {
-            acc.grow(&bin_bounds[plane + 1]);
-            n += bin_count[plane + 1];
-            right_cost[plane] = if n > 0 {
-                acc.half_area() * n as f32
-            } else {
-                f32::NAN
-            };
-        }
-        let mut acc = Aabb::EMPTY;
-        let mut n = 0;
-        for plane in 0..BINS - 1 {
-            acc.grow(&bin_bounds[plane]);
-            n += bin_count[plane];
-            if n == 0 || n == count {
-                continue;
-            }
-            let cost = acc.half_area() * n as f32 + right_cost[plane];
-            if best.is_none_or(|(c, _, _)| cost < c) {
-                best = Some((cost, axis, plane));
-            }
+        if let Some((cost, plane)) = best_plane(&all_bounds[axis], &all_counts[axis], count)
+            && best.is_none_or(|(c, _, _)| cost < c)
+        {
+            best = Some((cost, axis, plane));
         }
     }
 

@@ -289,6 +289,16 @@ fn read_primitive(
     })
 }
 
+/// Where a mesh instance goes: its node's world transform and what
+/// follows from it for normals and winding.
+struct Placement {
+    world: Mat4,
+    linear: Mat3,
+    normal_m: Mat3,
+    /// A mirroring transform (negative determinant).
+    flip: bool,
+}
+
 fn add_mesh(
     src: &Source,
     mesh: &gltf::Mesh,
@@ -299,8 +309,12 @@ fn add_mesh(
     skipped: &mut Skipped,
 ) -> Result<(), String> {
     let linear = Mat3::from_mat4(world);
-    let normal_m = normal_matrix(linear);
-    let flip = linear.determinant() < 0.0;
+    let place = Placement {
+        world,
+        linear,
+        normal_m: normal_matrix(linear),
+        flip: linear.determinant() < 0.0,
+    };
     let mesh_label = match mesh.name() {
         Some(n) => format!("mesh {} ('{n}')", mesh.index()),
         None => format!("mesh {}", mesh.index()),
@@ -312,145 +326,175 @@ fn add_mesh(
     }
     for prim in mesh.primitives() {
         let label = format!("{mesh_label} primitive {}", prim.index());
-        let err = |e: String| format!("{label}: {e}");
-        let mode = prim.mode();
-        if !matches!(
-            mode,
-            Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
-        ) {
-            // Points and lines have no area: nothing to render.
-            skipped.points_lines += 1;
-            continue;
+        add_primitive(src, &prim, default_material, &place, want_uvs, out, skipped)
+            .map_err(|e| format!("{label}: {e}"))?;
+    }
+    Ok(())
+}
+
+/// One primitive's triangles (points and lines skipped, strips and fans
+/// unrolled), with their shading records and texture coordinates.
+fn add_primitive(
+    src: &Source,
+    prim: &gltf::Primitive,
+    default_material: u32,
+    place: &Placement,
+    want_uvs: bool,
+    out: &mut Collected,
+    skipped: &mut Skipped,
+) -> Result<(), String> {
+    let mode = prim.mode();
+    if !matches!(
+        mode,
+        Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan
+    ) {
+        // Points and lines have no area: nothing to render.
+        skipped.points_lines += 1;
+        return Ok(());
+    }
+    if prim.morph_targets().len() > 0 {
+        skipped.morphs += 1;
+    }
+    let material = match prim.material().index() {
+        Some(m) => m as u32,
+        None => {
+            out.uses_default_material = true;
+            default_material
         }
-        if prim.morph_targets().len() > 0 {
-            skipped.morphs += 1;
+    };
+    let d = read_primitive(src, prim, want_uvs)?;
+    let n_verts = d.positions.len();
+    let n_refs = d.indices.as_ref().map_or(n_verts, Vec::len);
+    if mode == Mode::Triangles && n_refs % 3 != 0 {
+        let what = if d.indices.is_some() {
+            "index"
+        } else {
+            "vertex"
+        };
+        return Err(format!(
+            "{what} count {n_refs} is not a multiple of 3 (mode TRIANGLES)"
+        ));
+    }
+    let n_tris = triangles_from_refs(mode, n_refs as u64) as usize;
+    // Reserve only now that the data has been read: declared counts are
+    // not trusted until their bytes have been found.
+    out.triangles.reserve(n_tris);
+    out.shading.reserve(n_tris);
+    if want_uvs {
+        out.uvs.reserve(n_tris);
+    }
+    let vertex = |k: usize| -> Result<usize, String> {
+        let v = match &d.indices {
+            Some(ix) => ix[k] as usize,
+            None => k,
+        };
+        if v < n_verts {
+            Ok(v)
+        } else {
+            Err(format!(
+                "index {v} (at position {k}) is out of range: {n_verts} vertices"
+            ))
         }
-        let PrimData {
-            positions,
-            normals,
-            tangents,
-            uvs,
-            uvs1,
-            indices,
-        } = read_primitive(src, &prim, want_uvs).map_err(err)?;
-        let n_verts = positions.len();
-        let n_refs = indices.as_ref().map_or(n_verts, Vec::len);
-        if mode == Mode::Triangles && n_refs % 3 != 0 {
-            let what = if indices.is_some() { "index" } else { "vertex" };
-            return Err(err(format!(
-                "{what} count {n_refs} is not a multiple of 3 (mode TRIANGLES)"
-            )));
+    };
+    // Vertex order per glTF 2.0 spec section 3.7.2.1 (strips alternate
+    // winding, fans pivot on vertex 0).
+    let refs_of = |t: usize| match mode {
+        Mode::Triangles => [3 * t, 3 * t + 1, 3 * t + 2],
+        Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
+        Mode::TriangleStrip => [t, t + 2, t + 1],
+        _ => [t + 1, t + 2, 0],
+    };
+    let face = |t: usize| -> Result<[usize; 3], String> {
+        let r = refs_of(t);
+        Ok([vertex(r[0])?, vertex(r[1])?, vertex(r[2])?])
+    };
+    // Without TANGENT, a normal-mapped primitive gets MikkTSpace
+    // tangents (glTF 2.0 sec. 3.7.2.1: what exporters bake against),
+    // per triangle corner, in the normal texture's UV set.
+    let mikk_uvs = match (&d.tangents, normal_texcoord(src, prim.material().index())) {
+        (None, Some(0)) => d.uvs.as_deref(),
+        (None, Some(1)) => d.uvs1.as_deref(),
+        _ => None,
+    };
+    let mikk = match mikk_uvs {
+        Some(uv) => {
+            let faces = (0..n_tris).map(face).collect::<Result<Vec<_>, String>>()?;
+            Some(mikktspace_tangents(
+                &d.positions,
+                d.normals.as_deref(),
+                uv,
+                faces,
+            ))
         }
-        let n_tris = triangles_from_refs(mode, n_refs as u64) as usize;
-        // Reserve only now that the data has been read: declared counts are
-        // not trusted until their bytes have been found.
-        out.triangles.reserve(n_tris);
-        out.shading.reserve(n_tris);
-        if want_uvs {
-            out.uvs.reserve(n_tris);
-        }
-        let vertex = |k: usize| -> Result<usize, String> {
-            let v = match &indices {
-                Some(ix) => ix[k] as usize,
-                None => k,
-            };
-            if v < n_verts {
-                Ok(v)
-            } else {
-                Err(err(format!(
-                    "index {v} (at position {k}) is out of range: {n_verts} vertices"
-                )))
-            }
-        };
-        let material = match prim.material().index() {
-            Some(m) => m as u32,
-            None => {
-                out.uses_default_material = true;
-                default_material
-            }
-        };
-        // Vertex order per glTF 2.0 spec section 3.7.2.1 (strips alternate
-        // winding, fans pivot on vertex 0).
-        let refs_of = |t: usize| match mode {
-            Mode::Triangles => [3 * t, 3 * t + 1, 3 * t + 2],
-            Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
-            Mode::TriangleStrip => [t, t + 2, t + 1],
-            _ => [t + 1, t + 2, 0],
-        };
-        // Without TANGENT, a normal-mapped primitive gets MikkTSpace
-        // tangents (glTF 2.0 sec. 3.7.2.1: what exporters bake against),
-        // per triangle corner, in the normal texture's UV set.
-        let mikk_uvs = match (&tangents, normal_texcoord(src, prim.material().index())) {
-            (None, Some(0)) => uvs.as_deref(),
-            (None, Some(1)) => uvs1.as_deref(),
-            _ => None,
-        };
-        let mikk = match mikk_uvs {
-            Some(uv) => {
-                let faces = (0..n_tris)
-                    .map(|t| {
-                        let r = refs_of(t);
-                        Ok([vertex(r[0])?, vertex(r[1])?, vertex(r[2])?])
-                    })
-                    .collect::<Result<Vec<_>, String>>()?;
-                Some(mikktspace_tangents(
-                    &positions,
-                    normals.as_deref(),
-                    uv,
-                    faces,
-                ))
-            }
-            None => None,
-        };
-        for t in 0..n_tris {
-            let refs = refs_of(t);
-            let mut v = [vertex(refs[0])?, vertex(refs[1])?, vertex(refs[2])?];
-            // Which corner of the file's triangle each of ours is.
-            let mut corner = [0, 1, 2];
-            if flip {
-                // A mirroring transform reverses the winding; swapping two
-                // vertices keeps counter-clockwise = outside.
-                v.swap(1, 2);
-                corner.swap(1, 2);
-            }
-            let p = v.map(|k| world.transform_point3(Vec3::from(positions[k])));
-            if p.iter().any(|q| !q.is_finite()) {
-                return Err(err(format!(
-                    "a transformed position overflows to a non-finite value (triangle {t})"
-                )));
-            }
-            out.triangles.push(Triangle {
-                p0: p[0].into(),
-                material,
-                p1: p[1].into(),
-                light: crate::scene::NO_LIGHT,
-                p2: p[2].into(),
-                flags: 0,
-            });
-            let geo = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
-            // The file's tangent (xyz) at each of our corners.
-            let given: Option<[[f32; 4]; 3]> = match (&tangents, &mikk) {
-                (Some(ts), _) => Some(v.map(|k| ts[k])),
-                (None, Some(m)) => Some(corner.map(|j| m[3 * t + j])),
-                _ => None,
-            };
-            let sh = triangle_shading(
-                v,
-                p,
-                geo,
-                normals.as_deref(),
-                normal_m,
-                linear,
-                given.as_ref(),
-                uvs.as_deref(),
-            );
-            out.shading.push(sh);
-            if want_uvs {
-                let uv = (uvs.as_deref(), uvs1.as_deref());
-                out.uvs
-                    .push(triangle_uv(v, p, geo, given.as_ref(), uv, flip));
-            }
-        }
+        None => None,
+    };
+    for t in 0..n_tris {
+        let mikk_t = mikk
+            .as_ref()
+            .map(|m| [m[3 * t], m[3 * t + 1], m[3 * t + 2]]);
+        push_triangle(t, face(t)?, &d, mikk_t, material, place, want_uvs, out)?;
+    }
+    Ok(())
+}
+
+/// Triangle `t` of a primitive, vertices `v` of `d`: its world-space
+/// record, shading record and texture coordinates. `mikk`: the generated
+/// tangents at the file's three corners.
+#[allow(clippy::too_many_arguments)]
+fn push_triangle(
+    t: usize,
+    mut v: [usize; 3],
+    d: &PrimData,
+    mikk: Option<[[f32; 4]; 3]>,
+    material: u32,
+    place: &Placement,
+    want_uvs: bool,
+    out: &mut Collected,
+) -> Result<(), String> {
+    // Which corner of the file's triangle each of ours is.
+    let mut corner = [0, 1, 2];
+    if place.flip {
+        // A mirroring transform reverses the winding; swapping two
+        // vertices keeps counter-clockwise = outside.
+        v.swap(1, 2);
+        corner.swap(1, 2);
+    }
+    let p = v.map(|k| place.world.transform_point3(Vec3::from(d.positions[k])));
+    if p.iter().any(|q| !q.is_finite()) {
+        return Err(format!(
+            "a transformed position overflows to a non-finite value (triangle {t})"
+        ));
+    }
+    out.triangles.push(Triangle {
+        p0: p[0].into(),
+        material,
+        p1: p[1].into(),
+        light: crate::scene::NO_LIGHT,
+        p2: p[2].into(),
+        flags: 0,
+    });
+    let geo = (p[1] - p[0]).cross(p[2] - p[0]).normalize_or_zero();
+    // The file's tangent (xyz) at each of our corners.
+    let given: Option<[[f32; 4]; 3]> = match (&d.tangents, &mikk) {
+        (Some(ts), _) => Some(v.map(|k| ts[k])),
+        (None, Some(m)) => Some(corner.map(|j| m[j])),
+        _ => None,
+    };
+    let sh = triangle_shading(
+        v,
+        p,
+        geo,
+        d.normals.as_deref(),
+        place.normal_m,
+        place.linear,
+        given.as_ref(),
+        d.uvs.as_deref(),
+    );
+    out.shading.push(sh);
+    if want_uvs {
+        let uv = (d.uvs.as_deref(), d.uvs1.as_deref());
+        out.uvs
+            .push(triangle_uv(v, p, geo, given.as_ref(), uv, place.flip));
     }
     Ok(())
 }

@@ -340,16 +340,10 @@ pub fn bsdf_from_extras(v: &Value) -> Result<Bsdf, String> {
     bsdf_from_extras_with(v, false)
 }
 
-/// [`bsdf_from_extras`] with `multiscatter` the default of rough models
-/// that do not give it (`--multiscatter`).
-pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bsdf, String> {
-    let obj = v.as_object().ok_or("must be an object with a \"type\"")?;
-    let ty = match obj.get("type") {
-        Some(Value::String(s)) => s.as_str(),
-        Some(other) => return Err(format!("\"type\" must be a string, got {other}")),
-        None => return Err("has no \"type\"".into()),
-    };
-    let (own, rough): (&[&str], bool) = match ty {
+/// The parameters an `extras.bsdf` type takes besides the roughness ones,
+/// and whether it takes those.
+fn bsdf_parameters(ty: &str) -> Result<(&'static [&'static str], bool), String> {
+    Ok(match ty {
         "diffuse" => (&["reflectance"], false),
         "conductor" => (&["eta", "k", "material", "specular_reflectance"], false),
         "roughconductor" => (&["eta", "k", "material", "specular_reflectance"], true),
@@ -385,7 +379,19 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             true,
         ),
         _ => return Err(format!("unknown BSDF type \"{ty}\" (expected {TYPES})")),
+    })
+}
+
+/// [`bsdf_from_extras`] with `multiscatter` the default of rough models
+/// that do not give it (`--multiscatter`).
+pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bsdf, String> {
+    let obj = v.as_object().ok_or("must be an object with a \"type\"")?;
+    let ty = match obj.get("type") {
+        Some(Value::String(s)) => s.as_str(),
+        Some(other) => return Err(format!("\"type\" must be a string, got {other}")),
+        None => return Err("has no \"type\"".into()),
     };
+    let (own, rough) = bsdf_parameters(ty)?;
     for key in obj.keys() {
         let known = key == "type"
             || own.contains(&key.as_str())
