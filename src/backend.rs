@@ -1,6 +1,6 @@
 //! The one interface every verb renders through: render options in, film
 //! and statistics out, on either backend. `render`, `compare`, `bench` and
-//! `converge` call [`render`]; a new sampler or kernel variant is a field of
+//! `converge` call [`render`], the methods sweep a [`Renderer`] it keeps; a new sampler or kernel variant is a field of
 //! [`RenderOptions`] (or of [`GpuOptions`]) that both backends read, not a
 //! change to the verbs.
 
@@ -91,6 +91,9 @@ pub enum BackendError {
 }
 
 /// Render `scene` with `opts` on `backend`; `progress(done, total)` reports.
+/// One render through a new [`Renderer`] (its set-up time counted in the
+/// render's), finished so that what the validation layer reports while
+/// the device is destroyed counts too.
 pub fn render(
     backend: Backend,
     scene: &Scene,
@@ -98,17 +101,80 @@ pub fn render(
     gpu: &GpuOptions,
     progress: &(dyn Fn(u32, u32) + Sync),
 ) -> Result<BackendRender, BackendError> {
-    let backend = backend.resolve(gpu.device.as_deref());
-    Ok(match backend {
-        Backend::Auto => unreachable!("resolve() picks gpu or cpu"),
-        Backend::Cpu => {
+    let renderer = Renderer::new(backend, gpu)?;
+    let mut r = renderer.render(scene, opts, progress)?;
+    r.setup_seconds += renderer.setup_seconds;
+    renderer.finish()?;
+    Ok(r)
+}
+
+/// A backend made ready once, rendering any number of scenes: the CPU, or
+/// a Vulkan context (with `--traversal hardware`, one with ray queries),
+/// made once, its validation messages checked after every render.
+/// [`render`] is one render through a new one; the methods sweep keeps
+/// one for all its cells.
+pub struct Renderer {
+    backend: Backend,
+    gpu: GpuOptions,
+    ctx: Option<crate::gpu::Context>,
+    /// Making the context (0 for the CPU).
+    pub setup_seconds: f64,
+}
+
+impl Renderer {
+    /// `backend` resolved (`Auto` to a GPU or the CPU) and made ready.
+    pub fn new(backend: Backend, gpu: &GpuOptions) -> Result<Self, BackendError> {
+        let backend = backend.resolve(gpu.device.as_deref());
+        let start = Instant::now();
+        let ctx = match backend {
+            Backend::Gpu => {
+                let desc = crate::gpu::ContextDesc {
+                    device: gpu.device.as_deref(),
+                    ..Default::default()
+                };
+                Some(match gpu.traversal {
+                    Traversal::Software => crate::gpu::Context::new(&desc)?,
+                    Traversal::Hardware => crate::gpu::Context::new_ray_query(&desc)?,
+                })
+            }
+            _ => None,
+        };
+        Ok(Renderer {
+            backend,
+            gpu: gpu.clone(),
+            ctx,
+            setup_seconds: start.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The backend that renders (never `Auto`).
+    pub fn backend(&self) -> Backend {
+        self.backend
+    }
+
+    /// The device's name: the Vulkan device's, or the CPU's with its threads.
+    pub fn device_name(&self) -> String {
+        match &self.ctx {
+            Some(ctx) => ctx.info().name.clone(),
+            None => cpu_device_name(rayon::current_num_threads()),
+        }
+    }
+
+    /// Render `scene` with `opts`; `progress(done, total)` reports.
+    pub fn render(
+        &self,
+        scene: &Scene,
+        opts: &RenderOptions,
+        progress: &(dyn Fn(u32, u32) + Sync),
+    ) -> Result<BackendRender, BackendError> {
+        let Some(ctx) = &self.ctx else {
             let start = Instant::now();
             let pt = glint_cpu::PathTracer::new(scene, opts)?;
             let setup_seconds = start.elapsed().as_secs_f64();
             let (film, st) = pt.render(opts.spp, progress);
             let threads = rayon::current_num_threads();
-            BackendRender {
-                backend,
+            return Ok(BackendRender {
+                backend: self.backend,
                 film,
                 rays: st.rays,
                 render_seconds: st.render_seconds,
@@ -119,35 +185,59 @@ pub fn render(
                 kernel: None,
                 traversal: None,
                 features: Features::of(scene, opts),
-            }
+            });
+        };
+        let cache_path = self
+            .gpu
+            .pipeline_cache
+            .then(crate::cache::pipeline_cache_path)
+            .flatten();
+        let cache = match &cache_path {
+            Some(p) => Some(crate::gpu::pipeline_cache::PipelineCache::open(ctx, p)?),
+            None => None,
+        };
+        let handle = cache
+            .as_ref()
+            .map_or(ash::vk::PipelineCache::null(), |c| c.handle());
+        let kernel = (self.gpu.kernel, self.gpu.traversal);
+        let r = crate::gpu::render::render_with(ctx, scene, opts, kernel, handle, progress)?;
+        if let Some(c) = &cache {
+            c.save();
         }
-        Backend::Gpu => {
-            let config = crate::gpu::render::GpuConfig {
-                device: gpu.device.as_deref(),
-                kernel: gpu.kernel,
-                traversal: gpu.traversal,
-                pipeline_cache: if gpu.pipeline_cache {
-                    crate::cache::pipeline_cache_path()
-                } else {
-                    None
-                },
-            };
-            let r = crate::gpu::render(scene, opts, &config, progress)?;
-            BackendRender {
-                backend,
-                film: r.film,
-                rays: r.stats.rays,
-                render_seconds: r.stats.render_seconds,
-                setup_seconds: r.setup_seconds,
-                device: r.device,
-                driver: Some(r.driver),
-                threads: None,
-                kernel: Some(r.kernel),
-                traversal: Some(r.traversal),
-                features: Features::of(scene, opts),
-            }
+        check_validation(ctx.validation_log())?;
+        Ok(BackendRender {
+            backend: self.backend,
+            film: r.film,
+            rays: r.stats.rays,
+            render_seconds: r.stats.render_seconds,
+            setup_seconds: r.setup_seconds,
+            device: r.device,
+            driver: Some(r.driver),
+            threads: None,
+            kernel: Some(r.kernel),
+            traversal: Some(r.traversal),
+            features: Features::of(scene, opts),
+        })
+    }
+
+    /// Destroy the device, then fail if the validation layer reported an
+    /// error at any point, its destruction included.
+    pub fn finish(mut self) -> Result<(), BackendError> {
+        let log = self.ctx.as_ref().and_then(|c| c.validation_log());
+        drop(self.ctx.take());
+        check_validation(log)
+    }
+}
+
+fn check_validation(
+    log: Option<std::sync::Arc<crate::gpu::context::ValidationLog>>,
+) -> Result<(), BackendError> {
+    match log {
+        Some(log) if log.errors() > 0 => {
+            Err(crate::gpu::GpuError::Validation(log.messages()).into())
         }
-    })
+        _ => Ok(()),
+    }
 }
 
 /// The CPU's model name from /proc/cpuinfo (Linux), with the thread count

@@ -5,6 +5,8 @@
 use std::io::Write;
 
 use anyhow::{Context as _, Result, bail};
+use glint::backend::{Backend, GpuOptions, Renderer};
+use glint::cpu::Film;
 use glint::gpu::{Context, ContextDesc};
 use glint::methods;
 use glint::stability::{self, COS, Size};
@@ -78,22 +80,32 @@ fn run_methods(args: &StabilityArgs) -> Result<()> {
     let dir = &args.dir;
     let report = Report::reserve(dir, "methods")?;
     let sweep = methods::Sweep::new(args.quick);
-    let cpu = |s: &glint::cpu::Scene, o: &glint::cpu::RenderOptions| {
-        glint::cpu::render(s, o, &|_, _| {})
-            .map(|(f, st)| (f, st.render_seconds))
-            .map_err(|e| e.to_string())
-    };
+    // Every cell renders through the backend interface, on one renderer
+    // per backend made once.
+    fn through(
+        r: &Renderer,
+    ) -> impl Fn(&glint::cpu::Scene, &glint::cpu::RenderOptions) -> Result<(Film, f64), String> + '_
+    {
+        move |s, o| {
+            r.render(s, o, &|_, _| {})
+                .map(|b| (b.film, b.render_seconds))
+                .map_err(|e| e.to_string())
+        }
+    }
+    let cpu = Renderer::new(Backend::Cpu, &GpuOptions::default())?;
     let threads = rayon::current_num_threads();
     let mut devices = vec![("cpu".to_string(), format!("{threads} threads"))];
-    let mut rows = methods::run(&sweep, "cpu", &cpu).map_err(anyhow::Error::msg)?;
-    if let Some(ctx) = gpu_context(args)? {
-        let gpu = |s: &glint::cpu::Scene, o: &glint::cpu::RenderOptions| {
-            glint::gpu::render::render_on(&ctx, s, o, &|_, _| {})
-                .map(|r| (r.film, r.stats.render_seconds))
-                .map_err(|e| e.to_string())
+    let mut rows = methods::run(&sweep, "cpu", &through(&cpu)).map_err(anyhow::Error::msg)?;
+    if !args.cpu_only {
+        let gpu_opts = GpuOptions {
+            device: args.device.clone(),
+            ..Default::default()
         };
-        devices.push(("gpu".to_string(), ctx.info().name.clone()));
-        rows.extend(methods::run(&sweep, "gpu", &gpu).map_err(anyhow::Error::msg)?);
+        let gpu = Renderer::new(Backend::Gpu, &gpu_opts)
+            .context("the GPU half of the sweep needs a Vulkan device (--cpu-only skips it)")?;
+        devices.push(("gpu".to_string(), gpu.device_name()));
+        rows.extend(methods::run(&sweep, "gpu", &through(&gpu)).map_err(anyhow::Error::msg)?);
+        gpu.finish()?;
     }
     let md = methods::markdown(&rows, &sweep, &devices);
     let backends: Vec<String> = devices.iter().map(|d| d.0.clone()).collect();
