@@ -713,6 +713,30 @@ fn sensitive(b: &Bsdf, q: &Query, rng: &mut Pcg32) -> bool {
     false
 }
 
+/// The GLSL BSDFs' answers to `queries` (`shaders/tests/bsdf_test.comp`:
+/// eval, pdf, sample and is_delta of material `u[1]`'s bits), in one
+/// dispatch (the kernel reads a few thousand materials comfortably).
+pub fn bsdf_kernel(
+    ctx: &Context,
+    mats: &[GpuMaterial],
+    queries: &[Query],
+) -> Result<Vec<GpuResult>, GpuError> {
+    let mut results = vec![GpuResult::default(); queries.len()];
+    let n = queries.len() as u32;
+    ctx.run_kernel(
+        "tests/bsdf_test",
+        &[
+            bytemuck::cast_slice(mats),
+            bytemuck::cast_slice(queries),
+            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
+        ],
+        &mut [bytemuck::cast_slice_mut(&mut results)],
+        bytemuck::bytes_of(&n),
+        [groups(n, 64), 1, 1],
+    )?;
+    Ok(results)
+}
+
 /// Fraction of queries per point where the GLSL BSDFs disagree with the
 /// CPU crate (not counting inputs within float noise of a discontinuity).
 pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>, GpuError> {
@@ -754,21 +778,7 @@ pub fn measure_gpu(ctx: &Context, pts: &[Point], size: Size) -> Result<Vec<f64>,
             });
         }
     }
-    let mut results = vec![GpuResult::default(); queries.len()];
-    // The kernel reads at most a few thousand materials per dispatch
-    // comfortably; one dispatch holds them all.
-    let n = queries.len() as u32;
-    ctx.run_kernel(
-        "tests/bsdf_test",
-        &[
-            bytemuck::cast_slice(&mats),
-            bytemuck::cast_slice(&queries),
-            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
-        ],
-        &mut [bytemuck::cast_slice_mut(&mut results)],
-        bytemuck::bytes_of(&n),
-        [groups(n, 64), 1, 1],
-    )?;
+    let results = bsdf_kernel(ctx, &mats, &queries)?;
     Ok(pts
         .par_iter()
         .enumerate()

@@ -15,14 +15,13 @@
 mod common;
 
 use glam::{Vec2, Vec3};
-use glint::gpu::groups;
 use glint_cpu::bsdf::clearcoat::{decode_coat_normal, encode_coat_normal};
 use glint_cpu::bsdf::coated::CoatParams;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
 use glint_cpu::{GpuMaterial, Material};
 
 use glint::cpu::sampling::Pcg32;
-use glint::stability::{GpuResult, Query};
+use glint::stability::{GpuResult, Query, bsdf_kernel};
 
 fn rough(au: f32, av: f32, separable: bool) -> Roughness {
     Roughness {
@@ -341,20 +340,7 @@ fn glsl_bsdfs_match_the_cpu_crate() {
             });
         }
     }
-    let n = queries.len() as u32;
-    let mut results = vec![GpuResult::default(); queries.len()];
-    ctx.run_kernel(
-        "tests/bsdf_test",
-        &[
-            bytemuck::cast_slice(&gpu_mats),
-            bytemuck::cast_slice(&queries),
-            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
-        ],
-        &mut [bytemuck::cast_slice_mut(&mut results)],
-        bytemuck::bytes_of(&n),
-        [groups(n, 64), 1, 1],
-    )
-    .unwrap();
+    let results = bsdf_kernel(&ctx, &gpu_mats, &queries).unwrap();
 
     let names = [
         "diffuse",
@@ -444,19 +430,7 @@ fn an_unknown_kind_is_nan_on_the_gpu() {
         wi: [-wo.x, -wo.y, wo.z, 0.5],
         u: [0.5, f32::from_bits(0), 0.0, 0.0],
     }];
-    let mut results = [GpuResult::default()];
-    ctx.run_kernel(
-        "tests/bsdf_test",
-        &[
-            bytemuck::cast_slice(&mats),
-            bytemuck::cast_slice(&queries),
-            bytemuck::cast_slice(&glint_cpu::bsdf::multiscatter::gpu_tables()),
-        ],
-        &mut [bytemuck::cast_slice_mut(&mut results)],
-        bytemuck::bytes_of(&1u32),
-        [1, 1, 1],
-    )
-    .unwrap();
+    let results = bsdf_kernel(&ctx, &mats, &queries).unwrap();
     let g = &results[0];
     assert!(g.f_pdf.iter().all(|v| v.is_nan()), "eval, pdf: {g:?}");
     assert_eq!(g.flags[0], 1, "the sample is reported: {g:?}");

@@ -408,26 +408,7 @@ fn add_primitive(
         let r = refs_of(t);
         Ok([vertex(r[0])?, vertex(r[1])?, vertex(r[2])?])
     };
-    // Without TANGENT, a normal-mapped primitive gets MikkTSpace
-    // tangents (glTF 2.0 sec. 3.7.2.1: what exporters bake against),
-    // per triangle corner, in the normal texture's UV set.
-    let mikk_uvs = match (&d.tangents, normal_texcoord(src, prim.material().index())) {
-        (None, Some(0)) => d.uvs.as_deref(),
-        (None, Some(1)) => d.uvs1.as_deref(),
-        _ => None,
-    };
-    let mikk = match mikk_uvs {
-        Some(uv) => {
-            let faces = (0..n_tris).map(face).collect::<Result<Vec<_>, String>>()?;
-            Some(mikktspace_tangents(
-                &d.positions,
-                d.normals.as_deref(),
-                uv,
-                faces,
-            ))
-        }
-        None => None,
-    };
+    let mikk = generated_tangents(src, prim, &d, n_tris, &face)?;
     for t in 0..n_tris {
         let mikk_t = mikk
             .as_ref()
@@ -435,6 +416,33 @@ fn add_primitive(
         push_triangle(t, face(t)?, &d, mikk_t, material, place, want_uvs, out)?;
     }
     Ok(())
+}
+
+/// Without TANGENT, a normal-mapped primitive gets MikkTSpace tangents
+/// (glTF 2.0 sec. 3.7.2.1: what exporters bake against), per triangle
+/// corner (`3 t + j`), in the normal texture's UV set; `None` otherwise.
+fn generated_tangents(
+    src: &Source,
+    prim: &gltf::Primitive,
+    d: &PrimData,
+    n_tris: usize,
+    face: &dyn Fn(usize) -> Result<[usize; 3], String>,
+) -> Result<Option<Vec<[f32; 4]>>, String> {
+    let uv = match (&d.tangents, normal_texcoord(src, prim.material().index())) {
+        (None, Some(0)) => d.uvs.as_deref(),
+        (None, Some(1)) => d.uvs1.as_deref(),
+        _ => None,
+    };
+    let Some(uv) = uv else {
+        return Ok(None);
+    };
+    let faces = (0..n_tris).map(face).collect::<Result<Vec<_>, String>>()?;
+    Ok(Some(mikktspace_tangents(
+        &d.positions,
+        d.normals.as_deref(),
+        uv,
+        faces,
+    )))
 }
 
 /// Triangle `t` of a primitive, vertices `v` of `d`: its world-space
