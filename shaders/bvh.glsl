@@ -102,6 +102,16 @@ float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
     return tnear <= tfar ? tnear : BVH_INF;
 }
 
+// a b - c d to about 1.5 ulp (Kahan's difference of products), for the edge
+// functions that round to exactly 0 (glint_cpu::bvh::traverse::refine_edge).
+float difference_of_products(float a, float b, float c, float d) {
+    precise float cd = c * d;
+    precise float err = fma(-c, d, cd);
+    precise float dop = fma(a, b, -cd);
+    precise float r = dop + err;
+    return r;
+}
+
 // Watertight ray/triangle intersection (Woop, Benthin, Wald 2013, JCGT 2(1)).
 // A hit with 0 < t < tmax writes t and the barycentrics u, v; both faces hit.
 // `precise` forbids FMA contraction: the two triangles sharing an edge must
@@ -125,6 +135,20 @@ bool intersect_triangle(PreparedRay r, Triangle tri, float tmax, out float t, ou
     precise float eu = cx * by - cy * bx;
     precise float ev = ax * cy - ay * cx;
     precise float ew = bx * ay - by * ax;
+    // An edge function that rounds to exactly 0 is recomputed (traverse.rs
+    // says why): a degenerate triangle then reports no false hit, and a
+    // shared edge stays exactly negated (both triangles see the zero).
+    if (eu == 0.0 || ev == 0.0 || ew == 0.0) {
+        if (eu == 0.0) {
+            eu = difference_of_products(cx, by, cy, bx);
+        }
+        if (ev == 0.0) {
+            ev = difference_of_products(ax, cy, ay, cx);
+        }
+        if (ew == 0.0) {
+            ew = difference_of_products(bx, ay, by, ax);
+        }
+    }
     if ((eu < 0.0 || ev < 0.0 || ew < 0.0) && (eu > 0.0 || ev > 0.0 || ew > 0.0)) {
         return false;
     }

@@ -31,7 +31,7 @@ use glint::cpu::{Bvh, Bvh4, Ray, Triangle};
 use glint::gpu::groups;
 
 use geometry::{
-    Rng, asset_triangles, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays,
+    Pcg32, asset_triangles, bunny, diffuse_rays, grid_cube, nasty_soup, primary_rays, random_rays,
     random_soup, rays_from_surfaces, shared_asset_triangles,
 };
 
@@ -203,7 +203,7 @@ fn compare_kernels(name: &str, b: &Built, rays: &[Ray], wide: &GpuResult, bin: &
 fn gpu_traversal_matches_cpu_on_bunny() {
     let ctx = common::context();
     let b = build(&bunny());
-    let mut rng = Rng(0x5eed);
+    let mut rng = Pcg32::from_state(0x5eed);
     let rays = random_rays(&b.tris, 100_000, &mut rng);
     let wide = run_gpu(&ctx, &b, Kind::Wide, &rays, BOTH);
     let again = run_gpu(&ctx, &b, Kind::Wide, &rays, BOTH);
@@ -234,7 +234,7 @@ fn gpu_traversal_matches_cpu_on_bunny() {
 #[test]
 fn gpu_traversal_on_degenerate_soups_and_surface_rays() {
     let ctx = common::context();
-    let mut rng = Rng(0xd1ce);
+    let mut rng = Pcg32::from_state(0xd1ce);
     let soups = [
         ("nasty", nasty_soup(&mut rng)),
         ("small", random_soup(&mut rng, 3000, 0.04)),
@@ -450,7 +450,7 @@ fn measure_gpu(ctx: &common::ValidatedContext, name: &str, mesh: &[Triangle]) {
         .iter()
         .map(|r| b.wide.intersect(&b.tris, r))
         .collect();
-    let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Rng(9));
+    let diffuse = diffuse_rays(&b.tris, &primary, &hits, &mut Pcg32::from_state(9));
     for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
         for (query, mode) in [("closest", CLOSEST), ("any-hit", ANY)] {
             // Interleaved: each round times both kernels, so a change of

@@ -30,7 +30,7 @@ use glint::gpu::render::{KernelChoice, Traversal, render_with};
 use glint::gpu::{Buffer, BufferKind, Context, ContextDesc, GpuError, Kernel, KernelOptions};
 use glint::gpu::{ValidationLog, groups};
 
-use geometry::{Rng, asset_triangles, bunny, random_rays};
+use geometry::{Pcg32, asset_triangles, bunny, random_rays};
 
 /// A hit point's distance from its triangle's plane over the size of the
 /// coordinates ([`off_plane`]): 16 float32 ulps (lavapipe measured 1.9,
@@ -219,7 +219,7 @@ fn hardware_traversal_matches_software_per_ray() {
     let Some((ctx, log)) = rq_context() else {
         return;
     };
-    let mut rng = Rng(0x0a5e);
+    let mut rng = Pcg32::from_state(0x0a5e);
     for (name, mesh) in [
         ("bunny", bunny()),
         ("cornell", asset_triangles("cornell.gltf")),

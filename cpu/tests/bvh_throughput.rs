@@ -21,7 +21,7 @@ use glint_cpu::bvh::Kernel;
 use glint_cpu::{Bvh, Bvh4, Hit, Ray, Triangle};
 use rayon::prelude::*;
 
-use geometry::{Rng, asset_triangles, bunny, diffuse_rays, primary_rays, shared_asset_triangles};
+use geometry::{Pcg32, asset_triangles, bunny, diffuse_rays, primary_rays, shared_asset_triangles};
 
 /// A traversal under test: rays in, a checksum out.
 type Variant<'a> = &'a dyn Fn(&[Ray]) -> usize;
@@ -62,7 +62,7 @@ fn measure(name: &str, input: &[Triangle]) {
     let (lo, hi) = geometry::bounds_of(&tris);
     let primary = primary_rays(lo, hi, 384, 384);
     let primary_hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(&tris, r)).collect();
-    let diffuse = diffuse_rays(&tris, &primary, &primary_hits, &mut Rng(9));
+    let diffuse = diffuse_rays(&tris, &primary, &primary_hits, &mut Pcg32::from_state(9));
     eprintln!(
         "{name}: {} tris; binary: build {:.1} ms, {} nodes, depth {}; \
          wide: collapse {:.1} ms, {} nodes, depth {}; {} primary rays, {} diffuse",

@@ -96,6 +96,27 @@ pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32
     if tnear <= tfar { tnear } else { f32::INFINITY }
 }
 
+/// `a b - c d` to about 1.5 ulp (Kahan's difference of products: the
+/// rounding error of `c d` recovered with one FMA and added back).
+#[inline]
+pub fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
+    let cd = c * d;
+    let err = (-c).mul_add(d, cd);
+    let dop = a.mul_add(b, -cd);
+    dop + err
+}
+
+/// The edge function `e = a b - c d` as the triangle test computed it, or,
+/// where it rounded to exactly 0, recomputed by [`difference_of_products`].
+#[inline]
+pub fn refine_edge(e: f32, a: f32, b: f32, c: f32, d: f32) -> f32 {
+    if e == 0.0 {
+        difference_of_products(a, b, c, d)
+    } else {
+        e
+    }
+}
+
 /// Watertight ray/triangle intersection (Woop, Benthin, Wald 2013, JCGT 2(1),
 /// section 3 and appendix A). Returns (t, u, v) for a hit with 0 < t < tmax,
 /// p = (1 - u - v) p0 + u p1 + v p2; both faces hit.
@@ -107,8 +128,15 @@ pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32
 /// values (IEEE products commute and a - b = -(b - a)). Zero counts as inside
 /// for both, so a ray through an edge hits at least one of its triangles. The
 /// paper's double-precision recomputation when an edge function is exactly 0
-/// only decides which of the two is hit, and is left out so the GPU (no fp64
-/// required) computes the same thing.
+/// is done in f32 instead, so the GPU (no fp64 required) computes the same
+/// thing: an edge function that rounds to exactly 0 is recomputed with
+/// Kahan's difference of products ([`refine_edge`]). Besides deciding which
+/// of two triangles sharing an edge is hit, this keeps a degenerate
+/// (collinear) triangle from reporting a hit where two of its edge
+/// functions round to 0 and the third does not (a false hit 0.42 away from
+/// such a triangle was found by `cpu/tests/bvh.rs`'s random soups). Only
+/// the zero ones are recomputed, so a shared edge is still computed the
+/// same way by both triangles (both see the same zero), exactly negated.
 #[inline]
 pub fn intersect_triangle(r: &PreparedRay, tri: &Triangle, tmax: f32) -> Option<(f32, f32, f32)> {
     let a = Vec3::from(tri.p0) - r.o;
@@ -123,9 +151,14 @@ pub fn intersect_triangle(r: &PreparedRay, tri: &Triangle, tmax: f32) -> Option<
     let cx = c[kx] - sx * c[kz];
     let cy = c[ky] - sy * c[kz];
     // Scaled barycentrics: the 2D edge functions opposite A, B and C.
-    let u = cx * by - cy * bx;
-    let v = ax * cy - ay * cx;
-    let w = bx * ay - by * ax;
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        u = refine_edge(u, cx, by, cy, bx);
+        v = refine_edge(v, ax, cy, ay, cx);
+        w = refine_edge(w, bx, ay, by, ax);
+    }
     if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
         return None;
     }

@@ -369,7 +369,7 @@ pub(super) fn any_hit(nodes: &[Bvh4Node], tris: &[Triangle], ray: &Ray, kernel: 
 mod x86 {
     use std::arch::x86_64::*;
 
-    use super::super::traverse::{PreparedRay, SLAB_PAD};
+    use super::super::traverse::{PreparedRay, SLAB_PAD, refine_edge};
     use super::super::wide::Bvh4Node;
     use super::{Hit, Triangle, closest, occluded};
 
@@ -527,10 +527,33 @@ mod x86 {
             let by = _mm_sub_ps(b[ky], _mm_mul_ps(sy, b[kz]));
             let cx = _mm_sub_ps(c[kx], _mm_mul_ps(sx, c[kz]));
             let cy = _mm_sub_ps(c[ky], _mm_mul_ps(sy, c[kz]));
-            let u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-            let v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-            let w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+            let mut u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+            let mut v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+            let mut w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
             let zero = _mm_setzero_ps();
+            let zeros = _mm_or_ps(
+                _mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)),
+                _mm_cmpeq_ps(w, zero),
+            );
+            if _mm_movemask_ps(zeros) != 0 {
+                // Rare: the scalar test's refinement of edge functions that
+                // round to exactly 0, lane by lane.
+                let lanes = |x: __m128| {
+                    let mut a = [0f32; 4];
+                    _mm_storeu_ps(a.as_mut_ptr(), x);
+                    a
+                };
+                let [ax, ay, bx, by, cx, cy] = [ax, ay, bx, by, cx, cy].map(lanes);
+                let [mut eu, mut ev, mut ew] = [u, v, w].map(lanes);
+                for j in 0..4 {
+                    eu[j] = refine_edge(eu[j], cx[j], by[j], cy[j], bx[j]);
+                    ev[j] = refine_edge(ev[j], ax[j], cy[j], ay[j], cx[j]);
+                    ew[j] = refine_edge(ew[j], bx[j], ay[j], by[j], ax[j]);
+                }
+                u = _mm_loadu_ps(eu.as_ptr());
+                v = _mm_loadu_ps(ev.as_ptr());
+                w = _mm_loadu_ps(ew.as_ptr());
+            }
             let any_neg = _mm_or_ps(
                 _mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)),
                 _mm_cmplt_ps(w, zero),

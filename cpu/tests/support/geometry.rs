@@ -8,52 +8,7 @@ use std::path::Path;
 use glam::Vec3;
 use glint_cpu::{Hit, Ray, Triangle};
 
-/// SplitMix64: a small, seedable generator, so each test has its own stream.
-/// The one generator besides `glint_cpu::sampling::Pcg32` that tests keep:
-/// on PCG32's stream the BVH and ray-offset tests meet two inputs their
-/// current streams never drew, open findings that a stream change should
-/// not decide: `intersect_triangle` reports a hit on a collinear triangle
-/// (p1 the midpoint of p0 and p2) 0.42 away from it when two of its edge
-/// functions round to exactly 0 (the brute-force reference takes it, the
-/// BVH's box rightly culls it; Woop et al.'s fp64 recomputation, left out
-/// for GPU parity, or pbrt-v4's DifferenceOfProducts would reject it), and
-/// a steep ray leaving a 1e5-sized triangle 1e6 from the origin re-hits it
-/// (the triangle test's t error there exceeds the fixed RAY_ERR_TRI margin;
-/// pbrt-v4 bounds it per hit).
-pub struct Rng(pub u64);
-
-impl Rng {
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn f(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f()
-    }
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-    pub fn vec_in(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(
-            self.range(lo.x, hi.x),
-            self.range(lo.y, hi.y),
-            self.range(lo.z, hi.z),
-        )
-    }
-    pub fn unit(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
+pub use glint_cpu::sampling::Pcg32;
 
 pub fn tri(p0: Vec3, p1: Vec3, p2: Vec3) -> Triangle {
     Triangle {
@@ -82,29 +37,29 @@ pub fn bounds_of(tris: &[Triangle]) -> (Vec3, Vec3) {
 /// bounds, most aimed at a random point of a random triangle (so they hit),
 /// some with one or two zero direction components, some unnormalised, some
 /// with a tmax short of the aimed point.
-pub fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
+pub fn random_rays(tris: &[Triangle], count: usize, rng: &mut Pcg32) -> Vec<Ray> {
     let (lo, hi) = bounds_of(tris);
     let size = hi - lo;
     (0..count)
         .map(|_| {
-            let o = if rng.f() < 0.5 {
+            let o = if rng.f32() < 0.5 {
                 rng.vec_in(lo, hi)
             } else {
                 rng.vec_in(lo - size, hi + size)
             };
-            let aimed = rng.f() < 0.7;
+            let aimed = rng.f32() < 0.7;
             let mut d = if aimed {
                 let t = &tris[rng.below(tris.len())];
                 let [a, b, c] = t.vertices();
-                let (mut u, mut v) = (rng.f(), rng.f());
+                let (mut u, mut v) = (rng.f32(), rng.f32());
                 if u + v > 1.0 {
                     (u, v) = (1.0 - u, 1.0 - v);
                 }
                 (a + u * (b - a) + v * (c - a)) - o
             } else {
-                rng.unit()
+                rng.dir()
             };
-            let zeros = rng.f();
+            let zeros = rng.f32();
             if zeros < 0.1 {
                 d[rng.below(3)] = 0.0;
             } else if zeros < 0.15 {
@@ -119,7 +74,7 @@ pub fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
                 d = Vec3::X;
             }
             // Unnormalised directions change the units of t: still exact.
-            d = if rng.f() < 0.3 {
+            d = if rng.f32() < 0.3 {
                 d * rng.range(0.1, 10.0)
             } else {
                 d.normalize()
@@ -140,20 +95,20 @@ pub fn random_rays(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
 /// short tmax. The origin's own triangle may be hit at a tiny t or missed,
 /// depending on rounding: every traversal that shares the triangle test must
 /// decide it the same way.
-pub fn rays_from_surfaces(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec<Ray> {
+pub fn rays_from_surfaces(tris: &[Triangle], count: usize, rng: &mut Pcg32) -> Vec<Ray> {
     let (lo, hi) = bounds_of(tris);
     let size = (hi - lo).length();
     (0..count)
         .map(|_| {
             let t = &tris[rng.below(tris.len())];
             let [a, b, c] = t.vertices();
-            let (mut u, mut v) = (rng.f(), rng.f());
+            let (mut u, mut v) = (rng.f32(), rng.f32());
             if u + v > 1.0 {
                 (u, v) = (1.0 - u, 1.0 - v);
             }
             let o = a + u * (b - a) + v * (c - a);
-            let mut d = rng.unit();
-            if rng.f() < 0.1 {
+            let mut d = rng.dir();
+            if rng.f32() < 0.1 {
                 d[rng.below(3)] = 0.0;
             }
             if d == Vec3::ZERO || !d.is_finite() || !o.is_finite() {
@@ -163,7 +118,7 @@ pub fn rays_from_surfaces(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec
                     tmax: f32::INFINITY,
                 };
             }
-            let tmax = if rng.f() < 0.25 {
+            let tmax = if rng.f32() < 0.25 {
                 rng.range(0.0, 0.2) * size
             } else {
                 f32::INFINITY
@@ -174,14 +129,14 @@ pub fn rays_from_surfaces(tris: &[Triangle], count: usize, rng: &mut Rng) -> Vec
 }
 
 /// Triangles of random shape and orientation, centres uniform in the unit cube.
-pub fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
+pub fn random_soup(rng: &mut Pcg32, n: usize, size: f32) -> Vec<Triangle> {
     (0..n)
         .map(|_| {
             let c = rng.vec_in(Vec3::ZERO, Vec3::ONE);
             tri(
-                c + size * rng.unit(),
-                c + size * rng.unit(),
-                c + size * rng.unit(),
+                c + size * rng.dir(),
+                c + size * rng.dir(),
+                c + size * rng.dir(),
             )
         })
         .collect()
@@ -189,7 +144,7 @@ pub fn random_soup(rng: &mut Rng, n: usize, size: f32) -> Vec<Triangle> {
 
 /// A soup of the awkward cases: exact duplicates, zero-area triangles
 /// (repeated and collinear vertices), axis-aligned triangles sharing planes.
-pub fn nasty_soup(rng: &mut Rng) -> Vec<Triangle> {
+pub fn nasty_soup(rng: &mut Pcg32) -> Vec<Triangle> {
     let mut tris = random_soup(rng, 400, 0.05);
     for i in 0..100 {
         let t = tris[i];
@@ -252,7 +207,7 @@ pub fn diffuse_rays(
     tris: &[Triangle],
     primary: &[Ray],
     hits: &[Option<Hit>],
-    rng: &mut Rng,
+    rng: &mut Pcg32,
 ) -> Vec<Ray> {
     primary
         .iter()
@@ -267,7 +222,7 @@ pub fn diffuse_rays(
             let p = r.o + h.t * r.d;
             let eps = 1e-4 * p.abs().max_element().max(1.0);
             // Cosine-weighted hemisphere (Malley's method) about n.
-            let (u1, u2) = (rng.f(), rng.f());
+            let (u1, u2) = (rng.f32(), rng.f32());
             let (rad, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
             let (s, t) = n.any_orthonormal_pair();
             let d = rad * phi.cos() * s + rad * phi.sin() * t + (1.0 - u1).max(0.0).sqrt() * n;
