@@ -102,13 +102,26 @@ float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
     return tnear <= tfar ? tnear : BVH_INF;
 }
 
-// a b - c d to about 1.5 ulp (Kahan's difference of products), for the edge
-// functions that round to exactly 0 (glint_cpu::bvh::traverse::refine_edge).
+// Dekker's exact product (Veltkamp's split, no FMA: lavapipe's fma() did not
+// match the CPU's fused one): p = fl(a b) and its rounding error e, p + e = a b exactly; then
+// a b - c d from two of them, for the edge functions that round to exactly
+// 0 (glint_cpu::bvh::traverse::difference_of_products, bit for bit).
+vec2 two_product(float a, float b) {
+    precise float p = a * b;
+    precise float ta = 4097.0 * a;
+    precise float ah = ta - (ta - a);
+    precise float al = a - ah;
+    precise float tb = 4097.0 * b;
+    precise float bh = tb - (tb - b);
+    precise float bl = b - bh;
+    precise float e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+    return vec2(p, e);
+}
+
 float difference_of_products(float a, float b, float c, float d) {
-    precise float cd = c * d;
-    precise float err = fma(-c, d, cd);
-    precise float dop = fma(a, b, -cd);
-    precise float r = dop + err;
+    precise vec2 x = two_product(a, b);
+    precise vec2 y = two_product(c, d);
+    precise float r = (x.x - y.x) + (x.y - y.y);
     return r;
 }
 

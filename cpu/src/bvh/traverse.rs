@@ -96,14 +96,33 @@ pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32
     if tnear <= tfar { tnear } else { f32::INFINITY }
 }
 
-/// `a b - c d` to about 1.5 ulp (Kahan's difference of products: the
-/// rounding error of `c d` recovered with one FMA and added back).
+/// Veltkamp's split of `x` into a high half of 12 significant bits and the
+/// exact rest (`hi + lo == x`).
+#[inline]
+fn split(x: f32) -> (f32, f32) {
+    let t = 4097.0 * x;
+    let hi = t - (t - x);
+    (hi, x - hi)
+}
+
+/// Dekker's exact product: `p = fl(a b)` and its rounding error `e`, with
+/// `p + e == a b` exactly (no FMA, so the GPU computes the same bits where
+/// its `fma` differs: lavapipe's did not match the CPU's fused one).
+#[inline]
+fn two_product(a: f32, b: f32) -> (f32, f32) {
+    let p = a * b;
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    (p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+}
+
+/// `a b - c d` from the two exact products: to about an ulp, and exactly
+/// negated when the operands swap (the property the watertight test needs).
 #[inline]
 pub fn difference_of_products(a: f32, b: f32, c: f32, d: f32) -> f32 {
-    let cd = c * d;
-    let err = (-c).mul_add(d, cd);
-    let dop = a.mul_add(b, -cd);
-    dop + err
+    let (p1, e1) = two_product(a, b);
+    let (p2, e2) = two_product(c, d);
+    (p1 - p2) + (e1 - e2)
 }
 
 /// The edge function `e = a b - c d` as the triangle test computed it, or,
@@ -129,8 +148,8 @@ pub fn refine_edge(e: f32, a: f32, b: f32, c: f32, d: f32) -> f32 {
 /// for both, so a ray through an edge hits at least one of its triangles. The
 /// paper's double-precision recomputation when an edge function is exactly 0
 /// is done in f32 instead, so the GPU (no fp64 required) computes the same
-/// thing: an edge function that rounds to exactly 0 is recomputed with
-/// Kahan's difference of products ([`refine_edge`]). Besides deciding which
+/// thing: an edge function that rounds to exactly 0 is recomputed from
+/// Dekker's exact products ([`refine_edge`]). Besides deciding which
 /// of two triangles sharing an edge is hit, this keeps a degenerate
 /// (collinear) triangle from reporting a hit where two of its edge
 /// functions round to 0 and the third does not (a false hit 0.42 away from
