@@ -108,10 +108,10 @@ float intersect_aabb(PreparedRay r, vec3 bmin, vec3 bmax, float tmax) {
 // 0 (glint_cpu::bvh::traverse::difference_of_products, bit for bit).
 vec2 two_product(float a, float b) {
     precise float p = a * b;
-    precise float ta = 4097.0 * a;
+    precise float ta = VELTKAMP_SPLIT * a;
     precise float ah = ta - (ta - a);
     precise float al = a - ah;
-    precise float tb = 4097.0 * b;
+    precise float tb = VELTKAMP_SPLIT * b;
     precise float bh = tb - (tb - b);
     precise float bl = b - bh;
     precise float e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;

@@ -207,6 +207,9 @@ device_constants! { BVH_CONSTANTS;
     BVH4_LEAF_BIT: u32 = 1 << 31;
     /// The first triangle's bits of a leaf reference.
     BVH4_LEAF_FIRST_MASK: u32 = (1 << 27) - 1;
+    /// Veltkamp's splitting factor 2^12 + 1 for f32 (24-bit significands):
+    /// the triangle test's exact products (`bvh::traverse::two_product`).
+    VELTKAMP_SPLIT: f32 = 4097.0;
 }
 
 device_struct! {
@@ -892,11 +895,6 @@ fn constant_groups() -> [&'static [(&'static str, Constant)]; 9] {
         INTEGRATOR_CONSTANTS,
         FEATURE_CONSTANTS,
     ]
-}
-
-/// Every constant the generated GLSL defines.
-pub fn constants() -> impl Iterator<Item = (&'static str, Constant)> {
-    constant_groups().into_iter().flatten().copied()
 }
 
 /// std430 (alignment, size) of a scalar or vector type; `None` for others.

@@ -15,7 +15,7 @@ pub mod render;
 pub mod shaders;
 
 use ash::vk;
-use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
+use glint_cpu::{Film, RenderStats};
 
 pub use buffer::{Buffer, BufferKind};
 pub use context::{Context, ContextDesc, DeviceInfo, Validation, ValidationLog};
@@ -117,16 +117,4 @@ pub struct GpuRender {
     /// How the kernel traced rays (`--traversal`).
     pub traversal: render::Traversal,
     pub features: glint_cpu::features::Features,
-}
-
-/// Render `scene` on the Vulkan device `config` names (or the best one:
-/// discrete, integrated, then CPU). `progress(done, total)` is called after
-/// each batch of samples.
-pub fn render(
-    scene: &Scene,
-    opts: &RenderOptions,
-    config: &render::GpuConfig<'_>,
-    progress: &dyn Fn(u32, u32),
-) -> Result<GpuRender, GpuError> {
-    render::render(scene, opts, config, progress)
 }

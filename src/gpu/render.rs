@@ -24,9 +24,8 @@ use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::accel::Accel;
 use super::buffer::{Buffer, BufferKind};
-use super::context::{Context, ContextDesc};
+use super::context::Context;
 use super::kernel::{Kernel, KernelOptions, groups};
-use super::pipeline_cache::PipelineCache;
 use super::{GpuError, GpuRender};
 
 /// Aim for dispatches of about this long: well under any watchdog, long
@@ -615,65 +614,9 @@ impl Traversal {
     }
 }
 
-/// GPU-only render settings.
-#[derive(Clone, Debug, Default)]
-pub struct GpuConfig<'a> {
-    /// The Vulkan device whose name contains this.
-    pub device: Option<&'a str>,
-    pub kernel: KernelChoice,
-    pub traversal: Traversal,
-    /// A persistent pipeline cache file (none: no cache).
-    pub pipeline_cache: Option<std::path::PathBuf>,
-}
-
-/// The whole GPU render behind `glint render --backend gpu`: context,
-/// upload, sampling, readback. Under `GLINT_VALIDATION` any validation
-/// error fails the render (after the context is destroyed, so leaks count),
-/// which makes every CLI test a validation test too.
-pub fn render(
-    scene: &Scene,
-    opts: &RenderOptions,
-    config: &GpuConfig<'_>,
-    progress: &dyn Fn(u32, u32),
-) -> Result<GpuRender, GpuError> {
-    let start = Instant::now();
-    let desc = ContextDesc {
-        device: config.device,
-        ..Default::default()
-    };
-    let ctx = match config.traversal {
-        Traversal::Software => Context::new(&desc)?,
-        Traversal::Hardware => Context::new_ray_query(&desc)?,
-    };
-    let log = ctx.validation_log();
-    let context_seconds = start.elapsed().as_secs_f64();
-    let r = {
-        let cache = match &config.pipeline_cache {
-            Some(p) => Some(PipelineCache::open(&ctx, p)?),
-            None => None,
-        };
-        let handle = cache
-            .as_ref()
-            .map_or(vk::PipelineCache::null(), |c| c.handle());
-        let kernel = (config.kernel, config.traversal);
-        let mut r = render_with(&ctx, scene, opts, kernel, handle, progress)?;
-        r.setup_seconds += context_seconds;
-        if let Some(c) = &cache {
-            c.save();
-        }
-        r
-    };
-    drop(ctx);
-    if let Some(log) = log {
-        if log.errors() > 0 {
-            return Err(GpuError::Validation(log.messages()));
-        }
-    }
-    Ok(r)
-}
-
-/// [`render`] on an existing context (tests share one validated context
-/// across scenes), with the specialized kernel and no pipeline cache.
+/// A render on an existing context (tests share one validated context
+/// across scenes), with the specialized kernel and no pipeline cache
+/// (`backend::Renderer` is the CLI's, with the options' kernel and cache).
 /// `setup_seconds` covers scene preparation, upload and pipeline creation,
 /// not the context.
 pub fn render_on(

@@ -100,7 +100,7 @@ pub fn intersect_aabb(r: &PreparedRay, bmin: Vec3, bmax: Vec3, tmax: f32) -> f32
 /// exact rest (`hi + lo == x`).
 #[inline]
 fn split(x: f32) -> (f32, f32) {
-    let t = 4097.0 * x;
+    let t = crate::abi::VELTKAMP_SPLIT * x;
     let hi = t - (t - x);
     (hi, x - hi)
 }
