@@ -4,7 +4,7 @@
 
 mod common;
 
-use glint::gpu::render::{SceneBytes, next_batch, render_film};
+use glint::gpu::render::{SceneBytes, render_film};
 
 fn f32s(v: &[f32]) -> &[u8] {
     bytemuck::cast_slice(v)
@@ -137,17 +137,4 @@ fn empty_scene_arrays_and_tiny_images_render() {
     assert_eq!(r.film.sum[0].to_array(), [0.0, 0.0, 0.0]);
     assert_eq!(r.stats.rays, 3);
     assert!(render_film(&ctx, "tests/render_plumbing", &scene, 0, 4, 1, &|_, _| {}).is_err());
-}
-
-#[test]
-fn batch_sizes_follow_measured_time() {
-    // 1 sample took 10 ms: grow at most 4x.
-    assert_eq!(next_batch(1, 0.01, 1000), 4);
-    // 4 samples took 0.1 s: 0.025 s each, 10 fit in 0.25 s.
-    assert_eq!(next_batch(4, 0.1, 1000), 10);
-    // Slow samples: never below one.
-    assert_eq!(next_batch(1, 5.0, 1000), 1);
-    // Never past what remains.
-    assert_eq!(next_batch(64, 0.001, 3), 3);
-    assert_eq!(next_batch(8, 0.0, 100), 32);
 }

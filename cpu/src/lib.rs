@@ -24,6 +24,7 @@ pub mod quadrature;
 pub mod safe_fs;
 pub mod sampling;
 pub mod scene;
+pub mod schedule;
 pub mod sobol;
 pub mod texture;
 

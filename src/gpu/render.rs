@@ -7,11 +7,12 @@
 //! buffer is found by the table's name ([`FilmBuffers::get`]). Push
 //! constants: [`SamplePush`]. One invocation per pixel, local size 8x8.
 //!
-//! Batching: one dispatch renders `sample_count` samples of every pixel. A
-//! dispatch that runs for seconds can trip a desktop driver's watchdog
-//! (TDR, about 2 s on Windows) and starves progress reports, so batches are
-//! sized from the measured time of the previous one to stay near
-//! [`TARGET_BATCH_SECONDS`].
+//! Batching: one dispatch renders `sample_count` samples of every pixel, in
+//! the passes of the render's [`PassPlan`] ([`glint_cpu::schedule`], shared
+//! with the CPU backend). A dispatch that runs for seconds can trip a
+//! desktop driver's watchdog (TDR, about 2 s on Windows) and starves
+//! progress reports, so a plain render's dispatches are sized from the
+//! measured time of the previous one to stay near [`TARGET_BATCH_SECONDS`].
 
 use std::time::Instant;
 
@@ -20,6 +21,7 @@ use glam::Vec3;
 use glint_cpu::abi::{self, Resource};
 use glint_cpu::features::Features;
 use glint_cpu::integrator::{GpuSceneData, gpu_scene_data};
+use glint_cpu::schedule::{Pacing, PassPlan, Schedule};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::accel::Accel;
@@ -158,31 +160,13 @@ impl Drop for Timer<'_> {
     }
 }
 
-/// Next batch size from the last one: scale to the target time, grow at
-/// most 4x per step (the first batch's time includes one-off costs), and
-/// never pass the samples left.
-pub fn next_batch(last_count: u32, last_seconds: f64, remaining: u32) -> u32 {
-    let per_sample = last_seconds / last_count.max(1) as f64;
-    let ideal = if per_sample > 0.0 {
-        (TARGET_BATCH_SECONDS / per_sample).floor()
-    } else {
-        f64::INFINITY
-    };
-    let grown = (last_count as f64 * 4.0).min(ideal).max(1.0);
-    (grown.min(remaining as f64) as u32).max(1).min(remaining)
-}
-
-/// Which samples a render takes: indices `[start, start + spp)` of every
-/// pixel, or, with a time limit, the longest prefix of them whose whole
-/// passes fit the budget (wall-clock seconds of sampling).
+/// Which samples a render takes: indices from `start` of every pixel, in
+/// the passes of `plan` (a controlled render's film is read back after each
+/// pass for the host's decision).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SampleRange {
     pub start: u32,
-    pub spp: u32,
-    pub time_limit: Option<f64>,
-    /// `--target-error` / `--adaptive`: passes of `Control::step` samples,
-    /// the film read back after each for the host's decision.
-    pub control: Option<glint_cpu::adaptive::Control>,
+    pub plan: PassPlan,
 }
 
 /// Render `spp` samples of a `width` x `height` image with kernel
@@ -198,9 +182,7 @@ pub fn render_film(
 ) -> Result<FilmRender, GpuError> {
     let range = SampleRange {
         start: 0,
-        spp,
-        time_limit: None,
-        control: None,
+        plan: PassPlan::whole(spp),
     };
     let kernel = KernelConfig {
         name: kernel_name,
@@ -444,27 +426,6 @@ fn warm_up(kernel: &Kernel<'_>, accum: &Buffer<'_>, rays: &Buffer<'_>) -> Result
     rays.fill_zero()
 }
 
-/// The batch after one of `count` samples that took `wall_batch` seconds,
-/// `left` samples to go: sized from wall time toward
-/// [`TARGET_BATCH_SECONDS`] (what a watchdog and a progress bar see), and
-/// to what fits the `seconds_left` of a time limit (`None`: nothing more
-/// fits).
-fn following_batch(
-    count: u32,
-    wall_batch: f64,
-    left: u32,
-    seconds_left: Option<f64>,
-) -> Option<u32> {
-    let batch = next_batch(count, wall_batch, left.max(1));
-    match seconds_left {
-        None => Some(batch),
-        Some(s) => match glint_cpu::integrator::next_pass(count, wall_batch, s, left) {
-            0 => None,
-            fit => Some(batch.min(fit)),
-        },
-    }
-}
-
 /// [`render_film`] over a [`SampleRange`]; the film's `spp` is the number
 /// of samples taken.
 pub fn render_film_range(
@@ -476,7 +437,7 @@ pub fn render_film_range(
     range: SampleRange,
     progress: &dyn Fn(u32, u32),
 ) -> Result<FilmRender, GpuError> {
-    let spp = range.spp;
+    let spp = range.plan.spp;
     if width == 0 || height == 0 {
         return Err(GpuError::Invalid(format!(
             "image size {width}x{height}: both must be at least 1"
@@ -506,47 +467,41 @@ pub fn render_film_range(
     let timer = Timer::new(ctx)?;
     let setup_seconds = setup_start.elapsed().as_secs_f64();
 
-    let mut done = 0u32;
     let batch_size = scene.variance_batch.max(1);
     let mut mask = vec![1u32; pixels as usize];
     let mut counts = Vec::new();
-    let mut batch = range.control.map_or(1, |c| c.step);
     let mut batches = Vec::new();
     let mut render_seconds = 0.0;
     let wall = Instant::now();
-    while done < spp {
-        let count = batch.min(spp - done);
+    let mut schedule = Schedule::new(range.plan, Pacing::Target(TARGET_BATCH_SECONDS));
+    while let Some(count) = schedule.next() {
+        let done = schedule.done();
         let push = SamplePush {
             sample_start: range.start.wrapping_add(done),
             sample_count: count,
         };
         let (wall_batch, seconds) = timed_dispatch(ctx, &kernel, timer.as_ref(), &push, grid)?;
         render_seconds += seconds;
-        done += count;
         batches.push(count);
-        progress(done, spp);
-        if let Some(c) = &range.control {
-            let mut film = film_of(&accum.read()?, width, height, done - count, batch_size);
+        progress(done + count, spp);
+        let mut more = true;
+        if let Some(c) = schedule.control() {
+            let mut film = film_of(&accum.read()?, width, height, done, batch_size);
             film.counts = std::mem::take(&mut counts);
             if c.adaptive.is_some() {
                 glint_cpu::adaptive::count_pass(&mut film, &mask, count);
             } else {
-                film.spp = done;
+                film.spp = done + count;
             }
-            let more = c.decide(&film, &mut mask);
+            more = c.decide(&film, &mut mask);
             counts = film.counts;
-            if !more {
-                break;
+            if more {
+                active.write(&mask)?;
             }
-            active.write(&mask)?;
-            continue;
         }
-        let left = range.time_limit.map(|l| l - wall.elapsed().as_secs_f64());
-        match following_batch(count, wall_batch, spp - done, left) {
-            Some(b) => batch = b,
-            None => break,
-        }
+        schedule.passed(wall_batch, more);
     }
+    let done = schedule.done();
     if timer.is_none() {
         render_seconds = wall.elapsed().as_secs_f64();
     }
@@ -681,9 +636,7 @@ pub fn render_with(
     let prepare_seconds = start.elapsed().as_secs_f64();
     let range = SampleRange {
         start: opts.sample_start,
-        spp: opts.spp,
-        time_limit: opts.time_limit,
-        control: glint_cpu::adaptive::Control::of(opts),
+        plan: PassPlan::of(opts),
     };
     let spec = [features.0];
     let cfg = KernelConfig {

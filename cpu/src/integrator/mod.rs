@@ -71,6 +71,7 @@ use crate::frame::Frame;
 use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
+use crate::schedule::{Pacing, PassPlan, Schedule};
 use crate::sobol::PathSampler;
 use crate::texture::{MaterialTextures, clearcoat_normal, normal_mapped, textured_bsdf};
 
@@ -259,21 +260,6 @@ pub fn precision_warning(scene: &Scene) -> Option<String> {
 /// batch_sq], rays traced.
 type TileResult = (u32, Vec<[Vec3; 4]>, u64);
 
-/// Samples per pass for a time-limited render: the passes left in the
-/// budget at the last pass's rate, growing at most 4x per pass (the first
-/// pass pays cache warm-up), never past `remaining`. 0 when the next whole
-/// pass of one sample would not fit.
-pub fn next_pass(last_count: u32, last_seconds: f64, left_seconds: f64, remaining: u32) -> u32 {
-    let per_sample = last_seconds / last_count.max(1) as f64;
-    let fit = if per_sample > 0.0 {
-        (left_seconds / per_sample).floor()
-    } else {
-        f64::INFINITY
-    };
-    let n = fit.min(last_count as f64 * 4.0).min(remaining as f64);
-    if n >= 1.0 { n as u32 } else { 0 }
-}
-
 /// Everything one render needs, prepared once.
 pub struct PathTracer<'a> {
     pub scene: &'a Scene,
@@ -291,12 +277,10 @@ pub struct PathTracer<'a> {
     pub sampler: SamplerKind,
     /// First sample index (`RenderOptions::sample_start`).
     pub sample_start: u32,
-    /// Sampling budget in seconds (`RenderOptions::time_limit`).
-    pub time_limit: Option<f64>,
     /// Samples per variance batch (`RenderOptions::batch`).
     pub batch: u32,
-    /// `--target-error` / `--adaptive` (None: a plain render).
-    pub control: Option<crate::adaptive::Control>,
+    /// The passes: a time limit, `--target-error` / `--adaptive`.
+    pub plan: PassPlan,
     /// Whether traversal runs the alpha test (`Scene::textures.has_masks()`,
     /// asked once here, not per ray).
     pub masks: bool,
@@ -377,9 +361,8 @@ impl<'a> PathTracer<'a> {
             mis: opts.mis,
             sampler: opts.sampler,
             sample_start: opts.sample_start,
-            time_limit: opts.time_limit,
             batch: opts.batch(),
-            control: crate::adaptive::Control::of(opts),
+            plan: PassPlan::of(opts),
             masks: scene.textures.has_masks(),
         })
     }
@@ -635,73 +618,46 @@ impl<'a> PathTracer<'a> {
         radiance
     }
 
-    /// Render every pixel with sample indices `[sample_start, sample_start
-    /// + spp)`, in passes (one pass without a time limit; with one, passes
-    /// sized to the budget, stopping at the last whole pass that fits).
-    /// `progress(done, total)` counts finished tiles over all `spp`.
+    /// Render every pixel with sample indices from `sample_start`, `spp` of
+    /// them, in the passes of the render's [`PassPlan`] (one pass for a
+    /// plain render; see [`crate::schedule`]); a controlled render samples
+    /// only the pixels its control keeps active and keeps per-pixel counts.
+    /// `progress(done, total)` counts finished tiles over all `spp` (for a
+    /// controlled render, samples over the cap).
     pub fn render(&self, spp: u32, progress: &(dyn Fn(u32, u32) + Sync)) -> (Film, RenderStats) {
-        if let Some(c) = self.control {
-            return self.render_controlled(&c, progress);
-        }
         let start = Instant::now();
+        let plan = PassPlan { spp, ..self.plan };
         let (w, h) = (self.camera.width, self.camera.height);
         let tiles = w.div_ceil(TILE) * h.div_ceil(TILE);
         let mut film = Film::with_batch(w, h, self.batch);
-        let mut rays = 0u64;
-        let mut count = if self.time_limit.is_some() { 1 } else { spp };
-        while film.spp < spp && count > 0 {
-            let pass_start = Instant::now();
-            let base = film.spp * tiles;
-            let total = spp.saturating_mul(tiles);
-            rays += self.render_pass(&mut film, count, None, &|done, _| {
-                progress(base + done * count, total)
-            });
-            let Some(limit) = self.time_limit else {
-                continue;
-            };
-            let left = limit - start.elapsed().as_secs_f64();
-            count = next_pass(
-                count,
-                pass_start.elapsed().as_secs_f64(),
-                left,
-                spp - film.spp,
-            );
-        }
-        let stats = RenderStats {
-            rays,
-            render_seconds: start.elapsed().as_secs_f64(),
-        };
-        (film, stats)
-    }
-
-    /// Passes of `c.step` samples until `c` stops the render
-    /// ([`crate::adaptive`]); adaptive renders sample only the pixels
-    /// still active and keep per-pixel counts.
-    fn render_controlled(
-        &self,
-        c: &crate::adaptive::Control,
-        progress: &(dyn Fn(u32, u32) + Sync),
-    ) -> (Film, RenderStats) {
-        let start = Instant::now();
-        let (w, h) = (self.camera.width, self.camera.height);
-        let mut film = Film::with_batch(w, h, self.batch);
         let mut active = vec![1u32; film.sum.len()];
         let mut rays = 0u64;
-        loop {
-            let count = c.next_count(&film);
-            if count == 0 {
-                break;
-            }
-            let mask = c.adaptive.is_some().then_some(&active[..]);
-            rays += self.render_pass(&mut film, count, mask, &|_, _| {});
-            if c.adaptive.is_some() {
+        let mut schedule = Schedule::new(plan, Pacing::Whole);
+        while let Some(count) = schedule.next() {
+            let pass_start = Instant::now();
+            let controlled = schedule.control().is_some();
+            let adaptive = schedule.control().is_some_and(|c| c.adaptive.is_some());
+            let mask = adaptive.then_some(&active[..]);
+            let base = film.spp * tiles;
+            let total = spp.saturating_mul(tiles);
+            let tile_progress = |done: u32, _| {
+                if !controlled {
+                    progress(base + done * count, total)
+                }
+            };
+            rays += self.render_pass(&mut film, count, mask, &tile_progress);
+            if adaptive {
                 film.spp -= count;
                 crate::adaptive::count_pass(&mut film, &active, count);
             }
-            progress(film.spp, c.cap);
-            if !c.decide(&film, &mut active) {
-                break;
-            }
+            let more = match schedule.control() {
+                Some(c) => {
+                    progress(film.spp, c.cap);
+                    c.decide(&film, &mut active)
+                }
+                None => true,
+            };
+            schedule.passed(pass_start.elapsed().as_secs_f64(), more);
         }
         let stats = RenderStats {
             rays,
