@@ -3,8 +3,11 @@
 //! for the binary BVH and for the 4-wide BVH with every box-test kernel the
 //! CPU runs (scalar, SSE2, AVX), which must agree with the binary one.
 
+#[path = "support/binary.rs"]
+mod binary;
 #[path = "support/geometry.rs"]
 mod geometry;
+use binary::BinaryTraversal;
 
 use std::collections::HashMap;
 use std::time::Instant;

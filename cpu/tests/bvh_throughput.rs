@@ -12,8 +12,11 @@
 //! asserted: every traversal gives the binary BVH's hits, and one thread and
 //! rayon give identical results.
 
+#[path = "support/binary.rs"]
+mod binary;
 #[path = "support/geometry.rs"]
 mod geometry;
+use binary::BinaryTraversal;
 
 use std::time::Instant;
 

@@ -10,7 +10,8 @@
 //! - [`Bvh4`]: the binary tree collapsed into 4-wide nodes ([`Bvh4Node`],
 //!   `wide.rs`), traversed with one SIMD box test per node (`wide_traverse.rs`).
 //!   Renders use it on both backends; the binary tree stays the reference the
-//!   wide one is tested against.
+//!   wide one is tested against (its traversal lives with the tests, in
+//!   `cpu/tests/support/binary.rs`: no render uses it).
 //!
 //! `shaders/bvh.glsl` mirrors this module function for function with the same
 //! names (`prepare_ray`, `intersect_aabb`, `intersect_triangle`,
@@ -80,38 +81,6 @@ impl Bvh {
     pub fn build(tris: &[Triangle]) -> (Bvh, Vec<u32>) {
         let (nodes, order) = build::build(tris);
         (Bvh { nodes }, order)
-    }
-
-    /// Closest hit in (0, ray.tmax), watertight (Woop, Benthin, Wald 2013).
-    /// `tris` must be in the order [`Bvh::build`] returned.
-    pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        traverse::intersect(&self.nodes, tris, ray, |_, _, _| true)
-    }
-
-    /// Any hit in (0, ray.tmax).
-    pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
-        traverse::occluded(&self.nodes, tris, ray, |_, _, _| true)
-    }
-
-    /// [`Bvh::intersect`] skipping hits where `present(tri, u, v)` is false
-    /// (alpha masks).
-    pub fn intersect_masked(
-        &self,
-        tris: &[Triangle],
-        ray: &Ray,
-        present: impl Fn(u32, f32, f32) -> bool,
-    ) -> Option<Hit> {
-        traverse::intersect(&self.nodes, tris, ray, present)
-    }
-
-    /// [`Bvh::occluded`] skipping hits where `present(tri, u, v)` is false.
-    pub fn occluded_masked(
-        &self,
-        tris: &[Triangle],
-        ray: &Ray,
-        present: impl Fn(u32, f32, f32) -> bool,
-    ) -> bool {
-        traverse::occluded(&self.nodes, tris, ray, present)
     }
 
     /// Depth of the deepest node (root = 0); 0 for an empty hierarchy.
