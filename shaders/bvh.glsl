@@ -125,6 +125,20 @@ float difference_of_products(float a, float b, float c, float d) {
     return r;
 }
 
+// pbrt-v4's conservative bound on the triangle test's t error (deltaT),
+// traverse.rs's t_error: the same operations in the same order.
+float t_error(vec3 x, vec3 y, vec3 z, vec3 e, float det) {
+    precise float max_x = max(max(abs(x.x), abs(x.y)), abs(x.z));
+    precise float max_y = max(max(abs(y.x), abs(y.y)), abs(y.z));
+    precise float max_z = max(max(abs(z.x), abs(z.y)), abs(z.z));
+    precise float max_e = max(max(abs(e.x), abs(e.y)), abs(e.z));
+    precise float delta_x = TRI_GAMMA5 * (max_x + max_z);
+    precise float delta_y = TRI_GAMMA5 * (max_y + max_z);
+    precise float delta_e = 2.0 * (TRI_GAMMA2 * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    precise float sum = TRI_GAMMA3 * max_e * max_z + delta_e * max_z + delta_x * max_e;
+    return 3.0 * sum / abs(det);
+}
+
 // Watertight ray/triangle intersection (Woop, Benthin, Wald 2013, JCGT 2(1)).
 // A hit with 0 < t < tmax writes t and the barycentrics u, v; both faces hit.
 // `precise` forbids FMA contraction: the two triangles sharing an edge must
@@ -173,8 +187,11 @@ bool intersect_triangle(PreparedRay r, Triangle tri, float tmax, out float t, ou
     precise float bz = r.shear.z * b[r.kz];
     precise float cz = r.shear.z * c[r.kz];
     precise float tt = (eu * az + ev * bz + ew * cz) / det;
-    // Also rejects NaN.
+    // Also rejects NaN; a hit within t's own error bound is not reported.
     if (!(tt > 0.0 && tt < tmax)) {
+        return false;
+    }
+    if (!(tt > t_error(vec3(ax, bx, cx), vec3(ay, by, cy), vec3(az, bz, cz), vec3(eu, ev, ew), det))) {
         return false;
     }
     t = tt;

@@ -548,11 +548,28 @@ device_constants! { INTEGRATOR_CONSTANTS;
     RAY_ERR_GAMMA: f32 = 4.172_326_8e-7;
     /// Relative margin for the watertight triangle test's own rounding: a ray
     /// leaving a triangle at a grazing angle meets its plane again at a t
-    /// whose rounding error is a few tens of ulps of the triangle's size
-    /// (pbrt-v4 rejects such hits with a conservative t > deltaT; glint's
-    /// triangle test has no such margin, so the offset carries it). 64 unit
+    /// whose rounding error is a few tens of ulps of the triangle's size.
+    /// The test also rejects t below its own conservative error bound
+    /// (pbrt-v4's deltaT), which covers steep rays far from the origin
+    /// where this fixed margin did not (a 1e5-sized triangle 1e6 away was
+    /// re-hit at t = 0.49); the margin keeps what it always covered. 64 unit
     /// roundoffs.
     RAY_ERR_TRI: f32 = 3.814_697_3e-6;
+    /// pbrt-v4's gamma(2), gamma(3) and gamma(5): the triangle test's
+    /// conservative bound on its own t error (`bvh::traverse::t_error`),
+    /// under which a hit is not reported (pbrt-v4 sec. 6.8.4).
+    TRI_GAMMA2: f32 = {
+        let eps = f32::EPSILON * 0.5;
+        2.0 * eps / (1.0 - 2.0 * eps)
+    };
+    TRI_GAMMA3: f32 = {
+        let eps = f32::EPSILON * 0.5;
+        3.0 * eps / (1.0 - 3.0 * eps)
+    };
+    TRI_GAMMA5: f32 = {
+        let eps = f32::EPSILON * 0.5;
+        5.0 * eps / (1.0 - 5.0 * eps)
+    };
     /// Shadow rays stop this fraction of their length short of the light
     /// point (pbrt-v4's `ShadowEpsilon`).
     SHADOW_EPS: f32 = 1e-4;

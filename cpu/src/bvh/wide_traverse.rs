@@ -578,7 +578,12 @@ mod x86 {
                 _mm_or_ps(_mm_and_ps(any_neg, any_pos), _mm_cmpeq_ps(det, zero)),
                 _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(tmax))),
             );
-            let mask = _mm_movemask_ps(ok) as u32 & ((1u32 << tris.len()) - 1);
+            let mut mask = _mm_movemask_ps(ok) as u32 & ((1u32 << tris.len()) - 1);
+            if mask != 0 {
+                // Only where some lane hits: t above its own error bound.
+                let bound = t_error4([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], det);
+                mask &= _mm_movemask_ps(_mm_cmpgt_ps(t, bound)) as u32;
+            }
             let mut out = [[0f32; 4]; 3];
             if mask != 0 {
                 _mm_storeu_ps(out[0].as_mut_ptr(), t);
@@ -586,6 +591,47 @@ mod x86 {
                 _mm_storeu_ps(out[2].as_mut_ptr(), _mm_div_ps(w, det));
             }
             (mask, out)
+        }
+    }
+
+    /// [`t_error`](super::super::traverse::t_error) lane by lane, the same
+    /// operations in the same order (max of absolute values, no FMA).
+    #[inline(always)]
+    fn t_error4(
+        x: [__m128; 3],
+        y: [__m128; 3],
+        z: [__m128; 3],
+        e: [__m128; 3],
+        det: __m128,
+    ) -> __m128 {
+        use crate::abi::{TRI_GAMMA2, TRI_GAMMA3, TRI_GAMMA5};
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
+            let max3 = |v: [__m128; 3]| _mm_max_ps(_mm_max_ps(abs(v[0]), abs(v[1])), abs(v[2]));
+            let (max_x, max_y, max_z, max_e) = (max3(x), max3(y), max3(z), max3(e));
+            let g = |k: f32| _mm_set1_ps(k);
+            let delta_x = _mm_mul_ps(g(TRI_GAMMA5), _mm_add_ps(max_x, max_z));
+            let delta_y = _mm_mul_ps(g(TRI_GAMMA5), _mm_add_ps(max_y, max_z));
+            let delta_e = _mm_mul_ps(
+                g(2.0),
+                _mm_add_ps(
+                    _mm_add_ps(
+                        _mm_mul_ps(_mm_mul_ps(g(TRI_GAMMA2), max_x), max_y),
+                        _mm_mul_ps(delta_y, max_x),
+                    ),
+                    _mm_mul_ps(delta_x, max_y),
+                ),
+            );
+            let sum = _mm_add_ps(
+                _mm_add_ps(
+                    _mm_mul_ps(_mm_mul_ps(g(TRI_GAMMA3), max_e), max_z),
+                    _mm_mul_ps(delta_e, max_z),
+                ),
+                _mm_mul_ps(delta_x, max_e),
+            );
+            _mm_div_ps(_mm_mul_ps(g(3.0), sum), abs(det))
         }
     }
 
