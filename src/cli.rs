@@ -509,6 +509,17 @@ pub struct CompareArgs {
         allow_negative_numbers = true
     )]
     pub alpha: f64,
+
+    /// Further render options for the GPU side only, laid over the shared
+    /// ones, e.g. '--mis balance' (not --backend, --spp, --target-error or
+    /// --adaptive): compare two methods, or check a change is seen.
+    #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
+    pub gpu_options: Option<String>,
+
+    /// As --gpu-options, for the CPU side (e.g. '--max-depth 2' must differ
+    /// from the default on a scene with indirect light).
+    #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
+    pub cpu_options: Option<String>,
 }
 
 #[derive(clap::Args, Debug)]

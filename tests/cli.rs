@@ -434,6 +434,33 @@ fn gpu_backend_renders_and_compare_finds_the_backends_agree() {
     // Nothing written.
     assert_eq!(files_in(&dir), ["scene.bin", "scene.gltf"]);
 
+    // Per-side options: another unbiased method agrees; a biased one (the
+    // CPU without the floor's lighting, emitters only) is found, exit 1.
+    let compare = |side: &str, extra: &str| {
+        glint()
+            .arg("compare")
+            .arg(&scene)
+            .args(["--spp", "8", "--width", "24", side, extra])
+            .output()
+            .unwrap()
+    };
+    let out = compare("--cpu-options", "--mis balance");
+    assert!(
+        out.status.success(),
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let out = compare("--cpu-options", "--max-depth 1");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{stdout}{stderr}");
+    assert!(stdout.lines().next().unwrap().contains("FAIL"), "{stdout}");
+    assert!(stderr.contains("the backends differ"), "{stderr}");
+    // What is not per side: one line.
+    assert_one_line_error(&compare("--gpu-options", "--backend cpu"), "--gpu-options");
+    assert_one_line_error(&compare("--cpu-options", "--max-depth 0"), "--cpu-options");
+
     // The GPU backend's stats name the device and driver.
     let (png, stats) = (dir.join("g.png"), dir.join("g.json"));
     let out = glint()

@@ -1,16 +1,66 @@
 //! `glint compare`: both backends on one scene, the statistical test of
-//! glint_cpu::compare, one line of verdict on stdout.
+//! glint_cpu::compare, one line of verdict on stdout. `--gpu-options` and
+//! `--cpu-options` lay further render options over one side's: two methods
+//! compared (`--cpu-options '--mis balance'` must agree), or a change the
+//! test must see (`--cpu-options '--max-depth 2'` must differ).
 
 use anyhow::{Result, anyhow, bail};
 use glint::backend::Backend;
-use glint::cpu::RenderOptions;
+use glint::cpu::{RenderOptions, Scene};
 
-use super::{check_params, load_scene, render_on};
-use crate::cli::CompareArgs;
+use super::converge::overlay;
+use super::{
+    check_opts, check_params, load, load_scene, prepare_options, render_on, render_options, spp_of,
+};
+use crate::cli::{CompareArgs, RenderOpts};
 
 /// The CPU's seed in `glint compare`: any value other than the GPU's.
 fn cpu_seed(seed: u64) -> u64 {
     seed ^ 0x9e37_79b9_7f4a_7c15
+}
+
+/// One side of the comparison: its render options (the shared ones with
+/// that side's `--gpu-options`/`--cpu-options` laid over them), its scene
+/// (prepared again only where those options change it) and its
+/// `RenderOptions`.
+struct Side {
+    ro: RenderOpts,
+    scene: Option<Scene>,
+    opts: RenderOptions,
+}
+
+fn side(
+    flag: &str,
+    extra: Option<&str>,
+    args: &CompareArgs,
+    shared: &(Scene, RenderOptions),
+) -> Result<Side> {
+    let path = &args.scene.scene;
+    let Some(extra) = extra else {
+        return Ok(Side {
+            ro: args.scene.opts.clone(),
+            scene: None,
+            opts: shared.1.clone(),
+        });
+    };
+    let v = overlay(&args.scene.opts, extra).map_err(|e| anyhow!("{flag} '{extra}': {e}"))?;
+    if v.backend != Backend::Auto
+        || v.control.target_error.is_some()
+        || v.control.adaptive.is_some()
+    {
+        bail!("{flag} '{extra}': the backend, --target-error and --adaptive are not per side");
+    }
+    let spp = spp_of(args.scene.spp, &v.opts);
+    check_opts(spp, &v.opts).map_err(|e| anyhow!("{flag} '{extra}': {e}"))?;
+    let scene = (prepare_options(&v.opts) != prepare_options(&args.scene.opts))
+        .then(|| load(path, &v.opts))
+        .transpose()?;
+    let opts = render_options(scene.as_ref().unwrap_or(&shared.0), path, spp, &v.opts)?;
+    Ok(Side {
+        ro: v.opts,
+        scene,
+        opts,
+    })
 }
 
 pub fn run(args: &CompareArgs) -> Result<()> {
@@ -21,17 +71,30 @@ pub fn run(args: &CompareArgs) -> Result<()> {
     if args.scene.spp.is_some_and(|n| n < 2) {
         bail!("--spp must be at least 2 to estimate the variance");
     }
-    let (scene, opts) = load_scene(&args.scene)?;
+    let shared = load_scene(&args.scene)?;
     let path = &args.scene.scene;
-    let ro = &args.scene.opts;
+    let g = side("--gpu-options", args.gpu_options.as_deref(), args, &shared)?;
+    let c = side("--cpu-options", args.cpu_options.as_deref(), args, &shared)?;
+    if (g.opts.width, g.opts.height) != (c.opts.width, c.opts.height) {
+        bail!(
+            "the sides' images differ in size ({}x{} and {}x{})",
+            g.opts.width,
+            g.opts.height,
+            c.opts.width,
+            c.opts.height
+        );
+    }
     // Independent seeds: with the same seed both backends trace the same
     // paths (one random stream), and the Welch test assumes independence.
-    let gpu = render_on(Backend::Gpu, path, ro, &scene, &opts)?;
+    let gpu_scene = g.scene.as_ref().unwrap_or(&shared.0);
+    let gpu = render_on(Backend::Gpu, path, &g.ro, gpu_scene, &g.opts)?;
     let cpu_opts = RenderOptions {
-        seed: cpu_seed(opts.seed),
-        ..opts.clone()
+        seed: cpu_seed(c.opts.seed),
+        ..c.opts.clone()
     };
-    let cpu = render_on(Backend::Cpu, path, ro, &scene, &cpu_opts)?;
+    let cpu_scene = c.scene.as_ref().unwrap_or(&shared.0);
+    let cpu = render_on(Backend::Cpu, path, &c.ro, cpu_scene, &cpu_opts)?;
+    let opts = &g.opts;
     let report =
         glint::cpu::compare::compare_films_masked(&gpu.film, &cpu.film, &|_, _| true, args.alpha)
             .map_err(|e| anyhow!("{}: {e}", path.display()))?;

@@ -47,17 +47,7 @@ pub fn parse_variant(spec: &str, shared: &RenderOpts) -> Result<Variant> {
     {
         bail!("--variant '{spec}': the name must be letters, digits and - _ . + (it names files)");
     }
-    let mut argv = shared.to_args()?;
-    argv.extend(options.split_whitespace().map(str::to_string));
-    let v = VariantCli::try_parse_from(&argv).map_err(|e| {
-        let text = e.to_string();
-        let first = text
-            .lines()
-            .next()
-            .unwrap_or("")
-            .trim_start_matches("error: ");
-        anyhow!("--variant '{spec}': {first}")
-    })?;
+    let v = overlay(shared, options).map_err(|e| anyhow!("--variant '{spec}': {e}"))?;
     if v.opts.time_limit.is_some() {
         bail!("--variant '{spec}': --time-limit is converge's own (use --time)");
     }
@@ -68,6 +58,22 @@ pub fn parse_variant(spec: &str, shared: &RenderOpts) -> Result<Variant> {
         backend: v.backend,
         opts: v.opts,
         control: v.control,
+    })
+}
+
+/// `options` (render's, and `--backend`, `--target-error`, `--adaptive`)
+/// laid over `shared`; an error is clap's first line.
+pub fn overlay(shared: &RenderOpts, options: &str) -> Result<VariantCli> {
+    let mut argv = shared.to_args()?;
+    argv.extend(options.split_whitespace().map(str::to_string));
+    VariantCli::try_parse_from(&argv).map_err(|e| {
+        let text = e.to_string();
+        let first = text
+            .lines()
+            .next()
+            .unwrap_or("")
+            .trim_start_matches("error: ");
+        anyhow!("{first}")
     })
 }
 
