@@ -63,8 +63,8 @@ struct Built {
 
 fn build(input: &[Triangle]) -> Built {
     let (bin, order) = Bvh::build(input);
-    let wide = Bvh4::collapse(&bin);
-    let tris = order.iter().map(|&i| input[i as usize]).collect();
+    let tris: Vec<Triangle> = order.iter().map(|&i| input[i as usize]).collect();
+    let wide = Bvh4::collapse(&bin, &tris);
     Built { bin, wide, tris }
 }
 

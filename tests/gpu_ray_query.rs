@@ -225,8 +225,8 @@ fn hardware_traversal_matches_software_per_ray() {
         ("cornell", asset_triangles("cornell.gltf")),
     ] {
         let (bin, order) = Bvh::build(&mesh);
-        let wide = Bvh4::collapse(&bin);
         let tris: Vec<Triangle> = order.iter().map(|&i| mesh[i as usize]).collect();
+        let wide = Bvh4::collapse(&bin, &tris);
         let rays = random_rays(&tris, 100_000, &mut rng);
         for masked in [false, true] {
             let hw = run_hardware(&ctx, &tris, &rays, masked);

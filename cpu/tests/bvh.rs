@@ -136,8 +136,8 @@ struct Traversals {
 }
 
 impl Traversals {
-    fn new(bin: Bvh) -> Self {
-        let wide = Bvh4::collapse(&bin);
+    fn new(bin: Bvh, tris: &[Triangle]) -> Self {
+        let wide = Bvh4::collapse(&bin, tris);
         Traversals {
             bin,
             wide,
@@ -246,7 +246,70 @@ fn check_wide_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle]) -> usize {
     let bin_depth = bin.depth();
     assert!(depth <= MAX_WIDE_DEPTH && depth <= bin_depth.saturating_sub(1) / 2);
     assert_eq!(wide.depth(), depth);
+    check_wide8_structure(wide, bin, tris, &bin_leaves);
     depth
+}
+
+/// The 8-wide tree of `wide`: every used slot inside its parent, empty
+/// slots last with the empty box, every leaf a block holding exactly its
+/// binary leaf's triangles (lanes past the count repeating the last), the
+/// leaves those of the binary tree, within the depth bound.
+fn check_wide8_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle], bin_leaves: &[(usize, usize)]) {
+    use glint_cpu::bvh::WIDTH8;
+    let nodes = &wide.nodes8;
+    let mut leaves = Vec::new();
+    let mut depth = 0;
+    let root = (
+        Vec3::from(bin.nodes[0].aabb_min),
+        Vec3::from(bin.nodes[0].aabb_max),
+    );
+    let mut stack = vec![(0usize, 0usize, root.0, root.1)];
+    while let Some((i, d, plo, phi)) = stack.pop() {
+        depth = depth.max(d);
+        let node = &nodes[i];
+        let used = node.child_count();
+        assert!(
+            used >= 2 || (nodes.len() == 1 && used == 1),
+            "8-wide node {i}: {used} children"
+        );
+        for s in 0..WIDTH8 {
+            let lo = Vec3::new(node.lo_x[s], node.lo_y[s], node.lo_z[s]);
+            let hi = Vec3::new(node.hi_x[s], node.hi_y[s], node.hi_z[s]);
+            let c = node.child[s];
+            if s >= used {
+                assert_eq!(c, SLOT_EMPTY);
+                assert!(lo == Vec3::INFINITY && hi == Vec3::NEG_INFINITY);
+                continue;
+            }
+            assert!(lo.cmpge(plo).all() && hi.cmple(phi).all() && lo.cmple(hi).all());
+            if is_leaf_ref(c) {
+                let (b, count) = leaf_range(c);
+                let block = &wide.blocks[b];
+                let first = block.first as usize;
+                assert_eq!(block.count as usize, count);
+                for lane in 0..4 {
+                    let t = &tris[first + lane.min(count - 1)];
+                    for (k, p) in [t.p0, t.p1, t.p2].iter().enumerate() {
+                        for (axis, c) in p.iter().enumerate() {
+                            assert_eq!(block.v[k][axis][lane].to_bits(), c.to_bits());
+                        }
+                    }
+                }
+                leaves.push((first, count));
+            } else {
+                assert!((c as usize) < nodes.len() && c as usize > i);
+                stack.push((c as usize, d + 1, lo, hi));
+            }
+        }
+    }
+    leaves.sort();
+    assert_eq!(
+        leaves, bin_leaves,
+        "the 8-wide leaves are not the binary leaves"
+    );
+    assert_eq!(leaves.len(), wide.blocks.len());
+    assert!(depth <= MAX_WIDE_DEPTH);
+    assert_eq!(wide.depth8(), depth);
 }
 
 /// Every traversal of `t` against the binary one on `ray`: the same closest
@@ -288,7 +351,7 @@ struct Diff {
 fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
     let (bvh, tris, order) = build(input);
     check_structure(&bvh, &tris, &order);
-    let all = Traversals::new(bvh.clone());
+    let all = Traversals::new(bvh.clone(), &tris);
     check_wide_structure(&all.wide, &bvh, &tris);
     let results: Vec<Diff> = rays
         .par_chunks(256)
@@ -385,7 +448,7 @@ fn empty_scene_misses() {
     };
     assert_eq!(bvh.intersect(&[], &ray), None);
     assert!(!bvh.occluded(&[], &ray));
-    let all = Traversals::new(bvh);
+    let all = Traversals::new(bvh, &[]);
     assert!(all.wide.nodes.is_empty() && all.wide.depth() == 0);
     for (which, hit, occ) in all.each(&[], &ray) {
         assert!(hit.is_none() && !occ, "{which}");
@@ -403,7 +466,7 @@ fn single_triangle() {
     assert_eq!(order, vec![0]);
     assert_eq!(bvh.nodes.len(), 1);
     check_structure(&bvh, &tris, &order);
-    let all = Traversals::new(bvh.clone());
+    let all = Traversals::new(bvh.clone(), &tris);
     // A lone leaf root becomes a wide root with one child.
     assert_eq!(all.wide.nodes.len(), 1);
     check_wide_structure(&all.wide, &bvh, &tris);
@@ -595,7 +658,7 @@ fn degenerate_inputs_build_and_traverse() {
     let same = vec![t; 5000];
     let (bvh, tris, order) = build(&same);
     check_structure(&bvh, &tris, &order);
-    let all = Traversals::new(bvh.clone());
+    let all = Traversals::new(bvh.clone(), &tris);
     check_wide_structure(&all.wide, &bvh, &tris);
     let ray = Ray {
         o: Vec3::new(0.2, 0.2, -1.0),
@@ -635,7 +698,7 @@ fn degenerate_inputs_build_and_traverse() {
     }
     let (bvh, tris, order) = build(&soup);
     check_structure(&bvh, &tris, &order);
-    let all = Traversals::new(bvh.clone());
+    let all = Traversals::new(bvh.clone(), &tris);
     check_wide_structure(&all.wide, &bvh, &tris);
     let (fb, ftris, _) = build(&finite);
     for ray in &rays {
@@ -662,7 +725,11 @@ fn build_is_deterministic() {
     let (b, ob) = Bvh::build(&soup);
     assert_eq!(a.nodes, b.nodes);
     assert_eq!(oa, ob);
-    assert_eq!(Bvh4::collapse(&a).nodes, Bvh4::collapse(&b).nodes);
+    let ta: Vec<_> = oa.iter().map(|&i| soup[i as usize]).collect();
+    let (wa, wb) = (Bvh4::collapse(&a, &ta), Bvh4::collapse(&b, &ta));
+    assert_eq!(wa.nodes, wb.nodes);
+    assert_eq!(wa.nodes8, wb.nodes8);
+    assert_eq!(wa.blocks, wb.blocks);
 }
 
 /// A closed icosphere: shared vertices are bit-identical between triangles.
@@ -761,7 +828,7 @@ fn edges_and_vertices(tris: &[Triangle]) -> (Vec<Vec3>, Vec<(Vec3, Vec3)>) {
 /// grid lines: every one must hit. Returns the number of rays.
 fn assert_no_leaks(name: &str, mesh: &[Triangle], origins: &[Vec3], rng: &mut Pcg32) -> usize {
     let (bvh, tris, _) = build(mesh);
-    let all = Traversals::new(bvh);
+    let all = Traversals::new(bvh, &tris);
     let (verts, edges) = edges_and_vertices(mesh);
     let mut targets = verts.clone();
     for &(a, b) in &edges {
@@ -815,7 +882,7 @@ fn watertight_closed_meshes() {
     // grid lines, from inside: they cross the faces at edges and vertices of
     // the grid and run inside flat (zero-thickness) boxes.
     let (bvh, tris, _) = build(&cube);
-    let all = Traversals::new(bvh);
+    let all = Traversals::new(bvh, &tris);
     let coord = |i: usize| -1.0 + 2.0 * i as f32 / 8.0;
     let mut leaks = 0;
     let mut axis_rays = 0;
@@ -935,7 +1002,7 @@ fn bunny_build_differential_and_watertight() {
     let tris: Vec<Triangle> = order.iter().map(|&i| input[i as usize]).collect();
     let (leaves, depth) = check_structure(&bvh, &tris, &order);
     let start = Instant::now();
-    let all = Traversals::new(bvh.clone());
+    let all = Traversals::new(bvh.clone(), &tris);
     let collapse_s = start.elapsed().as_secs_f64();
     let wide_depth = check_wide_structure(&all.wide, &bvh, &tris);
     eprintln!(
@@ -970,7 +1037,7 @@ fn bunny_build_differential_and_watertight() {
 fn bunny_wide_matches_binary() {
     let input = bunny();
     let (bvh, tris, _) = build(&input);
-    let all = Traversals::new(bvh);
+    let all = Traversals::new(bvh, &tris);
     let mut rng = Pcg32::from_state(0xb0b);
     let mut rays = random_rays(&tris, 80_000, &mut rng);
     rays.extend(rays_from_surfaces(&tris, 20_000, &mut rng));

@@ -58,10 +58,10 @@ fn measure(name: &str, input: &[Triangle]) {
     let start = Instant::now();
     let (bvh, order) = Bvh::build(input);
     let build_s = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    let wide = Bvh4::collapse(&bvh);
-    let collapse_s = start.elapsed().as_secs_f64();
     let tris: Vec<Triangle> = order.iter().map(|&i| input[i as usize]).collect();
+    let start = Instant::now();
+    let wide = Bvh4::collapse(&bvh, &tris);
+    let collapse_s = start.elapsed().as_secs_f64();
     let (lo, hi) = geometry::bounds_of(&tris);
     let primary = primary_rays(lo, hi, 384, 384);
     let primary_hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(&tris, r)).collect();

@@ -21,6 +21,7 @@
 mod build;
 mod traverse;
 mod wide;
+mod wide8;
 mod wide_traverse;
 
 use glam::Vec3;
@@ -32,6 +33,7 @@ pub use wide::{
     Bvh4Node, LEAF_BIT, MAX_WIDE_DEPTH, SLOT_EMPTY, WIDE_STACK_SIZE, WIDTH, is_leaf_ref, leaf_range,
 };
 pub use wide_traverse::Kernel;
+pub use wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE, WIDTH8};
 
 /// Entries of the traversal stack (CPU and GPU). The builder guarantees every
 /// leaf is at depth `<= MAX_DEPTH < STACK_SIZE`, and front-to-back traversal
@@ -109,32 +111,43 @@ impl Bvh {
 #[derive(Clone, Debug, Default)]
 pub struct Bvh4 {
     pub nodes: Vec<Bvh4Node>,
+    /// The same tree collapsed eight children to a node (`wide8.rs`), which
+    /// CPUs with AVX2 traverse ([`Kernel::Avx2x8`]); the GPU reads `nodes`.
+    pub nodes8: Vec<Bvh8Node>,
+    /// The 8-wide tree's leaves: each leaf's triangles side by side.
+    pub blocks: Vec<LeafBlock>,
 }
 
 impl Bvh4 {
     /// [`Bvh::build`], then [`Bvh4::collapse`]: the same triangle order.
     pub fn build(tris: &[Triangle]) -> (Bvh4, Vec<u32>) {
         let (bvh, order) = Bvh::build(tris);
-        (Bvh4::collapse(&bvh), order)
+        let ordered: Vec<Triangle> = order.iter().map(|&i| tris[i as usize]).collect();
+        (Bvh4::collapse(&bvh, &ordered), order)
     }
 
-    /// Regroups a binary BVH four children to a node; leaves, their triangle
-    /// ranges and every child box are kept unchanged.
-    pub fn collapse(bvh: &Bvh) -> Bvh4 {
+    /// Regroups a binary BVH four children to a node, and eight to a node
+    /// with its leaves' triangles (`tris`, in the order the build returned)
+    /// side by side; leaves, their triangle ranges and every child box are
+    /// kept unchanged.
+    pub fn collapse(bvh: &Bvh, tris: &[Triangle]) -> Bvh4 {
+        let (nodes8, blocks) = wide8::collapse8(&bvh.nodes, tris);
         Bvh4 {
             nodes: wide::collapse(&bvh.nodes),
+            nodes8,
+            blocks,
         }
     }
 
     /// Closest hit in (0, ray.tmax), the binary traversal's answer
     /// ([`Bvh::intersect`]) with the fastest box test this CPU has.
     pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        wide_traverse::intersect(&self.nodes, tris, ray, Kernel::best())
+        self.intersect_with(Kernel::best(), tris, ray)
     }
 
     /// Any hit in (0, ray.tmax).
     pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
-        wide_traverse::any_hit(&self.nodes, tris, ray, Kernel::best())
+        self.occluded_with(Kernel::best(), tris, ray)
     }
 
     /// [`Bvh4::intersect`] skipping hits where `present(tri, u, v)` is
@@ -161,12 +174,27 @@ impl Bvh4 {
     /// [`Bvh4::intersect`] with a given box-test kernel (for tests and
     /// benchmarks; an unsupported one falls back to one the CPU has).
     pub fn intersect_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        wide_traverse::intersect(&self.nodes, tris, ray, kernel)
+        match kernel {
+            Kernel::Avx2x8 if Kernel::has_avx2() => {
+                wide_traverse::intersect8(&self.nodes8, &self.blocks, ray)
+            }
+            _ => wide_traverse::intersect(&self.nodes, tris, ray, kernel),
+        }
     }
 
     /// [`Bvh4::occluded`] with a given box-test kernel.
     pub fn occluded_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> bool {
-        wide_traverse::any_hit(&self.nodes, tris, ray, kernel)
+        match kernel {
+            Kernel::Avx2x8 if Kernel::has_avx2() => {
+                wide_traverse::any_hit8(&self.nodes8, &self.blocks, ray)
+            }
+            _ => wide_traverse::any_hit(&self.nodes, tris, ray, kernel),
+        }
+    }
+
+    /// Depth of the deepest 8-wide node (root = 0).
+    pub fn depth8(&self) -> usize {
+        wide8::depth8(&self.nodes8)
     }
 
     /// Depth of the deepest wide node (root = 0); 0 for an empty hierarchy.

@@ -16,10 +16,11 @@
 //! and the crates would add a second builder whose trees the binary
 //! reference could not be compared with node by node.
 //!
-//! Why 4 wide: an SSE register and a GLSL `vec4` hold exactly one coordinate
-//! of four boxes; a binned SAH tree with leaves of up to 4 triangles has few
-//! interior nodes with 8 well-filled grandchildren-of-grandchildren, so an
-//! 8-wide node is mostly empty slots on meshes the size of ours.
+//! Why 4 wide here: an SSE register and a GLSL `vec4` hold exactly one
+//! coordinate of four boxes, and it is the GPU's layout. CPUs with AVX2
+//! traverse the same tree collapsed 8 wide (`wide8.rs`), measured faster
+//! there (`bench/embree`, docs/benchmarks.md); [`collapse_slots`] serves
+//! both widths.
 
 use glam::Vec3;
 
@@ -119,30 +120,46 @@ fn half_area(n: &BvhNode) -> f32 {
 }
 
 /// Collapses a binary BVH (as [`super::Bvh::build`] makes it) into 4-wide
-/// nodes, top down (Wald et al. 2008, section 3.1): a wide node starts from
-/// a binary node's two children and repeatedly opens an interior child into
-/// its two children until it has four. Children one binary level down are
-/// opened first, so every interior child of a wide node lies at least two
-/// binary levels below it (the depth bound [`MAX_WIDE_DEPTH`] rests on
-/// that); then the child with the largest surface area, the likeliest to be
-/// entered (the SAH's argument). Leaves stay the binary tree's leaves, so the
-/// triangle order is unchanged. Nodes are numbered depth first.
+/// nodes ([`collapse_slots`] with four slots).
 pub(super) fn collapse(bin: &[BvhNode]) -> Vec<Bvh4Node> {
+    collapse_slots(bin, WIDTH)
+        .iter()
+        .map(|slots| {
+            let mut node = Bvh4Node::EMPTY;
+            for (s, &(i, child)) in slots.iter().enumerate() {
+                node.set_child(s, &bin[i], child);
+            }
+            node
+        })
+        .collect()
+}
+
+/// Collapses a binary BVH into nodes of up to `width` children, top down
+/// (Wald et al. 2008, section 3.1): a wide node starts from a binary node's
+/// two children and repeatedly opens an interior child into its two
+/// children until it has `width`. Children one binary level down are opened
+/// first, so every interior child of a wide node lies at least two binary
+/// levels below it (the depth bound [`MAX_WIDE_DEPTH`] rests on that); then
+/// the child with the largest surface area, the likeliest to be entered
+/// (the SAH's argument). Leaves stay the binary tree's leaves, so the
+/// triangle order is unchanged. Nodes are numbered depth first. Returns,
+/// per wide node, its slots in order: (binary node whose box the slot
+/// holds, child reference: a wide node's index or a [`leaf_ref`]).
+pub(super) fn collapse_slots(bin: &[BvhNode], width: usize) -> Vec<Vec<(usize, u32)>> {
     let Some(root) = bin.first() else {
         return Vec::new();
     };
-    let mut out = vec![Bvh4Node::EMPTY];
     if root.is_leaf() {
-        out[0].set_child(0, root, leaf_ref(root.left_or_first, root.tri_count));
-        return out;
+        return vec![vec![(0, leaf_ref(root.left_or_first, root.tri_count))]];
     }
+    let mut out = vec![Vec::new()];
     // (binary node, wide node to fill from its children)
     let mut tasks = vec![(0usize, 0usize)];
     while let Some((b, w)) = tasks.pop() {
         let l = bin[b].left_or_first as usize;
         // (binary node, levels below b), in the binary tree's left-to-right order.
         let mut slots: Vec<(usize, u32)> = vec![(l, 1), (l + 1, 1)];
-        while slots.len() < WIDTH {
+        while slots.len() < width {
             let mut pick: Option<(usize, bool, f32)> = None;
             for (k, &(i, d)) in slots.iter().enumerate() {
                 if bin[i].is_leaf() {
@@ -161,14 +178,14 @@ pub(super) fn collapse(bin: &[BvhNode]) -> Vec<Bvh4Node> {
             slots.insert(k + 1, (c + 1, d + 1));
         }
         let mut interior = Vec::new();
-        for (s, &(i, _)) in slots.iter().enumerate() {
+        for &(i, _) in &slots {
             let n = &bin[i];
             if n.is_leaf() {
-                out[w].set_child(s, n, leaf_ref(n.left_or_first, n.tri_count));
+                out[w].push((i, leaf_ref(n.left_or_first, n.tri_count)));
             } else {
                 let idx = out.len();
-                out.push(Bvh4Node::EMPTY);
-                out[w].set_child(s, n, idx as u32);
+                out.push(Vec::new());
+                out[w].push((i, idx as u32));
                 interior.push((i, idx));
             }
         }

@@ -13,6 +13,7 @@ use std::mem::MaybeUninit;
 
 use super::traverse::{PreparedRay, SLAB_PAD, intersect_aabb, intersect_triangle};
 use super::wide::{Bvh4Node, SLOT_EMPTY, WIDE_STACK_SIZE, is_leaf_ref, leaf_range};
+use super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE, order8};
 use super::{Hit, Ray};
 use crate::scene::Triangle;
 
@@ -27,6 +28,9 @@ pub enum Kernel {
     /// The same SSE code compiled with AVX enabled: VEX three-operand
     /// encodings, no extra width (a 4-wide node fills an SSE register).
     Avx,
+    /// The 8-wide tree (`wide8.rs`), eight boxes per AVX instruction (AVX2
+    /// for the integer compare of the child slots); leaves as `Avx`.
+    Avx2x8,
 }
 
 impl Kernel {
@@ -39,17 +43,36 @@ impl Kernel {
             if std::arch::is_x86_feature_detected!("avx") {
                 k.push(Kernel::Avx);
             }
+            if Self::has_avx2() {
+                k.push(Kernel::Avx2x8);
+            }
         }
         k
     }
 
-    /// The kernel [`super::Bvh4::intersect`] uses: AVX where the CPU has it,
-    /// else SSE2 on x86_64, else scalar. The detection is cached by std.
+    /// Whether this CPU runs [`Kernel::Avx2x8`] (cached by std).
+    #[inline]
+    pub fn has_avx2() -> bool {
+        #[cfg(target_arch = "x86_64")]
+        {
+            std::arch::is_x86_feature_detected!("avx2")
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            false
+        }
+    }
+
+    /// The kernel [`super::Bvh4::intersect`] uses: the 8-wide tree where
+    /// the CPU has AVX2, else AVX, else SSE2 on x86_64, else scalar. The
+    /// detection is cached by std.
     #[inline]
     pub fn best() -> Kernel {
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx") {
+            if Self::has_avx2() {
+                Kernel::Avx2x8
+            } else if std::arch::is_x86_feature_detected!("avx") {
                 Kernel::Avx
             } else {
                 Kernel::Sse2
@@ -276,6 +299,152 @@ where
     }
 }
 
+/// [`closest`] on 8-wide nodes: the same loop, the hit slots ordered by
+/// [`order8`] (nearest visited at once, the others stacked farthest first).
+#[inline(always)]
+fn closest8<F, L>(nodes: &[Bvh8Node], tmax: f32, boxes: F, leaf: L) -> Option<Hit>
+where
+    F: Fn(&Bvh8Node, f32) -> (u32, [f32; 8]),
+    L: Fn(usize, usize, &mut Hit),
+{
+    let mut best = Hit {
+        t: tmax,
+        tri: u32::MAX,
+        u: 0.0,
+        v: 0.0,
+    };
+    let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); WIDE8_STACK_SIZE];
+    let mut sp = 0;
+    let mut cur = 0u32;
+    loop {
+        if is_leaf_ref(cur) {
+            let (first, count) = leaf_range(cur);
+            leaf(first, count, &mut best);
+        } else {
+            let node = &nodes[cur as usize];
+            let (mask, dist) = boxes(node, best.t);
+            if mask != 0 {
+                if mask.is_power_of_two() {
+                    cur = node.child[mask.trailing_zeros() as usize];
+                    continue;
+                }
+                if mask.count_ones() == 2 {
+                    // order8's answer for two hits, with one comparison.
+                    let (near, far) = (
+                        mask.trailing_zeros() as usize,
+                        31 - mask.leading_zeros() as usize,
+                    );
+                    let (a, b) = if dist[far] < dist[near] {
+                        (far, near)
+                    } else {
+                        (near, far)
+                    };
+                    stack[sp] = MaybeUninit::new((node.child[b], dist[b]));
+                    sp += 1;
+                    cur = node.child[a];
+                    continue;
+                }
+                let (order, n) = order8(mask, &dist);
+                for &s in order[1..n].iter().rev() {
+                    stack[sp] = MaybeUninit::new((node.child[s as usize], dist[s as usize]));
+                    sp += 1;
+                }
+                cur = node.child[order[0] as usize];
+                continue;
+            }
+        }
+        loop {
+            if sp == 0 {
+                return (best.tri != u32::MAX).then_some(best);
+            }
+            sp -= 1;
+            // SAFETY: every entry below the stack pointer was pushed.
+            let (c, d) = unsafe { stack[sp].assume_init() };
+            if d <= best.t * SLAB_PAD {
+                cur = c;
+                break;
+            }
+        }
+    }
+}
+
+/// [`occluded`] on 8-wide nodes.
+#[inline(always)]
+fn occluded8<F, L>(nodes: &[Bvh8Node], tmax: f32, boxes: F, leaf: L) -> bool
+where
+    F: Fn(&Bvh8Node, f32) -> (u32, [f32; 8]),
+    L: Fn(usize, usize) -> bool,
+{
+    let mut stack = [MaybeUninit::<u32>::uninit(); WIDE8_STACK_SIZE];
+    let mut sp = 0;
+    let mut cur = 0u32;
+    loop {
+        if is_leaf_ref(cur) {
+            let (first, count) = leaf_range(cur);
+            if leaf(first, count) {
+                return true;
+            }
+        } else {
+            let node = &nodes[cur as usize];
+            let (mask, dist) = boxes(node, tmax);
+            if mask != 0 {
+                if mask.is_power_of_two() {
+                    cur = node.child[mask.trailing_zeros() as usize];
+                    continue;
+                }
+                // Unordered (Embree's any-hit traversal): the first hit
+                // slot now, the others stacked.
+                let mut m = mask & (mask - 1);
+                while m != 0 {
+                    stack[sp] = MaybeUninit::new(node.child[m.trailing_zeros() as usize]);
+                    sp += 1;
+                    m &= m - 1;
+                }
+                cur = node.child[mask.trailing_zeros() as usize];
+                let _ = dist;
+                continue;
+            }
+        }
+        if sp == 0 {
+            return false;
+        }
+        sp -= 1;
+        // SAFETY: every entry below the stack pointer was pushed.
+        cur = unsafe { stack[sp].assume_init() };
+    }
+}
+
+/// Closest hit on the 8-wide tree (AVX2). None of it runs on a CPU
+/// without AVX2: [`Kernel::Avx2x8`] is only chosen where it has it.
+pub(super) fn intersect8(nodes: &[Bvh8Node], blocks: &[LeafBlock], ray: &Ray) -> Option<Hit> {
+    if nodes.is_empty() {
+        return None;
+    }
+    let r = PreparedRay::new(ray.o, ray.d);
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { x86::intersect_avx2(nodes, blocks, &r, ray.tmax) };
+    }
+    let _ = (blocks, r);
+    unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
+}
+
+/// Any hit on the 8-wide tree (AVX2).
+pub(super) fn any_hit8(nodes: &[Bvh8Node], blocks: &[LeafBlock], ray: &Ray) -> bool {
+    if nodes.is_empty() {
+        return false;
+    }
+    let r = PreparedRay::new(ray.o, ray.d);
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { x86::occluded_avx2(nodes, blocks, &r, ray.tmax) };
+    }
+    let _ = (blocks, r);
+    unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
+}
+
 pub(super) fn intersect(
     nodes: &[Bvh4Node],
     tris: &[Triangle],
@@ -371,7 +540,8 @@ mod x86 {
 
     use super::super::traverse::{PreparedRay, SLAB_PAD, refine_edge};
     use super::super::wide::Bvh4Node;
-    use super::{Hit, Triangle, closest, occluded};
+    use super::super::wide8::{Bvh8Node, LeafBlock};
+    use super::{Hit, Triangle, closest, closest8, occluded, occluded8};
 
     /// The ray's constants broadcast to all four lanes, for the box test
     /// and the triangle test.
@@ -520,13 +690,60 @@ mod x86 {
             };
             let (a, b, c) = (vertex(0), vertex(4), vertex(8));
             let [kx, ky, kz] = r.k;
+            let permuted = |v: [__m128; 3]| [v[kx], v[ky], v[kz]];
+            triangles4_sheared(r, permuted(a), permuted(b), permuted(c), tris.len(), tmax)
+        }
+    }
+
+    /// Up to four triangles of one leaf block (`wide8::LeafBlock`, their
+    /// coordinates already side by side): [`triangles4`] without the
+    /// transposes, each coordinate loaded in the ray's axis order. The same
+    /// operations on the same values, so the same hits bit for bit.
+    #[inline(always)]
+    fn triangles4_block(r: &Ray4, block: &LeafBlock, tmax: f32) -> (u32, [[f32; 4]; 3]) {
+        // SAFETY: SSE2 is part of the x86_64 baseline; the loads read
+        // 16-byte aligned `[f32; 4]` rows of an align(16) block.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let [kx, ky, kz] = r.k;
+            let vertex = |k: usize| -> [__m128; 3] {
+                let row =
+                    |axis: usize| _mm_sub_ps(_mm_load_ps(block.v[k][axis].as_ptr()), r.o[axis]);
+                [row(kx), row(ky), row(kz)]
+            };
+            triangles4_sheared(
+                r,
+                vertex(0),
+                vertex(1),
+                vertex(2),
+                block.count as usize,
+                tmax,
+            )
+        }
+    }
+
+    /// The watertight test of up to four triangles whose vertices are
+    /// given minus the ray origin, in the ray's axis order (kx, ky, kz):
+    /// `lanes` of them are real.
+    #[inline(always)]
+    fn triangles4_sheared(
+        r: &Ray4,
+        a: [__m128; 3],
+        b: [__m128; 3],
+        c: [__m128; 3],
+        lanes: usize,
+        tmax: f32,
+    ) -> (u32, [[f32; 4]; 3]) {
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[allow(unused_unsafe)]
+        unsafe {
             let [sx, sy, sz] = r.shear;
-            let ax = _mm_sub_ps(a[kx], _mm_mul_ps(sx, a[kz]));
-            let ay = _mm_sub_ps(a[ky], _mm_mul_ps(sy, a[kz]));
-            let bx = _mm_sub_ps(b[kx], _mm_mul_ps(sx, b[kz]));
-            let by = _mm_sub_ps(b[ky], _mm_mul_ps(sy, b[kz]));
-            let cx = _mm_sub_ps(c[kx], _mm_mul_ps(sx, c[kz]));
-            let cy = _mm_sub_ps(c[ky], _mm_mul_ps(sy, c[kz]));
+            let ax = _mm_sub_ps(a[0], _mm_mul_ps(sx, a[2]));
+            let ay = _mm_sub_ps(a[1], _mm_mul_ps(sy, a[2]));
+            let bx = _mm_sub_ps(b[0], _mm_mul_ps(sx, b[2]));
+            let by = _mm_sub_ps(b[1], _mm_mul_ps(sy, b[2]));
+            let cx = _mm_sub_ps(c[0], _mm_mul_ps(sx, c[2]));
+            let cy = _mm_sub_ps(c[1], _mm_mul_ps(sy, c[2]));
             let mut u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
             let mut v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
             let mut w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
@@ -563,9 +780,9 @@ mod x86 {
                 _mm_cmpgt_ps(w, zero),
             );
             let det = _mm_add_ps(_mm_add_ps(u, v), w);
-            let az = _mm_mul_ps(sz, a[kz]);
-            let bz = _mm_mul_ps(sz, b[kz]);
-            let cz = _mm_mul_ps(sz, c[kz]);
+            let az = _mm_mul_ps(sz, a[2]);
+            let bz = _mm_mul_ps(sz, b[2]);
+            let cz = _mm_mul_ps(sz, c[2]);
             let t = _mm_div_ps(
                 _mm_add_ps(
                     _mm_add_ps(_mm_mul_ps(u, az), _mm_mul_ps(v, bz)),
@@ -578,7 +795,7 @@ mod x86 {
                 _mm_or_ps(_mm_and_ps(any_neg, any_pos), _mm_cmpeq_ps(det, zero)),
                 _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(tmax))),
             );
-            let mut mask = _mm_movemask_ps(ok) as u32 & ((1u32 << tris.len()) - 1);
+            let mut mask = _mm_movemask_ps(ok) as u32 & ((1u32 << lanes) - 1);
             if mask != 0 {
                 // Only where some lane hits: t above its own error bound.
                 let bound = t_error4([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], det);
@@ -663,6 +880,24 @@ mod x86 {
         }
     }
 
+    /// [`leaf_closest`] on a leaf block of the 8-wide tree.
+    #[inline(always)]
+    fn block_closest(r: &Ray4, block: &LeafBlock, best: &mut Hit) {
+        let (mut mask, [t, u, v]) = triangles4_block(r, block, best.t);
+        while mask != 0 {
+            let j = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            if t[j] < best.t {
+                *best = Hit {
+                    t: t[j],
+                    tri: block.first + j as u32,
+                    u: u[j],
+                    v: v[j],
+                };
+            }
+        }
+    }
+
     #[inline(always)]
     pub(super) fn leaf_any(
         r: &Ray4,
@@ -731,6 +966,184 @@ mod x86 {
         tmax: f32,
     ) -> Option<Hit> {
         intersect_impl(nodes, tris, r, tmax)
+    }
+
+    /// The ray's box-test constants broadcast to eight lanes, and per axis
+    /// which of a node's planes the ray meets first: the byte offsets in a
+    /// [`Bvh8Node`] of the near (`lo_*` where the direction is positive,
+    /// else `hi_*`) and far coordinate arrays (Embree's near/far plane
+    /// selection: each axis then takes one slab distance for the entry and
+    /// one for the exit, with no min/max).
+    struct Ray8 {
+        o: [__m256; 3],
+        inv_d: [__m256; 3],
+        zero_d: [bool; 3],
+        near: [usize; 3],
+        far: [usize; 3],
+    }
+
+    #[inline(always)]
+    fn ray8(r: &PreparedRay) -> Ray8 {
+        let arrays = [
+            (
+                std::mem::offset_of!(Bvh8Node, lo_x),
+                std::mem::offset_of!(Bvh8Node, hi_x),
+            ),
+            (
+                std::mem::offset_of!(Bvh8Node, lo_y),
+                std::mem::offset_of!(Bvh8Node, hi_y),
+            ),
+            (
+                std::mem::offset_of!(Bvh8Node, lo_z),
+                std::mem::offset_of!(Bvh8Node, hi_z),
+            ),
+        ];
+        let inv = r.inv_d.to_array();
+        let near = std::array::from_fn(|a| {
+            if inv[a] >= 0.0 {
+                arrays[a].0
+            } else {
+                arrays[a].1
+            }
+        });
+        let far = std::array::from_fn(|a| {
+            if inv[a] >= 0.0 {
+                arrays[a].1
+            } else {
+                arrays[a].0
+            }
+        });
+        // SAFETY: called only from the AVX2 entry points below.
+        #[allow(unused_unsafe)]
+        unsafe {
+            Ray8 {
+                o: [
+                    _mm256_set1_ps(r.o.x),
+                    _mm256_set1_ps(r.o.y),
+                    _mm256_set1_ps(r.o.z),
+                ],
+                inv_d: [
+                    _mm256_set1_ps(r.inv_d.x),
+                    _mm256_set1_ps(r.inv_d.y),
+                    _mm256_set1_ps(r.inv_d.z),
+                ],
+                zero_d: [r.zero_d.x, r.zero_d.y, r.zero_d.z],
+                near,
+                far,
+            }
+        }
+    }
+
+    /// [`intersect_aabb4`] for the eight boxes of an 8-wide node, lane by
+    /// lane the same entry and exit distances: along an axis with a
+    /// positive (negative) inverse direction, (lo - o) inv is the smaller
+    /// (larger) of the two slab distances for every box with lo <= hi,
+    /// rounding being monotone, so taking the near plane's is taking the
+    /// min. An empty slot (lo = +inf, hi = -inf) then enters at +inf on
+    /// every axis, a miss without a test of its reference.
+    #[inline(always)]
+    fn intersect_aabb8(r: &Ray8, n: &Bvh8Node, tmax: f32) -> (u32, [f32; 8]) {
+        // SAFETY: called only from the AVX2 entry points below; the loads
+        // read 32-byte aligned `[f32; 8]` fields of an align(64) node at
+        // offsets `ray8` took from its layout.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let base = (n as *const Bvh8Node).cast::<u8>();
+            let plane = |off: usize| _mm256_load_ps(base.add(off).cast::<f32>());
+            let mut tlo = [_mm256_setzero_ps(); 3];
+            let mut thi = [_mm256_setzero_ps(); 3];
+            for a in 0..3 {
+                tlo[a] = _mm256_mul_ps(_mm256_sub_ps(plane(r.near[a]), r.o[a]), r.inv_d[a]);
+                thi[a] = _mm256_mul_ps(_mm256_sub_ps(plane(r.far[a]), r.o[a]), r.inv_d[a]);
+            }
+            // Axes where d is exactly zero: the slab holds the whole line
+            // when the origin is inside it (faces included), none of it
+            // otherwise; see `intersect_aabb`.
+            let mut outside = _mm256_setzero_ps();
+            if r.zero_d[0] | r.zero_d[1] | r.zero_d[2] {
+                for a in 0..3 {
+                    if r.zero_d[a] {
+                        // Each axis's lo array precedes its hi array.
+                        let (lo, hi) = (
+                            plane(r.near[a].min(r.far[a])),
+                            plane(r.near[a].max(r.far[a])),
+                        );
+                        let inside = _mm256_and_ps(
+                            _mm256_cmp_ps::<_CMP_GE_OQ>(r.o[a], lo),
+                            _mm256_cmp_ps::<_CMP_LE_OQ>(r.o[a], hi),
+                        );
+                        outside = _mm256_or_ps(
+                            outside,
+                            _mm256_andnot_ps(inside, _mm256_castsi256_ps(_mm256_set1_epi32(-1))),
+                        );
+                        tlo[a] = _mm256_set1_ps(f32::NEG_INFINITY);
+                        thi[a] = _mm256_set1_ps(f32::INFINITY);
+                    }
+                }
+                // An empty slot's planes are +inf and -inf, so the test
+                // above already calls it outside.
+            }
+            let tnear = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
+                _mm256_setzero_ps(),
+            );
+            let tfar = _mm256_mul_ps(
+                _mm256_min_ps(
+                    _mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]),
+                    _mm256_set1_ps(tmax),
+                ),
+                _mm256_set1_ps(SLAB_PAD),
+            );
+            let hit = _mm256_andnot_ps(
+                outside,
+                _mm256_and_ps(
+                    _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
+                    _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
+                ),
+            );
+            let mut dist = [0f32; 8];
+            _mm256_storeu_ps(
+                dist.as_mut_ptr(),
+                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tnear, hit),
+            );
+            (_mm256_movemask_ps(hit) as u32, dist)
+        }
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn intersect_avx2(
+        nodes: &[Bvh8Node],
+        blocks: &[LeafBlock],
+        r: &PreparedRay,
+        tmax: f32,
+    ) -> Option<Hit> {
+        let (r4, r8) = (ray4(r), ray8(r));
+        closest8(
+            nodes,
+            tmax,
+            |n, t| intersect_aabb8(&r8, n, t),
+            |block, _, best| block_closest(&r4, &blocks[block], best),
+        )
+    }
+
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn occluded_avx2(
+        nodes: &[Bvh8Node],
+        blocks: &[LeafBlock],
+        r: &PreparedRay,
+        tmax: f32,
+    ) -> bool {
+        let (r4, r8) = (ray4(r), ray8(r));
+        occluded8(
+            nodes,
+            tmax,
+            |n, t| intersect_aabb8(&r8, n, t),
+            |block, _| triangles4_block(&r4, &blocks[block], tmax).0 != 0,
+        )
     }
 
     /// # Safety
