@@ -1,7 +1,7 @@
 //! Ray queries: robust slab test, watertight triangle test, stack traversal.
 //! `shaders/bvh.glsl` mirrors every function here under the same name.
 
-use glam::{BVec3, Vec3};
+use glam::{BVec3, Vec3, Vec3A};
 
 use crate::scene::Triangle;
 
@@ -28,6 +28,7 @@ pub struct PreparedRay {
     pub shear: Vec3,
 }
 
+#[cfg(test)]
 fn safe_rcp(x: f32) -> f32 {
     if x.abs() >= 1e-30 {
         1.0 / x
@@ -37,7 +38,9 @@ fn safe_rcp(x: f32) -> f32 {
 }
 
 impl PreparedRay {
-    /// `prepare_ray` in GLSL.
+    /// `prepare_ray` in GLSL. The six divisions are two vector divisions
+    /// (the same IEEE quotient per lane, so the same bits as one at a time).
+    #[inline]
     pub fn new(o: Vec3, d: Vec3) -> PreparedRay {
         let a = d.abs();
         let kz = if a.x >= a.y && a.x >= a.z {
@@ -47,20 +50,30 @@ impl PreparedRay {
         } else {
             2
         };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        if d[kz] < 0.0 {
+        // (kx, ky) follow kz cyclically, swapped when d[kz] < 0.
+        const NEXT: [(usize, usize); 3] = [(1, 2), (2, 0), (0, 1)];
+        let (mut kx, mut ky) = NEXT[kz];
+        let dv = d.to_array();
+        if dv[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
+        let da = Vec3A::from(d);
+        // safe_rcp per lane: NaN and |d| < 1e-30 take +-1e30.
+        let inv_d = Vec3A::select(
+            da.abs().cmpge(Vec3A::splat(1e-30)),
+            Vec3A::ONE / da,
+            Vec3A::splat(1e30).copysign(da),
+        );
+        let shear = Vec3A::new(dv[kx], dv[ky], 1.0) / Vec3A::splat(dv[kz]);
         PreparedRay {
             o,
             d,
-            inv_d: Vec3::new(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z)),
+            inv_d: inv_d.into(),
             zero_d: d.cmpeq(Vec3::ZERO),
             kx,
             ky,
             kz,
-            shear: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+            shear: shear.into(),
         }
     }
 }
@@ -225,6 +238,50 @@ mod tests {
     #[test]
     fn slab_pad_matches_glsl_bits() {
         assert_eq!(SLAB_PAD.to_bits(), 0x3f80_0003);
+    }
+
+    /// The scalar form [`PreparedRay::new`] replaced: six divisions.
+    fn prepared_scalar(o: Vec3, d: Vec3) -> PreparedRay {
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        PreparedRay {
+            o,
+            d,
+            inv_d: Vec3::new(safe_rcp(d.x), safe_rcp(d.y), safe_rcp(d.z)),
+            zero_d: d.cmpeq(Vec3::ZERO),
+            kx,
+            ky,
+            kz,
+            shear: Vec3::new(d[kx] / d[kz], d[ky] / d[kz], 1.0 / d[kz]),
+        }
+    }
+
+    #[test]
+    fn prepared_ray_is_the_scalar_one_bit_for_bit() {
+        let mut rng = crate::sampling::Pcg32::new(5, 5);
+        let special = [0.0, -0.0, 1e-31, -1e-31, 1e-30, f32::NAN, f32::INFINITY, 1e30, -3.0];
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for i in 0..20_000 {
+            let mut d = rng.dir() * rng.range(1e-3, 1e3);
+            if i % 3 == 0 {
+                d[i % 3] = special[(i / 3) % special.len()];
+            }
+            let (a, b) = (PreparedRay::new(Vec3::ONE, d), prepared_scalar(Vec3::ONE, d));
+            assert_eq!((a.kx, a.ky, a.kz, a.zero_d), (b.kx, b.ky, b.kz, b.zero_d), "{d}");
+            assert_eq!(bits(a.inv_d), bits(b.inv_d), "{d}");
+            assert_eq!(bits(a.shear), bits(b.shear), "{d}");
+        }
     }
 
     #[test]
