@@ -22,6 +22,9 @@
 
 #[path = "../../../cpu/tests/support/geometry.rs"]
 mod geometry;
+#[path = "../../../cpu/tests/support/timing.rs"]
+mod timing;
+use timing::interleaved;
 
 use std::ffi::c_void;
 use std::path::{Path, PathBuf};
@@ -216,31 +219,6 @@ impl Drop for Embree {
             ffi::rtcReleaseDevice(self.device);
         }
     }
-}
-
-/// A traversal under test: rays in, a checksum out.
-type Variant<'a> = &'a dyn Fn(&[Ray]) -> usize;
-
-/// Seconds each variant takes on all of `rays`, interleaved by chunk, best
-/// of three rounds per chunk (as `cpu/tests/bvh_throughput.rs`).
-fn interleaved(rays: &[Ray], chunk: usize, variants: &[Variant]) -> Vec<f64> {
-    let mut total = vec![0.0; variants.len()];
-    let mut sink = 0;
-    for c in rays.chunks(chunk) {
-        let mut best = vec![f64::INFINITY; variants.len()];
-        for _ in 0..3 {
-            for (v, f) in variants.iter().enumerate() {
-                let start = Instant::now();
-                sink += f(c);
-                best[v] = best[v].min(start.elapsed().as_secs_f64());
-            }
-        }
-        for (t, b) in total.iter_mut().zip(best) {
-            *t += b;
-        }
-    }
-    std::hint::black_box(sink);
-    total
 }
 
 fn repo() -> PathBuf {

@@ -270,15 +270,32 @@ mod tests {
     #[test]
     fn prepared_ray_is_the_scalar_one_bit_for_bit() {
         let mut rng = crate::sampling::Pcg32::new(5, 5);
-        let special = [0.0, -0.0, 1e-31, -1e-31, 1e-30, f32::NAN, f32::INFINITY, 1e30, -3.0];
+        let special = [
+            0.0,
+            -0.0,
+            1e-31,
+            -1e-31,
+            1e-30,
+            f32::NAN,
+            f32::INFINITY,
+            1e30,
+            -3.0,
+        ];
         let bits = |v: Vec3| v.to_array().map(f32::to_bits);
         for i in 0..20_000 {
             let mut d = rng.dir() * rng.range(1e-3, 1e3);
             if i % 3 == 0 {
                 d[i % 3] = special[(i / 3) % special.len()];
             }
-            let (a, b) = (PreparedRay::new(Vec3::ONE, d), prepared_scalar(Vec3::ONE, d));
-            assert_eq!((a.kx, a.ky, a.kz, a.zero_d), (b.kx, b.ky, b.kz, b.zero_d), "{d}");
+            let (a, b) = (
+                PreparedRay::new(Vec3::ONE, d),
+                prepared_scalar(Vec3::ONE, d),
+            );
+            assert_eq!(
+                (a.kx, a.ky, a.kz, a.zero_d),
+                (b.kx, b.ky, b.kz, b.zero_d),
+                "{d}"
+            );
             assert_eq!(bits(a.inv_d), bits(b.inv_d), "{d}");
             assert_eq!(bits(a.shear), bits(b.shear), "{d}");
         }

@@ -147,39 +147,3 @@ pub(super) fn depth8(nodes: &[Bvh8Node]) -> usize {
     }
     deepest
 }
-
-/// The hit slots of a node in order of (distance, slot), nearest first:
-/// an insertion sort of at most eight (misses are not in `mask`).
-#[inline(always)]
-pub(super) fn order8(mask: u32, dist: &[f32; 8]) -> ([u8; 8], usize) {
-    let mut order = [0u8; 8];
-    let mut n = 0;
-    let mut m = mask;
-    while m != 0 {
-        let s = m.trailing_zeros() as u8;
-        m &= m - 1;
-        // Slots arrive in increasing order: a tie stays behind the lower slot.
-        let mut k = n;
-        while k > 0 && dist[s as usize] < dist[order[k - 1] as usize] {
-            order[k] = order[k - 1];
-            k -= 1;
-        }
-        order[k] = s;
-        n += 1;
-    }
-    (order, n)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn order8_sorts_by_distance_then_slot() {
-        let inf = f32::INFINITY;
-        let dist = [3.0, inf, 1.0, 1.0, 0.5, inf, 2.0, 0.5];
-        let mask = 0b1101_1101;
-        let (order, n) = order8(mask, &dist);
-        assert_eq!(&order[..n], &[4, 7, 2, 3, 6, 0]);
-    }
-}

@@ -13,7 +13,7 @@ use std::mem::MaybeUninit;
 
 use super::traverse::{PreparedRay, SLAB_PAD, intersect_aabb, intersect_triangle};
 use super::wide::{Bvh4Node, SLOT_EMPTY, WIDE_STACK_SIZE, is_leaf_ref, leaf_range};
-use super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE, order8};
+use super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE};
 use super::{Hit, Ray};
 use crate::scene::Triangle;
 
@@ -108,8 +108,9 @@ fn intersect_aabb4_scalar(r: &PreparedRay, n: &Bvh4Node, tmax: f32) -> (u32, [f3
 /// The slots in order of (distance, slot): a sorting network of five
 /// compare-exchanges, so the order is the same whatever the kernel (ties,
 /// e.g. an origin inside two boxes, both at 0, go to the lower slot) and
-/// misses (+inf) come last. `sort4` in GLSL.
-#[inline(always)]
+/// misses (+inf) come last. `sort4` in GLSL; the CPU loop's
+/// [`order_hits`] gives the same order of the hits (a unit test pins it).
+#[cfg(test)]
 fn sort4(dist: &[f32; 4]) -> [usize; 4] {
     let mut o = [0, 1, 2, 3];
     let mut cx = |i: usize, j: usize| {
@@ -167,14 +168,64 @@ fn leaf_any_scalar(
     })
 }
 
-/// Closest hit, generic over the box test. Children are visited nearest
-/// first; the others wait on the stack with their entry distance and are
-/// dropped when popped if the best hit has since moved in front of them
-/// (the box test's own criterion: entry > tmax x SLAB_PAD misses).
+/// A wide node as the traversal loop sees it: its child references.
+pub(super) trait WideNode {
+    fn child(&self, slot: usize) -> u32;
+}
+
+impl WideNode for Bvh4Node {
+    #[inline(always)]
+    fn child(&self, slot: usize) -> u32 {
+        self.child[slot]
+    }
+}
+
+impl WideNode for Bvh8Node {
+    #[inline(always)]
+    fn child(&self, slot: usize) -> u32 {
+        self.child[slot]
+    }
+}
+
+/// Stack entries of either width's traversal: the 8-wide bound (7 per
+/// level), which holds the 4-wide one (3 per level) too.
+const STACK: usize = WIDE8_STACK_SIZE;
+const _: () = assert!(WIDE_STACK_SIZE <= STACK);
+
+/// The hit slots of a node (`mask`) in order of (distance, slot), nearest
+/// first, and how many: an insertion sort of the slots taken in increasing
+/// order, so a tie stays behind the lower slot. For four slots it is
+/// `sort4`'s order of the hits (GLSL's), which a unit test pins.
 #[inline(always)]
-fn closest<F, L>(nodes: &[Bvh4Node], tmax: f32, boxes: F, leaf: L) -> Option<Hit>
+fn order_hits<const W: usize>(mask: u32, dist: &[f32; W]) -> ([u8; W], usize) {
+    let mut order = [0u8; W];
+    let mut n = 0;
+    let mut m = mask;
+    while m != 0 {
+        let s = m.trailing_zeros() as u8;
+        m &= m - 1;
+        let mut k = n;
+        while k > 0 && dist[s as usize] < dist[order[k - 1] as usize] {
+            order[k] = order[k - 1];
+            k -= 1;
+        }
+        order[k] = s;
+        n += 1;
+    }
+    (order, n)
+}
+
+/// Closest hit, generic over the node width and the box and leaf tests.
+/// Children are visited nearest first; the others wait on the stack with
+/// their entry distance and are dropped when popped if the best hit has
+/// since moved in front of them (the box test's own criterion: entry >
+/// tmax x SLAB_PAD misses). `leaf(first, count, best)` tests a leaf
+/// reference's range.
+#[inline(always)]
+fn closest<N, const W: usize, F, L>(nodes: &[N], tmax: f32, boxes: F, leaf: L) -> Option<Hit>
 where
-    F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
+    N: WideNode,
+    F: Fn(&N, f32) -> (u32, [f32; W]),
     L: Fn(usize, usize, &mut Hit),
 {
     let mut best = Hit {
@@ -184,8 +235,8 @@ where
         v: 0.0,
     };
     // Not zeroed: only entries below `sp`, each written by a push, are read
-    // (zeroing 576 bytes per query was 2% of a render, in memset).
-    let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); WIDE_STACK_SIZE];
+    // (zeroing the stack per query was 2% of a render, in memset).
+    let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); STACK];
     let mut sp = 0;
     let mut cur = 0u32;
     loop {
@@ -197,139 +248,11 @@ where
             let (mask, dist) = boxes(node, best.t);
             if mask != 0 {
                 if mask.is_power_of_two() {
-                    cur = node.child[mask.trailing_zeros() as usize];
-                    continue;
-                }
-                let (near, far) = (
-                    mask.trailing_zeros() as usize,
-                    31 - mask.leading_zeros() as usize,
-                );
-                if mask.count_ones() == 2 {
-                    // sort4's answer for two hits, with one comparison.
-                    let (a, b) = if dist[far] < dist[near] {
-                        (far, near)
-                    } else {
-                        (near, far)
-                    };
-                    stack[sp] = MaybeUninit::new((node.child[b], dist[b]));
-                    sp += 1;
-                    cur = node.child[a];
-                    continue;
-                }
-                let order = sort4(&dist);
-                for &s in order[1..mask.count_ones() as usize].iter().rev() {
-                    stack[sp] = MaybeUninit::new((node.child[s], dist[s]));
-                    sp += 1;
-                }
-                cur = node.child[order[0]];
-                continue;
-            }
-        }
-        loop {
-            if sp == 0 {
-                return (best.tri != u32::MAX).then_some(best);
-            }
-            sp -= 1;
-            // SAFETY: every entry below the stack pointer was pushed.
-            let (c, d) = unsafe { stack[sp].assume_init() };
-            if d <= best.t * SLAB_PAD {
-                cur = c;
-                break;
-            }
-        }
-    }
-}
-
-/// Any hit: the first triangle hit in (0, tmax) ends the search; children
-/// still nearest first (the likelier blockers).
-#[inline(always)]
-fn occluded<F, L>(nodes: &[Bvh4Node], tmax: f32, boxes: F, leaf: L) -> bool
-where
-    F: Fn(&Bvh4Node, f32) -> (u32, [f32; 4]),
-    L: Fn(usize, usize) -> bool,
-{
-    // Not zeroed, as in `closest`.
-    let mut stack = [MaybeUninit::<u32>::uninit(); WIDE_STACK_SIZE];
-    let mut sp = 0;
-    let mut cur = 0u32;
-    loop {
-        if is_leaf_ref(cur) {
-            let (first, count) = leaf_range(cur);
-            if leaf(first, count) {
-                return true;
-            }
-        } else {
-            let node = &nodes[cur as usize];
-            let (mask, dist) = boxes(node, tmax);
-            if mask != 0 {
-                if mask.is_power_of_two() {
-                    cur = node.child[mask.trailing_zeros() as usize];
-                    continue;
-                }
-                let (near, far) = (
-                    mask.trailing_zeros() as usize,
-                    31 - mask.leading_zeros() as usize,
-                );
-                if mask.count_ones() == 2 {
-                    let (a, b) = if dist[far] < dist[near] {
-                        (far, near)
-                    } else {
-                        (near, far)
-                    };
-                    stack[sp] = MaybeUninit::new(node.child[b]);
-                    sp += 1;
-                    cur = node.child[a];
-                    continue;
-                }
-                let order = sort4(&dist);
-                for &s in order[1..mask.count_ones() as usize].iter().rev() {
-                    stack[sp] = MaybeUninit::new(node.child[s]);
-                    sp += 1;
-                }
-                cur = node.child[order[0]];
-                continue;
-            }
-        }
-        if sp == 0 {
-            return false;
-        }
-        sp -= 1;
-        // SAFETY: every entry below the stack pointer was pushed.
-        cur = unsafe { stack[sp].assume_init() };
-    }
-}
-
-/// [`closest`] on 8-wide nodes: the same loop, the hit slots ordered by
-/// [`order8`] (nearest visited at once, the others stacked farthest first).
-#[inline(always)]
-fn closest8<F, L>(nodes: &[Bvh8Node], tmax: f32, boxes: F, leaf: L) -> Option<Hit>
-where
-    F: Fn(&Bvh8Node, f32) -> (u32, [f32; 8]),
-    L: Fn(usize, usize, &mut Hit),
-{
-    let mut best = Hit {
-        t: tmax,
-        tri: u32::MAX,
-        u: 0.0,
-        v: 0.0,
-    };
-    let mut stack = [MaybeUninit::<(u32, f32)>::uninit(); WIDE8_STACK_SIZE];
-    let mut sp = 0;
-    let mut cur = 0u32;
-    loop {
-        if is_leaf_ref(cur) {
-            let (first, count) = leaf_range(cur);
-            leaf(first, count, &mut best);
-        } else {
-            let node = &nodes[cur as usize];
-            let (mask, dist) = boxes(node, best.t);
-            if mask != 0 {
-                if mask.is_power_of_two() {
-                    cur = node.child[mask.trailing_zeros() as usize];
+                    cur = node.child(mask.trailing_zeros() as usize);
                     continue;
                 }
                 if mask.count_ones() == 2 {
-                    // order8's answer for two hits, with one comparison.
+                    // The order of two hits, with one comparison.
                     let (near, far) = (
                         mask.trailing_zeros() as usize,
                         31 - mask.leading_zeros() as usize,
@@ -339,17 +262,17 @@ where
                     } else {
                         (near, far)
                     };
-                    stack[sp] = MaybeUninit::new((node.child[b], dist[b]));
+                    stack[sp] = MaybeUninit::new((node.child(b), dist[b]));
                     sp += 1;
-                    cur = node.child[a];
+                    cur = node.child(a);
                     continue;
                 }
-                let (order, n) = order8(mask, &dist);
+                let (order, n) = order_hits(mask, &dist);
                 for &s in order[1..n].iter().rev() {
-                    stack[sp] = MaybeUninit::new((node.child[s as usize], dist[s as usize]));
+                    stack[sp] = MaybeUninit::new((node.child(s as usize), dist[s as usize]));
                     sp += 1;
                 }
-                cur = node.child[order[0] as usize];
+                cur = node.child(order[0] as usize);
                 continue;
             }
         }
@@ -368,14 +291,18 @@ where
     }
 }
 
-/// [`occluded`] on 8-wide nodes.
+/// Any hit: the first triangle hit in (0, tmax) ends the search. Hit
+/// children are taken in slot order, unsorted (Embree's any-hit
+/// traversal: ordering costs more than it finds blockers sooner, measured
+/// with `bench/embree`).
 #[inline(always)]
-fn occluded8<F, L>(nodes: &[Bvh8Node], tmax: f32, boxes: F, leaf: L) -> bool
+fn occluded<N, const W: usize, F, L>(nodes: &[N], tmax: f32, boxes: F, leaf: L) -> bool
 where
-    F: Fn(&Bvh8Node, f32) -> (u32, [f32; 8]),
+    N: WideNode,
+    F: Fn(&N, f32) -> (u32, [f32; W]),
     L: Fn(usize, usize) -> bool,
 {
-    let mut stack = [MaybeUninit::<u32>::uninit(); WIDE8_STACK_SIZE];
+    let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
     let mut sp = 0;
     let mut cur = 0u32;
     loop {
@@ -386,22 +313,15 @@ where
             }
         } else {
             let node = &nodes[cur as usize];
-            let (mask, dist) = boxes(node, tmax);
+            let (mask, _) = boxes(node, tmax);
             if mask != 0 {
-                if mask.is_power_of_two() {
-                    cur = node.child[mask.trailing_zeros() as usize];
-                    continue;
-                }
-                // Unordered (Embree's any-hit traversal): the first hit
-                // slot now, the others stacked.
                 let mut m = mask & (mask - 1);
                 while m != 0 {
-                    stack[sp] = MaybeUninit::new(node.child[m.trailing_zeros() as usize]);
+                    stack[sp] = MaybeUninit::new(node.child(m.trailing_zeros() as usize));
                     sp += 1;
                     m &= m - 1;
                 }
-                cur = node.child[mask.trailing_zeros() as usize];
-                let _ = dist;
+                cur = node.child(mask.trailing_zeros() as usize);
                 continue;
             }
         }
@@ -541,7 +461,7 @@ mod x86 {
     use super::super::traverse::{PreparedRay, SLAB_PAD, refine_edge};
     use super::super::wide::Bvh4Node;
     use super::super::wide8::{Bvh8Node, LeafBlock};
-    use super::{Hit, Triangle, closest, closest8, occluded, occluded8};
+    use super::{Hit, Triangle, closest, occluded};
 
     /// The ray's constants broadcast to all four lanes, for the box test
     /// and the triangle test.
@@ -1120,7 +1040,7 @@ mod x86 {
         tmax: f32,
     ) -> Option<Hit> {
         let (r4, r8) = (ray4(r), ray8(r));
-        closest8(
+        closest(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
@@ -1138,7 +1058,7 @@ mod x86 {
         tmax: f32,
     ) -> bool {
         let (r4, r8) = (ray4(r), ray8(r));
-        occluded8(
+        occluded(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
@@ -1265,6 +1185,31 @@ mod tests {
         }
         // The cases hit often enough to test something.
         assert!(checked > 2000, "{checked} hits");
+    }
+
+    /// The CPU's order of a node's hits is GLSL's `sort4` order of them,
+    /// ties included.
+    #[test]
+    fn order_hits_is_sort4_on_the_hits() {
+        let mut rng = crate::sampling::Pcg32::new(4, 4);
+        let values = [0.0, 0.5, 0.5, 1.0, 2.0, f32::INFINITY];
+        for _ in 0..20_000 {
+            let dist: [f32; 4] = std::array::from_fn(|_| values[rng.below(values.len())]);
+            let mask = (0..4)
+                .filter(|&i| dist[i] != f32::INFINITY)
+                .fold(0, |m, i| m | 1 << i);
+            let (order, n) = order_hits(mask, &dist);
+            let want: Vec<usize> = sort4(&dist)
+                .into_iter()
+                .filter(|&i| mask & 1 << i != 0)
+                .collect();
+            let got: Vec<usize> = order[..n].iter().map(|&s| s as usize).collect();
+            assert_eq!(got, want, "{dist:?}");
+        }
+        let inf = f32::INFINITY;
+        let dist = [3.0, inf, 1.0, 1.0, 0.5, inf, 2.0, 0.5];
+        let (order, n) = order_hits(0b1101_1101, &dist);
+        assert_eq!(&order[..n], &[4, 7, 2, 3, 6, 0]);
     }
 
     #[test]
