@@ -40,6 +40,10 @@ pub enum Command {
     /// the models they map to, textures, lights, triangles, bounds, kernel
     /// features, GPU memory, warnings.
     Info(InfoArgs),
+    /// Write the prepared scene for a peer renderer: Mitsuba 3 XML and PLY
+    /// meshes (exact for Mitsuba's own models, lights and camera; what is
+    /// approximated gets a warning line).
+    Export(ExportArgs),
 
     /// Sweep each BSDF through its failure points (grazing angles, alpha
     /// to 0, eta to 1, extreme k and anisotropy) on both backends; write
@@ -520,6 +524,17 @@ pub struct CompareArgs {
     /// from the default on a scene with indirect light).
     #[arg(long, value_name = "OPTIONS", allow_hyphen_values = true)]
     pub cpu_options: Option<String>,
+}
+
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    #[command(flatten)]
+    pub scene: SceneArgs,
+
+    /// Output folder: DIR/scene.xml and DIR/meshes/*.ply (created; files
+    /// of the same names are replaced).
+    #[arg(short = 'o', long = "output", value_name = "DIR")]
+    pub dir: std::path::PathBuf,
 }
 
 #[derive(clap::Args, Debug)]

@@ -8,4 +8,5 @@ pub mod chart;
 pub mod gpu;
 pub mod heatmap;
 pub mod methods;
+pub mod mitsuba;
 pub mod stability;

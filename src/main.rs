@@ -68,6 +68,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => std::panic::catch_unwind(|| cmd::bench::run(&args)),
         Command::Converge(args) => std::panic::catch_unwind(|| cmd::converge::run(&args)),
         Command::Info(args) => std::panic::catch_unwind(|| cmd::info::run(&args)),
+        Command::Export(args) => std::panic::catch_unwind(|| cmd::export::run(&args)),
         Command::Stability(args) => std::panic::catch_unwind(|| cmd::stability::run(&args)),
         Command::Merge(args) => std::panic::catch_unwind(|| cmd::merge::run(&args)),
         Command::Diff(_) | Command::Test(_) => unreachable!("handled above"),

@@ -6,6 +6,7 @@ pub mod compare;
 pub mod converge;
 pub mod detect;
 pub mod diff;
+pub mod export;
 pub mod info;
 pub mod merge;
 pub mod outputs;

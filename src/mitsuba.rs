@@ -1,0 +1,451 @@
+//! The prepared scene as a Mitsuba 3 scene (`glint export`): `scene.xml`
+//! and one binary PLY per material, so the peer renders exactly the
+//! geometry, camera, lights and image glint renders, after glint's own
+//! loading (node transforms, the default camera and lighting, the
+//! load-time simplifications). `scripts/mitsuba_bench.py` times both
+//! renderers on what this writes.
+//!
+//! Exact where the models are Mitsuba's own (the contract's `extras.bsdf`
+//! types: `diffuse`, `conductor`, `roughconductor`, `dielectric`,
+//! `roughdielectric`, `plastic`, `roughplastic`, `thindielectric`), the
+//! emitters (area lights from emissive triangles, point, directional and
+//! constant background) and the camera (a box filter one pixel wide, the
+//! vertical field of view, `path` with the same `max_depth` and Russian
+//! roulette from depth 5). Approximate, with a warning each: the glTF
+//! non-metal and metallic blend (Mitsuba's `principled`), height-correlated
+//! shadowing (Mitsuba's GGX is separable), `multiscatter`, anisotropic
+//! lobes (oriented by Mitsuba's own tangent frame), the spot light's
+//! falloff (glTF's quadratic ramp against Mitsuba's smoothstep), textures
+//! (their factors only), alpha masks, interior absorption and environment
+//! maps (not written).
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+
+use anyhow::{Context, Result};
+use glam::{Mat4, Vec3};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
+use glint_cpu::camera::scene_camera;
+use glint_cpu::scene::{NO_LIGHT, TRI_NORMALS, TRI_SHADING_SHIFT};
+use glint_cpu::{PunctualLight, RenderOptions, Scene};
+
+/// What `export` wrote: the files (relative to the folder) and what it
+/// could only approximate, one line each.
+pub struct Export {
+    pub files: Vec<String>,
+    pub warnings: Vec<String>,
+}
+
+fn rgb(name: &str, v: Vec3) -> String {
+    format!(
+        r#"<rgb name="{name}" value="{:e}, {:e}, {:e}"/>"#,
+        v.x, v.y, v.z
+    )
+}
+
+fn float(name: &str, v: f32) -> String {
+    format!(r#"<float name="{name}" value="{v:e}"/>"#)
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// The GGX parameters of a rough model (`distribution`, alphas, visible
+/// normal sampling), and a warning where glint's shadowing is not Mitsuba's.
+fn ggx(r: &Roughness, what: &str, warnings: &mut Vec<String>) -> String {
+    if r.shadowing == Shadowing::Correlated {
+        warnings.push(format!(
+            "{what}: height-correlated Smith shadowing written as Mitsuba's separable G1 G1"
+        ));
+    }
+    if r.alpha_u != r.alpha_v {
+        warnings.push(format!(
+            "{what}: anisotropic: Mitsuba orients the lobe by its own tangent frame (from UVs, \
+             or its coordinate system without them), not glint's"
+        ));
+    }
+    if r.multiscatter {
+        warnings.push(format!("{what}: multiscatter (energy compensation) has no Mitsuba form: single scattering written"));
+    }
+    format!(
+        r#"<string name="distribution" value="ggx"/>{}{}<boolean name="sample_visible" value="true"/>"#,
+        float("alpha_u", r.alpha_u),
+        float("alpha_v", r.alpha_v)
+    )
+}
+
+fn conductor(c: &ConductorParams, what: &str, warnings: &mut Vec<String>) -> String {
+    let common = format!(
+        "{}{}{}",
+        rgb("eta", c.eta),
+        rgb("k", c.k),
+        rgb("specular_reflectance", c.specular_reflectance)
+    );
+    if c.roughness.is_smooth() {
+        format!(r#"<bsdf type="conductor">{common}</bsdf>"#)
+    } else {
+        let g = ggx(&c.roughness, what, warnings);
+        format!(r#"<bsdf type="roughconductor">{common}{g}</bsdf>"#)
+    }
+}
+
+/// Mitsuba's `principled` for the glTF non-metal (`metallic` 0) and the
+/// metallic blend: base colour, roughness sqrt(alpha), the coat's IOR and
+/// thin transmission. An approximation: a different layering model.
+fn principled(base: Vec3, metallic: f32, alpha: f32, eta: f32, spec_trans: f32) -> String {
+    format!(
+        r#"<bsdf type="principled">{}{}{}{}{}</bsdf>"#,
+        rgb("base_color", base),
+        float("metallic", metallic),
+        float("roughness", alpha.max(0.0).sqrt()),
+        float("eta", eta.max(1.0001)),
+        float("spec_trans", spec_trans)
+    )
+}
+
+/// A material's BSDF as Mitsuba XML.
+fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
+    match bsdf {
+        Bsdf::Diffuse { reflectance } => {
+            format!(
+                r#"<bsdf type="diffuse">{}</bsdf>"#,
+                rgb("reflectance", *reflectance)
+            )
+        }
+        Bsdf::Conductor(c) => conductor(c, what, warnings),
+        Bsdf::Dielectric { eta, roughness } => {
+            let iors = format!("{}{}", float("int_ior", *eta), float("ext_ior", 1.0));
+            if roughness.is_smooth() {
+                format!(r#"<bsdf type="dielectric">{iors}</bsdf>"#)
+            } else {
+                let g = ggx(roughness, what, warnings);
+                format!(r#"<bsdf type="roughdielectric">{iors}{g}</bsdf>"#)
+            }
+        }
+        Bsdf::Plastic(p) => format!(
+            r#"<bsdf type="plastic">{}{}{}{}<boolean name="nonlinear" value="{}"/></bsdf>"#,
+            rgb("diffuse_reflectance", p.diffuse),
+            rgb("specular_reflectance", p.specular),
+            float("int_ior", p.eta),
+            float("ext_ior", 1.0),
+            p.nonlinear
+        ),
+        Bsdf::RoughPlastic(rp) => {
+            let p = &rp.plastic;
+            let mut r = rp.roughness;
+            // roughplastic is isotropic: alpha_u only.
+            r.alpha_v = r.alpha_u;
+            let g = ggx(&r, what, warnings).replace(&float("alpha_v", r.alpha_v), "");
+            format!(
+                r#"<bsdf type="roughplastic">{}{}{}{}<boolean name="nonlinear" value="{}"/>{}</bsdf>"#,
+                rgb("diffuse_reflectance", p.diffuse),
+                rgb("specular_reflectance", p.specular),
+                float("int_ior", p.eta),
+                float("ext_ior", 1.0),
+                p.nonlinear,
+                g.replace("alpha_u", "alpha")
+            )
+        }
+        Bsdf::ThinDielectric {
+            eta,
+            reflectance,
+            transmittance,
+        } => format!(
+            r#"<bsdf type="thindielectric">{}{}{}{}</bsdf>"#,
+            float("int_ior", *eta),
+            float("ext_ior", 1.0),
+            rgb("specular_reflectance", *reflectance),
+            rgb("specular_transmittance", *transmittance)
+        ),
+        Bsdf::Coated {
+            base,
+            coat,
+            roughness,
+        } => {
+            warnings.push(format!(
+                "{what}: the glTF non-metal written as Mitsuba's principled (another layering model)"
+            ));
+            principled(*base, 0.0, roughness.alpha_u, coat.eta, coat.transmission)
+        }
+        Bsdf::Metallic {
+            metallic,
+            base,
+            conductor,
+            coat,
+        } => {
+            warnings.push(format!(
+                "{what}: the glTF metallic blend written as Mitsuba's principled (another layering model)"
+            ));
+            principled(
+                *base,
+                *metallic,
+                conductor.roughness.alpha_u,
+                coat.eta,
+                coat.transmission,
+            )
+        }
+    }
+}
+
+/// A triangle list as a binary little-endian PLY: three vertices per
+/// triangle (positions, and normals where `normals` is Some), faces in
+/// order.
+fn write_ply(path: &Path, positions: &[[f32; 3]], normals: Option<&[[f32; 3]]>) -> Result<()> {
+    let mut out = Vec::new();
+    let n = positions.len();
+    write!(
+        out,
+        "ply\nformat binary_little_endian 1.0\nelement vertex {n}\n\
+         property float x\nproperty float y\nproperty float z\n"
+    )?;
+    if normals.is_some() {
+        write!(
+            out,
+            "property float nx\nproperty float ny\nproperty float nz\n"
+        )?;
+    }
+    write!(
+        out,
+        "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
+        n / 3
+    )?;
+    for (i, p) in positions.iter().enumerate() {
+        for c in p {
+            out.extend_from_slice(&c.to_le_bytes());
+        }
+        if let Some(ns) = normals {
+            for c in &ns[i] {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    for f in 0..(n / 3) as i32 {
+        out.push(3);
+        for k in 0..3 {
+            out.extend_from_slice(&(3 * f + k).to_le_bytes());
+        }
+    }
+    std::fs::write(path, out).with_context(|| format!("{}", path.display()))
+}
+
+/// One mesh per (material, emitting): its triangles' vertices and
+/// normals (each triangle's own, or its geometric normal where it has none).
+struct Mesh {
+    positions: Vec<[f32; 3]>,
+    normals: Vec<[f32; 3]>,
+    smooth: bool,
+}
+
+/// The triangles of material `m` that emit (or not), or None when it has
+/// none.
+fn mesh_of(scene: &Scene, m: u32, emitting: bool) -> Option<Mesh> {
+    let mut mesh = Mesh {
+        positions: Vec::new(),
+        normals: Vec::new(),
+        smooth: false,
+    };
+    for t in &scene.triangles {
+        if t.material != m || (t.light != NO_LIGHT) != emitting {
+            continue;
+        }
+        let [a, b, c] = t.vertices();
+        let ng = t.geometric_normal().normalize_or_zero();
+        let mut ns = [ng; 3];
+        if t.flags & TRI_NORMALS != 0 {
+            let off = (t.flags >> TRI_SHADING_SHIFT) as usize;
+            for (k, n) in ns.iter_mut().enumerate() {
+                *n = Vec3::from_slice(&scene.shading[off + k][..3]);
+            }
+            mesh.smooth = true;
+        }
+        for (p, n) in [a, b, c].into_iter().zip(ns) {
+            mesh.positions.push(p.into());
+            mesh.normals.push(n.into());
+        }
+    }
+    (!mesh.positions.is_empty()).then_some(mesh)
+}
+
+/// The sensor: glTF's camera (looking down -Z, +X right) in Mitsuba's
+/// convention (looking down +Z, +X left): the same world transform times
+/// diag(-1, 1, -1).
+fn sensor_xml(scene: &Scene, opts: &RenderOptions) -> String {
+    let cam = scene_camera(scene, opts.camera);
+    let to_world = cam.to_world * Mat4::from_scale(Vec3::new(-1.0, 1.0, -1.0));
+    let rows = to_world.transpose().to_cols_array();
+    let matrix = rows.map(|v| format!("{v:e}")).join(" ");
+    format!(
+        r#"  <sensor type="perspective">
+    <string name="fov_axis" value="y"/>
+    {fov}
+    {near}
+    <transform name="to_world"><matrix value="{matrix}"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="{spp}"/></sampler>
+    <film type="hdrfilm">
+      <integer name="width" value="{w}"/>
+      <integer name="height" value="{h}"/>
+      <string name="pixel_format" value="rgb"/>
+      <rfilter type="box"/>
+    </film>
+  </sensor>
+"#,
+        fov = float("fov", cam.yfov.to_degrees()),
+        near = float("near_clip", 1e-4),
+        spp = opts.spp,
+        w = opts.width,
+        h = opts.height,
+    )
+}
+
+fn lights_xml(scene: &Scene, warnings: &mut Vec<String>) -> String {
+    let mut xml = String::new();
+    for l in &scene.lights {
+        let _ = match *l {
+            PunctualLight::Point {
+                position,
+                intensity,
+            } => writeln!(
+                xml,
+                r#"  <emitter type="point"><point name="position" x="{:e}" y="{:e}" z="{:e}"/>{}</emitter>"#,
+                position.x,
+                position.y,
+                position.z,
+                rgb("intensity", intensity)
+            ),
+            PunctualLight::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone_angle,
+                outer_cone_angle,
+            } => {
+                warnings.push(
+                    "a spot light: glTF's quadratic cone ramp written as Mitsuba's spot falloff"
+                        .into(),
+                );
+                let target = position + direction;
+                writeln!(
+                    xml,
+                    r#"  <emitter type="spot"><transform name="to_world"><lookat origin="{:e}, {:e}, {:e}" target="{:e}, {:e}, {:e}" up="{}"/></transform>{}{}{}</emitter>"#,
+                    position.x,
+                    position.y,
+                    position.z,
+                    target.x,
+                    target.y,
+                    target.z,
+                    if direction.y.abs() > 0.9 {
+                        "1, 0, 0"
+                    } else {
+                        "0, 1, 0"
+                    },
+                    rgb("intensity", intensity),
+                    float("cutoff_angle", outer_cone_angle.to_degrees()),
+                    float("beam_width", inner_cone_angle.to_degrees())
+                )
+            }
+            PunctualLight::Directional {
+                direction,
+                irradiance,
+            } => writeln!(
+                xml,
+                r#"  <emitter type="directional"><vector name="direction" x="{:e}" y="{:e}" z="{:e}"/>{}</emitter>"#,
+                direction.x,
+                direction.y,
+                direction.z,
+                rgb("irradiance", irradiance)
+            ),
+        };
+    }
+    if scene.envmap.is_some() {
+        warnings.push("the environment map is not written".into());
+    } else if scene.background.max_element() > 0.0 {
+        let _ = writeln!(
+            xml,
+            r#"  <emitter type="constant">{}</emitter>"#,
+            rgb("radiance", scene.background)
+        );
+    }
+    xml
+}
+
+/// Write `scene` as Mitsuba 3 XML and PLY meshes into `dir` (created),
+/// for the render `opts` describes (size, spp, depth, camera).
+pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export> {
+    std::fs::create_dir_all(dir.join("meshes")).with_context(|| format!("{}", dir.display()))?;
+    let mut warnings = Vec::new();
+    let mut files = Vec::new();
+    let mut shapes = String::new();
+    if !scene.textures.is_empty() {
+        warnings.push("textures are not written: each material keeps its factors".into());
+    }
+    for (m, mat) in scene.materials.iter().enumerate() {
+        let what = format!("material {m} ({})", mat.name);
+        if mat.absorption != Vec3::ZERO {
+            warnings.push(format!("{what}: interior absorption is not written"));
+        }
+        if scene
+            .textures
+            .material(m as u32)
+            .is_some_and(|t| t.has_alpha_test())
+        {
+            warnings.push(format!("{what}: the alpha mask is not written"));
+        }
+        let bsdf = bsdf_xml(&mat.bsdf, &what, &mut warnings);
+        if mat.is_emissive() && mat.double_sided {
+            warnings.push(format!(
+                "{what}: a double-sided emitter written one-sided (Mitsuba's area lights emit from the front)"
+            ));
+        }
+        for emitting in [false, true] {
+            {
+                let Some(mesh) = mesh_of(scene, m as u32, emitting) else {
+                    continue;
+                };
+                let id = format!("m{m}{}", if emitting { "e" } else { "" });
+                let name = format!("meshes/{id}.ply");
+                let normals = mesh.smooth.then_some(&mesh.normals[..]);
+                write_ply(&dir.join(&name), &mesh.positions, normals)?;
+                files.push(name.clone());
+                let emitter = if emitting {
+                    format!(
+                        r#"<emitter type="area">{}</emitter>"#,
+                        rgb("radiance", mat.emission)
+                    )
+                } else {
+                    String::new()
+                };
+                let _ = writeln!(
+                    shapes,
+                    r#"  <shape type="ply" id="{}"><string name="filename" value="{name}"/>{}{bsdf}{emitter}</shape>"#,
+                    xml_escape(&id),
+                    if mesh.smooth {
+                        ""
+                    } else {
+                        r#"<boolean name="face_normals" value="true"/>"#
+                    },
+                );
+            }
+        }
+    }
+    let depth = opts.max_depth;
+    let xml = format!(
+        r#"<?xml version="1.0" encoding="utf-8"?>
+<!-- Written by glint export: the prepared scene for Mitsuba 3. -->
+<scene version="3.0.0">
+  <integrator type="path"><integer name="max_depth" value="{depth}"/><integer name="rr_depth" value="5"/></integrator>
+{sensor}{lights}{shapes}</scene>
+"#,
+        sensor = sensor_xml(scene, opts),
+        lights = lights_xml(scene, &mut warnings),
+    );
+    std::fs::write(dir.join("scene.xml"), xml)
+        .with_context(|| format!("{}", dir.join("scene.xml").display()))?;
+    files.insert(0, "scene.xml".into());
+    warnings.dedup();
+    Ok(Export { files, warnings })
+}
