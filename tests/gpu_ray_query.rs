@@ -180,6 +180,9 @@ fn compare(name: &str, tris: &[Triangle], rays: &[Ray], hw: &Traced, sw: &Traced
         let (th, ts) = (f32::from_bits(h[0]), f32::from_bits(s[0]));
         match (h[1], s[1]) {
             (u32::MAX, u32::MAX) => {}
+            // One traversal hit, the other did not: a ray through a shared
+            // edge, or a hit software rejects within its own t error bound.
+            (u32::MAX, _) | (_, u32::MAX) => differ += 1,
             (a, b) if a == b || tris[a as usize].vertices() == tris[b as usize].vertices() => {
                 let tri = &tris[b as usize];
                 let (eh, es) = (off_plane(tri, ray, th), off_plane(tri, ray, ts));
