@@ -15,6 +15,16 @@ pub const CHECK_SAMPLES: u32 = 16;
 /// per channel (Sobol: 4 batches; independent: 64 samples).
 pub const ADAPTIVE_MIN_CHECKS: u32 = 4;
 
+/// `--target-error E` stops once the estimated relMSE is at most this
+/// fraction of E. Stopping at the first check where a noisy estimate falls
+/// under E selects the renders whose estimate happens to be low (optional
+/// stopping): on the caustic under the rough glass the true relMSE of the
+/// renders stopped at E = 0.005 averaged 1.44 E over 10 seeds. 0.8 is the
+/// calibration's lower end (estimated / true 0.81 at 256 spp): with it the
+/// target holds in the mean on every bundled scene
+/// (`cpu/tests/calibration.rs`).
+pub const TARGET_MARGIN: f64 = 0.8;
+
 /// The variance batch a controlled Sobol render uses: 16 samples (a check
 /// every batch, as often as Cycles checks), fewer when `cap` leaves under
 /// 16 batches ([`crate::film::variance_batch_for`]).
@@ -80,7 +90,7 @@ impl Control {
             return true;
         }
         if let Some(e) = self.target_error
-            && estimated_relmse(film) <= e
+            && estimated_relmse(film) <= e * TARGET_MARGIN
         {
             return false;
         }
