@@ -16,7 +16,8 @@
 # the side with the smaller error.
 #
 # Usage: scripts/before_after.sh BEFORE_REV [SPP] [WIDTH] [ROUNDS] [REF_SPP]
-#   defaults: 64 spp, 64 px wide, 3 rounds, reference 4096 spp.
+#   defaults: 64 spp, 64 px wide, 3 rounds, reference 4096 spp; BACKENDS="cpu"
+#   (environment) times one backend only (default "gpu cpu").
 # Output: target/before-after/ (images, stats, table.md). The earlier commit is
 # built in a git worktree under target/before-after/src with its own target dir.
 set -euo pipefail
@@ -35,7 +36,8 @@ if [ ! -d "$src" ] || [ "$(git -C "$src" rev-parse HEAD 2>/dev/null)" != "$(git 
   git worktree prune
   git worktree add --detach "$src" "$rev"
 fi
-(cd "$src" && CARGO_TARGET_DIR="$root/$out/target" cargo build --release --locked)
+# The worktree has no target/shaderc of its own (scripts/setup.sh makes it here).
+(cd "$src" && SHADERC_LIB_DIR="$root/target/shaderc" CARGO_TARGET_DIR="$root/$out/target" cargo build --release --locked)
 before="$root/$out/target/release/glint"
 
 table="$out/table.md"
@@ -51,7 +53,7 @@ for scene in assets/*.gltf assets/*.glb; do
     "$after" render "$scene" --width "$width" --spp "$ref_spp" --backend cpu --seed 1000 -o "$ref" 2> /dev/null
   fi
   for r in $(seq 1 "$rounds"); do
-    for backend in gpu cpu; do
+    for backend in ${BACKENDS:-gpu cpu}; do
       for side in before after; do
         bin=$before; [ "$side" = after ] && bin=$after
         base="$out/$name-$backend-$side-$r"
@@ -88,16 +90,18 @@ print()
 print("| scene | backend | render s, before | after | samples/s after / before | relMSE before | after | efficiency after / before | trimmed |")
 print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
 eff = {}
+backends = [b for b in ("gpu", "cpu") if any(k[1] == b for k in runs)]
 for name in scenes:
-    for backend in ("gpu", "cpu"):
+    for backend in backends:
         b, a = (name, backend, "before"), (name, backend, "after")
         sb, sa, eb, ea = med(b, 0), med(a, 0), med(b, 1), med(a, 1)
         tb, ta = med(b, 2), med(a, 2)
         eff[name, backend] = 1 / (ea * sa)
         print(f"| {name} | {backend} | {sb:.3f} | {sa:.3f} | {sb / sa:.2f} | {eb:.3g} | {ea:.3g} | "
               f"{eb * sb / (ea * sa):.2f} | {tb * sb / (ta * sa):.2f} |")
-print()
-print("GPU / CPU efficiency of the after binary (above 1: the GPU backend reaches the error sooner):", ", ".join(
-    f"{n} {eff[n, 'gpu'] / eff[n, 'cpu']:.2f}" for n in scenes) + ".")
+if len(backends) == 2:
+    print()
+    print("GPU / CPU efficiency of the after binary (above 1: the GPU backend reaches the error sooner):", ", ".join(
+        f"{n} {eff[n, 'gpu'] / eff[n, 'cpu']:.2f}" for n in scenes) + ".")
 PY
 cat "$table"

@@ -1054,3 +1054,40 @@ fn bunny_wide_matches_binary() {
         .sum();
     assert!(hits * 2 > rays.len(), "{hits} hits");
 }
+
+/// Alpha-masked queries (a triangle is there only where `present(tri, u,
+/// v)` says so, as an alpha mask cuts it): every kernel's masked closest
+/// and any hit against the binary traversal's on 10^5 bunny rays, with a
+/// mask that removes whole triangles and parts of others.
+#[test]
+fn masked_queries_match_the_binary_traversal_on_every_kernel() {
+    let input = bunny();
+    let (bvh, tris, _) = build(&input);
+    let all = Traversals::new(bvh, &tris);
+    let present = |tri: u32, u: f32, v: f32| {
+        let h = tri.wrapping_mul(0x9e37_79b9) >> 29;
+        h != 0 && !(h == 1 && u + v > 0.5)
+    };
+    let mut rng = Pcg32::from_state(0xa1fa);
+    let mut rays = random_rays(&tris, 80_000, &mut rng);
+    rays.extend(rays_from_surfaces(&tris, 20_000, &mut rng));
+    let (mut hits, mut masked_away) = (0, 0);
+    for ray in &rays {
+        let want = all.bin.intersect_masked(&tris, ray, present);
+        let want_occ = all.bin.occluded_masked(&tris, ray, present);
+        hits += want.is_some() as usize;
+        masked_away += (want.is_none() && all.bin.intersect(&tris, ray).is_some()) as usize;
+        for &k in &all.kernels {
+            let got = all.wide.intersect_masked_with(k, &tris, ray, present);
+            // The same distance (an exact tie may pick another triangle).
+            assert_eq!(got.map(|h| h.t), want.map(|h| h.t), "{k:?} {ray:?}");
+            let occ = all.wide.occluded_masked_with(k, &tris, ray, present);
+            let near_tmax = want.is_some_and(|h| (h.t - ray.tmax).abs() <= 1e-5 * ray.tmax);
+            assert!(occ == want_occ || near_tmax, "{k:?} occlusion {ray:?}");
+        }
+    }
+    assert!(
+        hits > 20_000 && masked_away > 1_000,
+        "{hits} hits, {masked_away} masked away"
+    );
+}

@@ -34,17 +34,25 @@ fn assets() -> Vec<PathBuf> {
     v
 }
 
-fn render(scene: &glint_cpu::Scene, spp: u32, seed: u64, sampler: SamplerKind) -> Film {
+/// WIDTH pixels wide, the height from the first camera's aspect (as
+/// `glint render`), `spp` samples of `seed`.
+fn options(scene: &glint_cpu::Scene, spp: u32, seed: u64) -> RenderOptions {
     let mut o = RenderOptions::new(WIDTH, WIDTH);
-    // The height from the first camera's aspect, as `glint render`.
     if let Some(a) = scene.cameras.first().and_then(|c| c.aspect_ratio) {
         o.height = ((WIDTH as f32 / a).round() as u32).max(1);
     }
     o.spp = spp;
     o.seed = seed;
-    o.sampler = sampler;
-    // Whole passes with the control's batches, as `--target-error` runs.
-    o.target_error = Some(1e-12);
+    o
+}
+
+fn render(scene: &glint_cpu::Scene, spp: u32, seed: u64, sampler: SamplerKind) -> Film {
+    let o = RenderOptions {
+        sampler,
+        // Whole passes with the control's batches, as `--target-error` runs.
+        target_error: Some(1e-12),
+        ..options(scene, spp, seed)
+    };
     glint_cpu::render(scene, &o, &|_, _| {}).unwrap().0
 }
 
@@ -118,13 +126,10 @@ fn target_error_meets_its_target_in_the_mean() {
             for target in [0.02, 0.005] {
                 let (mut truth, mut total_spp) = (0.0, 0u64);
                 for seed in 1..=10u64 {
-                    let mut o = RenderOptions::new(WIDTH, WIDTH);
-                    if let Some(a) = scene.cameras.first().and_then(|c| c.aspect_ratio) {
-                        o.height = ((WIDTH as f32 / a).round() as u32).max(1);
-                    }
-                    o.spp = 1 << 16;
-                    o.seed = seed;
-                    o.target_error = Some(target);
+                    let o = RenderOptions {
+                        target_error: Some(target),
+                        ..options(&scene, 1 << 16, seed)
+                    };
                     let f = glint_cpu::render(&scene, &o, &|_, _| {}).unwrap().0;
                     truth += (relmse(&f, &reference) - ref_err).max(0.0);
                     total_spp += f.spp as u64;

@@ -158,7 +158,24 @@ impl Bvh4 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
-        wide_traverse::intersect_masked(&self.nodes, tris, ray, present)
+        self.intersect_masked_with(Kernel::best(), tris, ray, present)
+    }
+
+    /// [`Bvh4::intersect_masked`] with a given kernel: the 8-wide tree
+    /// for [`Kernel::Avx2x8`], else the 4-wide one with scalar box tests.
+    pub fn intersect_masked_with(
+        &self,
+        kernel: Kernel,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> Option<Hit> {
+        match kernel {
+            Kernel::Avx2x8 if Kernel::has_avx2() => {
+                wide_traverse::intersect8(&self.nodes8, &self.blocks, ray, present)
+            }
+            _ => wide_traverse::intersect_masked(&self.nodes, tris, ray, present),
+        }
     }
 
     /// [`Bvh4::occluded`] skipping hits where `present(tri, u, v)` is false.
@@ -168,7 +185,23 @@ impl Bvh4 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        wide_traverse::occluded_masked(&self.nodes, tris, ray, present)
+        self.occluded_masked_with(Kernel::best(), tris, ray, present)
+    }
+
+    /// [`Bvh4::occluded_masked`] with a given kernel.
+    pub fn occluded_masked_with(
+        &self,
+        kernel: Kernel,
+        tris: &[Triangle],
+        ray: &Ray,
+        present: impl Fn(u32, f32, f32) -> bool,
+    ) -> bool {
+        match kernel {
+            Kernel::Avx2x8 if Kernel::has_avx2() => {
+                wide_traverse::any_hit8(&self.nodes8, &self.blocks, ray, present)
+            }
+            _ => wide_traverse::occluded_masked(&self.nodes, tris, ray, present),
+        }
     }
 
     /// [`Bvh4::intersect`] with a given box-test kernel (for tests and
@@ -176,7 +209,7 @@ impl Bvh4 {
     pub fn intersect_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
         match kernel {
             Kernel::Avx2x8 if Kernel::has_avx2() => {
-                wide_traverse::intersect8(&self.nodes8, &self.blocks, ray)
+                wide_traverse::intersect8(&self.nodes8, &self.blocks, ray, |_, _, _| true)
             }
             _ => wide_traverse::intersect(&self.nodes, tris, ray, kernel),
         }
@@ -186,7 +219,7 @@ impl Bvh4 {
     pub fn occluded_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> bool {
         match kernel {
             Kernel::Avx2x8 if Kernel::has_avx2() => {
-                wide_traverse::any_hit8(&self.nodes8, &self.blocks, ray)
+                wide_traverse::any_hit8(&self.nodes8, &self.blocks, ray, |_, _, _| true)
             }
             _ => wide_traverse::any_hit(&self.nodes, tris, ray, kernel),
         }

@@ -334,9 +334,16 @@ where
     }
 }
 
-/// Closest hit on the 8-wide tree (AVX2). None of it runs on a CPU
-/// without AVX2: [`Kernel::Avx2x8`] is only chosen where it has it.
-pub(super) fn intersect8(nodes: &[Bvh8Node], blocks: &[LeafBlock], ray: &Ray) -> Option<Hit> {
+/// Closest hit on the 8-wide tree (AVX2), skipping hits where
+/// `present(tri, u, v)` is false (`|_, _, _| true` compiles away). None of
+/// it runs on a CPU without AVX2: [`Kernel::Avx2x8`] and the masked
+/// queries come here only where it has it.
+pub(super) fn intersect8(
+    nodes: &[Bvh8Node],
+    blocks: &[LeafBlock],
+    ray: &Ray,
+    present: impl Fn(u32, f32, f32) -> bool,
+) -> Option<Hit> {
     if nodes.is_empty() {
         return None;
     }
@@ -344,14 +351,20 @@ pub(super) fn intersect8(nodes: &[Bvh8Node], blocks: &[LeafBlock], ray: &Ray) ->
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::intersect_avx2(nodes, blocks, &r, ray.tmax) };
+        return unsafe { x86::intersect_avx2(nodes, blocks, &r, ray.tmax, present) };
     }
-    let _ = (blocks, r);
+    let _ = (blocks, r, present);
     unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
 }
 
-/// Any hit on the 8-wide tree (AVX2).
-pub(super) fn any_hit8(nodes: &[Bvh8Node], blocks: &[LeafBlock], ray: &Ray) -> bool {
+/// Any hit on the 8-wide tree (AVX2), skipping hits where `present` is
+/// false.
+pub(super) fn any_hit8(
+    nodes: &[Bvh8Node],
+    blocks: &[LeafBlock],
+    ray: &Ray,
+    present: impl Fn(u32, f32, f32) -> bool,
+) -> bool {
     if nodes.is_empty() {
         return false;
     }
@@ -359,9 +372,9 @@ pub(super) fn any_hit8(nodes: &[Bvh8Node], blocks: &[LeafBlock], ray: &Ray) -> b
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::occluded_avx2(nodes, blocks, &r, ray.tmax) };
+        return unsafe { x86::occluded_avx2(nodes, blocks, &r, ray.tmax, present) };
     }
-    let _ = (blocks, r);
+    let _ = (blocks, r, present);
     unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
 }
 
@@ -800,14 +813,23 @@ mod x86 {
         }
     }
 
-    /// [`leaf_closest`] on a leaf block of the 8-wide tree.
+    /// [`leaf_closest`] on a leaf block of the 8-wide tree, skipping hits
+    /// where `present(tri, u, v)` is false (the alpha-mask hook; `|_, _, _|
+    /// true` compiles away). Lanes are taken in order, each only if nearer
+    /// than the best so far and present: what the one-by-one scalar loop
+    /// with the hook accepts.
     #[inline(always)]
-    fn block_closest(r: &Ray4, block: &LeafBlock, best: &mut Hit) {
+    fn block_closest(
+        r: &Ray4,
+        block: &LeafBlock,
+        best: &mut Hit,
+        present: &impl Fn(u32, f32, f32) -> bool,
+    ) {
         let (mut mask, [t, u, v]) = triangles4_block(r, block, best.t);
         while mask != 0 {
             let j = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            if t[j] < best.t {
+            if t[j] < best.t && present(block.first + j as u32, u[j], v[j]) {
                 *best = Hit {
                     t: t[j],
                     tri: block.first + j as u32,
@@ -1038,13 +1060,14 @@ mod x86 {
         blocks: &[LeafBlock],
         r: &PreparedRay,
         tmax: f32,
+        present: impl Fn(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
         let (r4, r8) = (ray4(r), ray8(r));
         closest(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
-            |block, _, best| block_closest(&r4, &blocks[block], best),
+            |block, _, best| block_closest(&r4, &blocks[block], best, &present),
         )
     }
 
@@ -1056,13 +1079,25 @@ mod x86 {
         blocks: &[LeafBlock],
         r: &PreparedRay,
         tmax: f32,
+        present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
         let (r4, r8) = (ray4(r), ray8(r));
         occluded(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
-            |block, _| triangles4_block(&r4, &blocks[block], tmax).0 != 0,
+            |block, _| {
+                let b = &blocks[block];
+                let (mut mask, [_, u, v]) = triangles4_block(&r4, b, tmax);
+                while mask != 0 {
+                    let j = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    if present(b.first + j as u32, u[j], v[j]) {
+                        return true;
+                    }
+                }
+                false
+            },
         )
     }
 
