@@ -88,7 +88,10 @@ fn adaptive_furnace_shows_its_albedo() {
         *film.counts.iter().max().unwrap(),
     );
     assert!(lo < hi, "every pixel at {lo} spp");
-    eprintln!("adaptive furnace: {lo}..{hi} spp, mean {:.1}", film.mean_spp());
+    eprintln!(
+        "adaptive furnace: {lo}..{hi} spp, mean {:.1}",
+        film.mean_spp()
+    );
     let mask = sphere_mask(&s, Vec3::ZERO, 1.0, uv_sphere_inner_radius(1.0, 48, 24));
     let on = |x: u32, y: u32| mask[(y * SIZE + x) as usize] == (true, true);
     let off = |x: u32, y: u32| mask[(y * SIZE + x) as usize] == (false, true);
