@@ -1,5 +1,6 @@
 //! The sampling methods' sweep (`glint::methods`, `glint stability
-//! --methods`) at its quick size, on the CPU:
+//! --methods`) at its quick size, on the CPU (and on the GPU, which must
+//! follow it):
 //! - Veach's bound: in every cell, MIS (power heuristic, and balance) has a
 //!   relMSE at most 2x the better single technique's (3x at the sweep's
 //!   corners, where one technique's variance is infinite-like), at equal
@@ -182,6 +183,59 @@ fn mis_is_never_much_worse_than_the_best_technique_and_all_are_unbiased() {
         failures.join("\n"),
         table.join("\n")
     );
+}
+
+/// The GPU backend (lavapipe, one renderer for the whole sweep, its
+/// pipelines reused) on the same cells, techniques and seeds: it traces the
+/// CPU's paths, so each relMSE is the CPU's within float rounding's
+/// divergence (a factor 1.25 either way), and Veach's bound holds on its
+/// own figures too. The CPU test above establishes that every technique is
+/// unbiased; following it path for path carries that over.
+#[test]
+fn the_gpu_follows_the_cpu_and_veachs_bound_holds_there() {
+    use glint::backend::{Backend, GpuOptions, Renderer};
+    let sweep = Sweep::new(true);
+    let gpu = Renderer::new(Backend::Gpu, &GpuOptions::default()).unwrap();
+    let corner = |c: &Cell| {
+        let (a, r) = (&sweep.alphas, &sweep.radii);
+        (c.alpha == a[0] || c.alpha == a[a.len() - 1])
+            && (c.radius == r[0] || c.radius == r[r.len() - 1])
+    };
+    let mut failures = Vec::new();
+    for cell in sweep.cells() {
+        let s = methods::scene(&cell);
+        let reference = reference(&sweep, &s);
+        let mut e = std::collections::HashMap::new();
+        for &t in &Technique::ALL {
+            let o = RenderOptions {
+                spp: SPP,
+                ..t.options(&sweep.options(5))
+            };
+            let g = gpu.render(&s, &o, &|_, _| {}).unwrap().film;
+            let c = render(&s, &o);
+            let (eg, ec) = (
+                methods::relmse(&g, &reference).unwrap(),
+                methods::relmse(&c, &reference).unwrap(),
+            );
+            if !(eg <= 1.25 * ec && ec <= 1.25 * eg) {
+                failures.push(format!("{cell:?} {}: gpu {eg:.3e}, cpu {ec:.3e}", t.name()));
+            }
+            e.insert(t, eg);
+        }
+        let best_single = e[&Technique::Bsdf].min(e[&Technique::Light]);
+        let bound = if corner(&cell) { 3.0 } else { 2.0 };
+        for t in [Technique::MisPower, Technique::MisBalance] {
+            if e[&t] > bound * best_single {
+                failures.push(format!(
+                    "{cell:?} gpu: {} {:.3e} > {bound} x {best_single:.3e}",
+                    t.name(),
+                    e[&t]
+                ));
+            }
+        }
+    }
+    gpu.finish().unwrap();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
 #[test]

@@ -190,6 +190,12 @@ pub struct Context {
     /// Ray queries, acceleration structures and buffer device addresses are
     /// enabled ([`Context::new_ray_query`]).
     ray_query: bool,
+    /// Every pipeline this context built, by what defines it
+    /// ([`super::kernel::PipelineKey`]), kept until the context goes: a
+    /// kernel made again (the next render of a sweep, a converge series,
+    /// `bench --repeat`) reuses it instead of paying lavapipe's 3.3 s of
+    /// pipeline set-up per render of the path tracer.
+    pub(crate) pipelines: Mutex<super::kernel::Pipelines>,
 }
 
 fn vk_err(what: &'static str) -> impl FnOnce(vk::Result) -> GpuError {
@@ -302,6 +308,7 @@ impl Context {
             },
             force_staging: false,
             ray_query,
+            pipelines: Mutex::new(Default::default()),
         })
     }
 
@@ -698,6 +705,9 @@ impl Drop for Context {
             // Nothing may be in flight when memory and the device go away;
             // an error here (device lost) leaves nothing better to do.
             let _ = self.device.device_wait_idle();
+            if let Ok(pipelines) = self.pipelines.get_mut() {
+                pipelines.destroy(&self.device);
+            }
             self.device.destroy_command_pool(self.command_pool, None);
             // The allocator frees its memory blocks through the device.
             ManuallyDrop::drop(&mut self.allocator);

@@ -52,6 +52,41 @@ pub struct KernelOptions<'s> {
     pub acceleration_structure: vk::AccelerationStructureKHR,
 }
 
+/// What defines a built pipeline: the kernel, its descriptor types, push
+/// constant size and specialization constants.
+#[derive(Clone, Debug, PartialEq, Eq, Hash)]
+pub(crate) struct PipelineKey {
+    name: String,
+    types: Vec<i32>,
+    push_constant_size: u32,
+    specialization: Vec<u32>,
+}
+
+/// A built pipeline and its layouts, owned by the context's cache.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct BuiltPipeline {
+    set_layout: vk::DescriptorSetLayout,
+    pipeline_layout: vk::PipelineLayout,
+    pipeline: vk::Pipeline,
+}
+
+/// The context's pipelines ([`Context`]'s `pipelines`).
+#[derive(Debug, Default)]
+pub(crate) struct Pipelines(std::collections::HashMap<PipelineKey, BuiltPipeline>);
+
+impl Pipelines {
+    /// Destroy every pipeline (the context is going; nothing is in flight).
+    pub(crate) fn destroy(&mut self, device: &ash::Device) {
+        for (_, p) in self.0.drain() {
+            unsafe {
+                device.destroy_pipeline(p.pipeline, None);
+                device.destroy_pipeline_layout(p.pipeline_layout, None);
+                device.destroy_descriptor_set_layout(p.set_layout, None);
+            }
+        }
+    }
+}
+
 /// Workgroups needed to cover `n` items with `local_size` per group.
 pub fn groups(n: u32, local_size: u32) -> u32 {
     n.div_ceil(local_size.max(1))
@@ -69,6 +104,9 @@ pub struct Kernel<'a> {
     set: vk::DescriptorSet,
     /// Whether `set` has been written since creation.
     bound: bool,
+    /// The pipeline and layouts are the context's (its cache); else this
+    /// kernel's own, to destroy (a build that failed half way).
+    cached: bool,
 }
 
 impl<'a> Kernel<'a> {
@@ -132,16 +170,49 @@ impl<'a> Kernel<'a> {
             descriptor_pool: vk::DescriptorPool::null(),
             set: vk::DescriptorSet::null(),
             bound: false,
+            cached: false,
         };
-        // `kernel`'s Drop destroys whatever was created if a step fails.
+        // `kernel`'s Drop destroys whatever it created if a step fails; the
+        // pipeline and its layouts belong to the context's cache once there.
         let accel = options.acceleration_structure != vk::AccelerationStructureKHR::null();
         let types: Vec<vk::DescriptorType> = bindings
             .iter()
             .map(|k| k.descriptor_type())
             .chain(accel.then_some(vk::DescriptorType::ACCELERATION_STRUCTURE_KHR))
             .collect();
-        kernel.create_layouts(&types)?;
-        kernel.create_pipeline(code, options)?;
+        let key = PipelineKey {
+            name: name.to_string(),
+            types: types.iter().map(|t| t.as_raw()).collect(),
+            push_constant_size,
+            specialization: options.specialization.to_vec(),
+        };
+        let cached = ctx
+            .pipelines
+            .lock()
+            .ok()
+            .and_then(|p| p.0.get(&key).copied());
+        match cached {
+            Some(p) => {
+                kernel.set_layout = p.set_layout;
+                kernel.pipeline_layout = p.pipeline_layout;
+                kernel.pipeline = p.pipeline;
+            }
+            None => {
+                kernel.create_layouts(&types)?;
+                kernel.create_pipeline(code, options)?;
+                if let Ok(mut p) = ctx.pipelines.lock() {
+                    p.0.insert(
+                        key,
+                        BuiltPipeline {
+                            set_layout: kernel.set_layout,
+                            pipeline_layout: kernel.pipeline_layout,
+                            pipeline: kernel.pipeline,
+                        },
+                    );
+                }
+            }
+        }
+        kernel.cached = true;
         if !types.is_empty() {
             kernel.create_descriptor_set(&types)?;
         }
@@ -437,9 +508,11 @@ impl Drop for Kernel<'_> {
         // tears down cleanly too.
         unsafe {
             d.destroy_descriptor_pool(self.descriptor_pool, None);
-            d.destroy_pipeline(self.pipeline, None);
-            d.destroy_pipeline_layout(self.pipeline_layout, None);
-            d.destroy_descriptor_set_layout(self.set_layout, None);
+            if !self.cached {
+                d.destroy_pipeline(self.pipeline, None);
+                d.destroy_pipeline_layout(self.pipeline_layout, None);
+                d.destroy_descriptor_set_layout(self.set_layout, None);
+            }
         }
     }
 }
