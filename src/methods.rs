@@ -35,14 +35,24 @@ pub enum Technique {
     MisBalance,
     /// MIS, power heuristic (the default).
     MisPower,
+    /// MIS (power) with per-pixel adaptive sampling (`--adaptive`
+    /// [`ADAPTIVE_THRESHOLD`]): it cannot take a time limit, so its cap is
+    /// the samples the power heuristic reached in the cell's time, and its
+    /// relMSE is scaled to the cell's time like the others'.
+    Adaptive,
 }
 
+/// The adaptive technique's per-pixel relative error target: low enough
+/// that the noisy pixels run to the cap while the converged ones stop.
+pub const ADAPTIVE_THRESHOLD: f64 = 0.01;
+
 impl Technique {
-    pub const ALL: [Technique; 4] = [
+    pub const ALL: [Technique; 5] = [
         Technique::Bsdf,
         Technique::Light,
         Technique::MisBalance,
         Technique::MisPower,
+        Technique::Adaptive,
     ];
 
     pub fn name(self) -> &'static str {
@@ -51,6 +61,7 @@ impl Technique {
             Technique::Light => "light",
             Technique::MisBalance => "mis-balance",
             Technique::MisPower => "mis-power",
+            Technique::Adaptive => "adaptive",
         }
     }
 
@@ -60,11 +71,12 @@ impl Technique {
             Technique::Bsdf => (false, Mis::Power),
             Technique::Light => (true, Mis::None),
             Technique::MisBalance => (true, Mis::Balance),
-            Technique::MisPower => (true, Mis::Power),
+            Technique::MisPower | Technique::Adaptive => (true, Mis::Power),
         };
         RenderOptions {
             nee,
             mis,
+            adaptive: (self == Technique::Adaptive).then_some(ADAPTIVE_THRESHOLD),
             ..o.clone()
         }
     }
@@ -324,13 +336,24 @@ pub fn run(sweep: &Sweep, backend: &str, render: &Render<'_>) -> Result<Vec<Row>
             ..sweep.options(0x5eed_0001)
         };
         let (reference, _) = render(&s, &reference)?;
+        let mut power_spp = sweep.max_spp;
         for technique in Technique::ALL {
-            let o = RenderOptions {
-                spp: sweep.max_spp,
-                time_limit: Some(sweep.seconds),
-                ..technique.options(&sweep.options(7))
+            let o = match technique {
+                // No time limit: the samples the power heuristic reached.
+                Technique::Adaptive => RenderOptions {
+                    spp: power_spp.max(1),
+                    ..technique.options(&sweep.options(7))
+                },
+                _ => RenderOptions {
+                    spp: sweep.max_spp,
+                    time_limit: Some(sweep.seconds),
+                    ..technique.options(&sweep.options(7))
+                },
             };
             let (film, seconds) = render(&s, &o)?;
+            if technique == Technique::MisPower {
+                power_spp = film.spp;
+            }
             rows.push(Row {
                 backend: backend.to_string(),
                 cell,
@@ -398,8 +421,8 @@ pub fn markdown(rows: &[Row], sweep: &Sweep, devices: &[(String, String)]) -> St
          sphere light of radius r (columns) at equal power, {0}x{0} pixels, direct lighting. \
          Each technique renders for {1} s per cell (`--time-limit`) against a {2}-spp \
          reference (MIS, power heuristic, another seed); relMSE is scaled to exactly {1} s \
-         (relMSE x seconds / {1}). `src/methods.rs` builds the scenes.\n\n",
-        sweep.size, sweep.seconds, sweep.reference_spp
+         (relMSE x seconds / {1}). `adaptive` (the power heuristic with `--adaptive {3}`)          cannot take a time limit: its cap is the samples per pixel the power heuristic          reached in the cell's time, and its relMSE is scaled the same way.          `src/methods.rs` builds the scenes.\n\n",
+        sweep.size, sweep.seconds, sweep.reference_spp, ADAPTIVE_THRESHOLD
     ));
     for (backend, device) in devices {
         s.push_str(&format!("Backend `{backend}`: {device}.\n\n"));
