@@ -738,4 +738,19 @@ mod tests {
         check::<KernelArg>();
         check::<TraversalArg>();
     }
+
+    /// The --width/--height help states the limit in prose (a doc comment
+    /// cannot name a const): it must say MAX_SIZE's value.
+    #[test]
+    fn side_help_states_the_limit() {
+        use clap::CommandFactory;
+        let mut cmd = super::Cli::command();
+        let render = cmd.find_subcommand_mut("render").unwrap();
+        for name in ["width", "height"] {
+            let arg = render.get_arguments().find(|a| a.get_id() == name).unwrap();
+            let help = arg.get_help().unwrap().to_string();
+            let limit = format!("1..={}", crate::cmd::MAX_SIZE);
+            assert!(help.contains(&limit), "--{name}: {help}");
+        }
+    }
 }

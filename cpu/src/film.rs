@@ -103,6 +103,9 @@ impl SamplerKind {
     }
 }
 
+/// The largest image side a render accepts (both backends, every verb).
+pub const MAX_IMAGE_SIDE: u32 = 16384;
+
 /// Per-pixel sums over the samples, enough for the mean and for the
 /// variance of the mean that statistical image comparisons need.
 #[derive(Clone, Debug, PartialEq)]

@@ -29,8 +29,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use crate::cli::{OnOff, RenderOpts, SceneArgs};
 
-/// Largest image side accepted.
-pub const MAX_SIZE: u32 = 16384;
+/// Largest image side accepted (the library's, one constant for every check).
+pub const MAX_SIZE: u32 = glint::cpu::film::MAX_IMAGE_SIDE;
 /// Width used when neither --width nor --height is given.
 pub const DEFAULT_WIDTH: u32 = 512;
 /// Samples per pixel when --spp is not given.

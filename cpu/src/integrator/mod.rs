@@ -100,10 +100,13 @@ pub fn depth_limit(max_depth: i32) -> u32 {
 
 pub fn validate_options(scene: &Scene, opts: &RenderOptions) -> Result<(), RenderError> {
     let bad = |m: String| Err(RenderError::InvalidOptions(m));
-    if !(1..=16384).contains(&opts.width) || !(1..=16384).contains(&opts.height) {
+    let side = 1..=crate::film::MAX_IMAGE_SIDE;
+    if !side.contains(&opts.width) || !side.contains(&opts.height) {
         return bad(format!(
-            "image size {}x{} (each side must be 1..=16384)",
-            opts.width, opts.height
+            "image size {}x{} (each side must be 1..={})",
+            opts.width,
+            opts.height,
+            crate::film::MAX_IMAGE_SIDE
         ));
     }
     if opts.spp == 0 {
