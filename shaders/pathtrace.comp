@@ -188,6 +188,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
     bool prev_mis = false;
     float prev_bsdf_pdf = 0.0;
     vec3 prev_bg_normal = vec3(0.0);
+    vec3 prev_p = vec3(0.0); // the previous vertex, where light sampling started
     bool nee = params.nee != 0u;
 
     for (;;) {
@@ -222,7 +223,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         if (HAS(F_AREA_LIGHTS) && floatBitsToUint(tri.p1.w) != NO_LIGHT && emitted(tri, hit.tri, hit.u, hit.v, wo, le)) {
             float w = 1.0;
             if (prev_mis) {
-                float lp = lights_area_pdf(hit.tri, ray_d, hit.t);
+                float lp = lights_area_pdf(hit.tri, prev_p, ray_d, hit.t);
                 w = mis_bsdf(params.mis, prev_bsdf_pdf, lp);
             }
             radiance += throughput * w * le;
@@ -322,6 +323,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         prev_mis = sample_lights && !bs.delta;
         prev_bsdf_pdf = bs.pdf;
         prev_bg_normal = bg_normal;
+        prev_p = p;
         ray_o = offset_origin(p, p_err, sf.ng, wi);
         ray_d = wi;
         depth += 1u;

@@ -26,6 +26,7 @@ pub mod sampling;
 pub mod scene;
 pub mod schedule;
 pub mod sobol;
+pub mod spherical;
 pub mod texture;
 
 pub use bsdf::{Bsdf, BsdfSample};

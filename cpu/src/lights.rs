@@ -10,7 +10,12 @@
 //! 2. within the area emitters, one triangle with probability proportional
 //!    to its power, luminance(emission) x area (x 2 when double-sided; by
 //!    area alone if every emitter has zero luminance) (a CDF), then a point
-//!    uniformly by area; the area density is converted to solid angle,
+//!    on it: uniformly in the solid angle it subtends from the shading
+//!    point when that is within [`SPHERICAL_SAMPLING_MIN`,
+//!    `SPHERICAL_SAMPLING_MAX`] and the triangle is no sliver from there
+//!    ([`spherical_sampling_angle`]; Arvo 1995, [`crate::spherical`]),
+//!    p = P(category) P(triangle) / omega, else uniformly by area, the
+//!    area density converted to solid angle,
 //!    p = P(category) P(triangle) / area * d^2 / |cos theta_light|;
 //!    within the punctual lights, one uniformly (delta lights: no MIS);
 //!    the background is sampled in direction space (see
@@ -33,6 +38,7 @@ use crate::sampling::{
     square_to_uniform_sphere, square_to_uniform_triangle,
 };
 use crate::scene::{PunctualLight, Scene, TRI_DOUBLE_SIDED};
+use crate::spherical::{sample_spherical_triangle, spherical_triangle_shape};
 use crate::texture::emission_factor;
 
 /// Rec. 709 / sRGB luminance.
@@ -41,7 +47,23 @@ pub fn luminance(c: Vec3) -> f32 {
 }
 
 use crate::abi;
-pub use crate::abi::{GpuEmitter, GpuLight};
+pub use crate::abi::{
+    GpuEmitter, GpuLight, SPHERICAL_SAMPLING_MAX, SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
+};
+
+/// The solid angle emitter triangle `v` subtends from `p` when light
+/// sampling picks its point by solid angle there (between
+/// [`SPHERICAL_SAMPLING_MIN`] and [`SPHERICAL_SAMPLING_MAX`], and not a
+/// sliver: shape at least [`SPHERICAL_SAMPLING_SHAPE`]), `None` when by
+/// area. A pure function of the triangle and the point, so a BSDF sample
+/// that hits the triangle finds the density the light sample used.
+#[inline]
+pub fn spherical_sampling_angle(v: [Vec3; 3], p: Vec3) -> Option<f32> {
+    let (omega, shape) = spherical_triangle_shape(v, p);
+    ((SPHERICAL_SAMPLING_MIN..=SPHERICAL_SAMPLING_MAX).contains(&omega)
+        && shape >= SPHERICAL_SAMPLING_SHAPE)
+        .then_some(omega)
+}
 
 impl From<&PunctualLight> for GpuLight {
     fn from(l: &PunctualLight) -> Self {
@@ -223,16 +245,21 @@ impl Lights {
         }
     }
 
-    /// An emissive triangle by power (`u_idx`), a point on it by area (`u`).
+    /// An emissive triangle by power (`u_idx`), a point on it (`u`) by
+    /// solid angle or by area ([`spherical_sampling_angle`]).
     fn sample_emitter(&self, scene: &Scene, p: Vec3, u_idx: f32, u: Vec2) -> Option<LightSample> {
         let pr = self.probs;
         let n = self.emitters.len() as u32;
         let i = sample_cdf(|k| self.emitters[k as usize].cdf, n, u_idx);
         let e = self.emitters[i as usize];
         let t = &scene.triangles[e.tri as usize];
-        let b = square_to_uniform_triangle(u);
-        let [a0, a1, a2] = t.vertices();
-        let q = (1.0 - b.x - b.y) * a0 + b.x * a1 + b.y * a2;
+        let v = t.vertices();
+        let omega = spherical_sampling_angle(v, p);
+        let b = match omega {
+            Some(omega) => sample_spherical_triangle(v, p, omega, u)?,
+            None => square_to_uniform_triangle(u),
+        };
+        let q = (1.0 - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
         let d = q - p;
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();
@@ -241,8 +268,13 @@ impl Lights {
         }
         let wi = d / dist;
         let le = emitted(scene, e.tri, b.x, b.y, -wi)?;
-        let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
-        let pdf = pr.area * e.pmf / e.area * dist2 / cos_l;
+        let pdf = match omega {
+            Some(omega) => pr.area * e.pmf / omega,
+            None => {
+                let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
+                pr.area * e.pmf / e.area * dist2 / cos_l
+            }
+        };
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -326,12 +358,15 @@ impl Lights {
         })
     }
 
-    /// Solid-angle density with which [`Lights::sample`] picks the point
-    /// `dist` away along `wi` on emitter triangle `tri` (for MIS of a BSDF
-    /// sample that hit it).
-    pub fn area_pdf(&self, scene: &Scene, tri: u32, wi: Vec3, dist: f32) -> f32 {
+    /// Solid-angle density with which [`Lights::sample`], called at `p`,
+    /// picks the point `dist` away along `wi` on emitter triangle `tri` (for
+    /// MIS of a BSDF sample from `p` that hit it).
+    pub fn area_pdf(&self, scene: &Scene, tri: u32, p: Vec3, wi: Vec3, dist: f32) -> f32 {
         let t = &scene.triangles[tri as usize];
         let e = self.emitters[t.light as usize];
+        if let Some(omega) = spherical_sampling_angle(t.vertices(), p) {
+            return self.probs.area * e.pmf / omega;
+        }
         let cos_l = t.geometric_normal().normalize().dot(wi).abs();
         if !(cos_l > 0.0) {
             return 0.0;

@@ -6,6 +6,7 @@
 #define GLINT_INTEGRATOR_LIGHTS_GLSL
 
 #include "glint_abi.glsl" // generated from cpu/src/abi.rs
+#include "integrator/spherical.glsl"
 // TRI_DOUBLE_SIDED, NO_LIGHT, MIS_*: glint_abi.glsl.
 #define GLINT_FLT_MAX 3.402823466e+38
 #define UNIFORM_SPHERE_PDF (1.0 / (4.0 * 3.14159265358979323846))
@@ -138,7 +139,15 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         uint i = sample_emitter_cdf(params.emitter_count, u_idx);
         Emitter e = emitters[i];
         Triangle t = triangles[e.tri];
-        vec2 b = square_to_uniform_triangle(u);
+        float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p);
+        vec2 b;
+        if (omega > 0.0) {
+            if (!sample_spherical_triangle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p, omega, u, b)) {
+                return false;
+            }
+        } else {
+            b = square_to_uniform_triangle(u);
+        }
         vec3 q = (1.0 - b.x - b.y) * t.p0.xyz + b.x * t.p1.xyz + b.y * t.p2.xyz;
         vec3 d = q - p;
         float dist2 = dot(d, d);
@@ -151,8 +160,13 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         if (!emitted(t, e.tri, b.x, b.y, -wi, le)) {
             return false;
         }
-        float cos_l = abs(dot(normalize(triangle_normal(t)), -wi));
-        float pdf = params.p_area * e.pmf / e.area * dist2 / cos_l;
+        float pdf;
+        if (omega > 0.0) {
+            pdf = params.p_area * e.pmf / omega;
+        } else {
+            float cos_l = abs(dot(normalize(triangle_normal(t)), -wi));
+            pdf = params.p_area * e.pmf / e.area * dist2 / cos_l;
+        }
         if (!(pdf > 0.0) || isinf(pdf)) {
             return false;
         }
@@ -231,11 +245,15 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
     return false;
 }
 
-// Density of lights_sample picking the point dist away along wi on
-// emitter triangle tri (MIS of a BSDF sample that hit it).
-float lights_area_pdf(uint tri, vec3 wi, float dist) {
+// Density of lights_sample, called at p, picking the point dist away
+// along wi on emitter triangle tri (MIS of a BSDF sample from p that hit it).
+float lights_area_pdf(uint tri, vec3 p, vec3 wi, float dist) {
     Triangle t = triangles[tri];
     Emitter e = emitters[floatBitsToUint(t.p1.w)];
+    float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p);
+    if (omega > 0.0) {
+        return params.p_area * e.pmf / omega;
+    }
     float cos_l = abs(dot(normalize(triangle_normal(t)), wi));
     if (!(cos_l > 0.0)) {
         return 0.0;

@@ -536,6 +536,8 @@ impl<'a> PathTracer<'a> {
         let mut prev_mis = false;
         let mut prev_bsdf_pdf = 0.0f32;
         let mut prev_bg_normal = Vec3::ZERO;
+        // The previous vertex, where light sampling would have started.
+        let mut prev_p = Vec3::ZERO;
 
         loop {
             *rays += 1;
@@ -561,7 +563,7 @@ impl<'a> PathTracer<'a> {
                 && let Some(le) = emitted(scene, hit.tri, hit.u, hit.v, wo)
             {
                 let w = emitter_weight(self.mis, prev_mis, prev_bsdf_pdf, || {
-                    self.lights.area_pdf(scene, hit.tri, ray.d, hit.t)
+                    self.lights.area_pdf(scene, hit.tri, prev_p, ray.d, hit.t)
                 });
                 radiance += throughput * w * le;
             }
@@ -600,6 +602,7 @@ impl<'a> PathTracer<'a> {
             prev_mis = sample_lights && !bs.delta;
             prev_bsdf_pdf = bs.pdf;
             prev_bg_normal = bg_normal;
+            prev_p = p;
             ray = Ray {
                 o: offset_origin(p, p_err, sf.ng, wi),
                 d: wi,

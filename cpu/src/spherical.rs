@@ -1,0 +1,210 @@
+//! Spherical triangles: the solid angle a triangle subtends from a point,
+//! and directions sampled uniformly within it (Arvo, "Stratified Sampling
+//! of Spherical Triangles", SIGGRAPH 1995, as pbrt-v4 writes it in
+//! `SampleSphericalTriangle`). Twin of `shaders/integrator/spherical.glsl`
+//! (same names, same operations).
+//!
+//! Light sampling uses it for emissive triangles that subtend a large
+//! solid angle from the shading point (see [`crate::lights`]): sampling by
+//! area there weights each sample by d^2 / cos theta_light, which varies
+//! without bound over a triangle that is close or seen at a grazing angle;
+//! sampling by solid angle makes the weight constant over the triangle.
+
+use glam::{Vec2, Vec3};
+use std::f32::consts::PI;
+
+/// atan(y / x) for y >= 0, in [0, pi], with the same operations on both
+/// backends: Cephes' `atanf` (range reduction to |t| <= tan(pi / 8) and
+/// a degree-9 odd polynomial, 2e-7 relative), because GLSL's `atan` is
+/// only held to 4096 ulp by Vulkan (lavapipe's differs from Rust's in the
+/// fourth digit).
+#[inline]
+pub fn atan2_nonneg(y: f32, x: f32) -> f32 {
+    const PI_2: f32 = std::f32::consts::FRAC_PI_2;
+    const PI_4: f32 = std::f32::consts::FRAC_PI_4;
+    let (ax, flip) = if x < 0.0 { (-x, true) } else { (x, false) };
+    // t = y / ax >= 0, reduced without forming it where it overflows.
+    let (base, t) = if y > 2.414_213_5 * ax {
+        (PI_2, -ax / y)
+    } else if y > 0.414_213_57 * ax {
+        (PI_4, (y - ax) / (y + ax))
+    } else if ax > 0.0 {
+        (0.0, y / ax)
+    } else {
+        return 0.0;
+    };
+    let z = t * t;
+    let r = base
+        + (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t
+        + t;
+    if flip { PI - r } else { r }
+}
+
+/// The solid angle triangle `v` subtends from `p` (van Oosterom and
+/// Strackee 1983: tan(omega / 2) = |a . (b x c)| / (1 + a.b + b.c + c.a)
+/// for the unit vectors toward the vertices), in [0, 2 pi]. Zero for a
+/// degenerate triangle or one whose plane holds `p`.
+#[inline]
+pub fn triangle_solid_angle(v: [Vec3; 3], p: Vec3) -> f32 {
+    spherical_triangle_shape(v, p).0
+}
+
+/// The solid angle (as [`triangle_solid_angle`]) and the shape of the
+/// spherical triangle: its solid angle over the square of its longest
+/// chord, about 0.43 for a small equilateral one and near 0 for a sliver
+/// (a triangle seen edge-on from afar, or a thin one). [`sample_spherical_triangle`]
+/// loses its accuracy in f32 on slivers (its construction divides by
+/// differences of nearly equal angles): measured in `cpu/tests/light_sampling.rs`.
+#[inline]
+pub fn spherical_triangle_shape(v: [Vec3; 3], p: Vec3) -> (f32, f32) {
+    let a = (v[0] - p).normalize_or_zero();
+    let b = (v[1] - p).normalize_or_zero();
+    let c = (v[2] - p).normalize_or_zero();
+    let num = a.dot(b.cross(c)).abs();
+    let den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
+    let omega = 2.0 * atan2_nonneg(num, den);
+    if !omega.is_finite() {
+        return (0.0, 0.0);
+    }
+    let chord2 = (a - b)
+        .length_squared()
+        .max((b - c).length_squared())
+        .max((c - a).length_squared());
+    let shape = if chord2 > 0.0 { omega / chord2 } else { 0.0 };
+    (omega, shape)
+}
+
+/// A direction sampled uniformly in the solid angle triangle `v` subtends
+/// from `p`, as the barycentrics (b1, b2) of the point it hits (weights of
+/// `v[1]` and `v[2]`), clamped into the triangle. `None` when the triangle
+/// is degenerate as seen from `p` (two vertices in one direction).
+/// `omega` is [`triangle_solid_angle`]`(v, p)`, the density's reciprocal.
+pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, omega: f32, u: Vec2) -> Option<Vec2> {
+    let a = (v[0] - p).normalize_or_zero();
+    let b = (v[1] - p).normalize_or_zero();
+    let c = (v[2] - p).normalize_or_zero();
+    // The great circles' normals through a and its neighbours: the
+    // spherical triangle's angle alpha at a, as its cosine and sine (no
+    // inverse trigonometry).
+    let n_ab = a.cross(b);
+    let n_ca = c.cross(a);
+    if n_ab.length_squared() == 0.0
+        || n_ca.length_squared() == 0.0
+        || b.cross(c).length_squared() == 0.0
+    {
+        return None;
+    }
+    let (n_ab, n_ca) = (n_ab.normalize(), n_ca.normalize());
+    let cos_alpha = -n_ab.dot(n_ca);
+    let sin_alpha = n_ab.cross(n_ca).length();
+    // The sub-triangle (a, b, c') whose area is u.x of the whole: its
+    // angles sum to pi + u.x omega, and Arvo's construction needs the sine
+    // and cosine of that sum less alpha.
+    let (sin_u, cos_u) = (u.x * omega).sin_cos();
+    let (sin_ap, cos_ap) = (-sin_u, -cos_u);
+    let sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
+    let cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
+    let k1 = cos_phi + cos_alpha;
+    let k2 = sin_phi - sin_alpha * a.dot(b);
+    let cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+    // NaN only where the triangle covers (nearly) a hemisphere, which the
+    // caller's solid-angle bound keeps out.
+    let cos_bp = if cos_bp.is_nan() {
+        return None;
+    } else {
+        cos_bp.clamp(-1.0, 1.0)
+    };
+    // c' on the arc from a to c, then the direction on the arc from b to
+    // c' at the fraction u.y of the arc's (1 - cos) measure.
+    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
+    let cp = cos_bp * a + sin_bp * (c - c.dot(a) * a).normalize_or_zero();
+    // 1 - cos theta as |c' - b|^2 / 2 and sin theta from it: no
+    // cancellation when the arc is short.
+    let one_minus_cos = u.y * 0.5 * (cp - b).length_squared();
+    let cos_theta = 1.0 - one_minus_cos;
+    let sin_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
+    let w = cos_theta * b + sin_theta * (cp - cp.dot(b) * b).normalize_or_zero();
+    // Where w meets the triangle (Moller-Trumbore with the ray p + t w).
+    let e1 = v[1] - v[0];
+    let e2 = v[2] - v[0];
+    let s1 = w.cross(e2);
+    let divisor = s1.dot(e1);
+    if divisor == 0.0 || !divisor.is_finite() {
+        return None;
+    }
+    let inv = 1.0 / divisor;
+    let s = p - v[0];
+    let b1 = (s.dot(s1) * inv).clamp(0.0, 1.0);
+    let b2 = (w.dot(s.cross(e1)) * inv).clamp(0.0, 1.0);
+    let sum = b1 + b2;
+    Some(if sum > 1.0 {
+        Vec2::new(b1 / sum, b2 / sum)
+    } else {
+        Vec2::new(b1, b2)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn atan2_nonneg_matches_the_library() {
+        let mut worst = 0.0f32;
+        for i in 0..=2000 {
+            let th = PI * i as f32 / 2000.0;
+            for r in [1e-6f32, 0.3, 1.0, 7.0, 1e5] {
+                let (y, x) = (r * th.sin().max(0.0), r * th.cos());
+                let got = atan2_nonneg(y, x);
+                let want = (y as f64).atan2(x as f64) as f32;
+                worst = worst.max((got - want).abs() / want.abs().max(1e-30));
+            }
+        }
+        assert!(worst < 4e-7, "{worst}");
+        assert_eq!(atan2_nonneg(0.0, 0.0), 0.0);
+        assert_eq!(atan2_nonneg(0.0, -1.0), PI);
+    }
+
+    #[test]
+    fn an_octant_subtends_half_pi() {
+        let v = [Vec3::X, Vec3::Y, Vec3::Z];
+        let omega = triangle_solid_angle(v, Vec3::ZERO);
+        assert!((omega - PI / 2.0).abs() < 1e-6, "{omega}");
+        // Scaled and seen from the same point: the same solid angle.
+        let omega = triangle_solid_angle(v.map(|x| 7.0 * x), Vec3::ZERO);
+        assert!((omega - PI / 2.0).abs() < 1e-6, "{omega}");
+    }
+
+    #[test]
+    fn a_far_triangle_subtends_area_cos_over_d2() {
+        let d = 100.0;
+        let v = [
+            Vec3::new(0.0, 0.0, d),
+            Vec3::new(1.0, 0.0, d),
+            Vec3::new(0.0, 1.0, d),
+        ];
+        let omega = triangle_solid_angle(v, Vec3::ZERO);
+        let approx = 0.5 / (d * d);
+        assert!((omega / approx - 1.0).abs() < 1e-3, "{omega} {approx}");
+        // In its own plane: nothing.
+        assert_eq!(triangle_solid_angle(v, Vec3::new(5.0, 5.0, d)), 0.0);
+    }
+
+    #[test]
+    fn sampled_points_lie_on_the_triangle_and_corners_map_to_vertices() {
+        let v = [Vec3::X, Vec3::Y, Vec3::Z];
+        let b = sample_spherical_triangle(v, Vec3::ZERO, PI / 2.0, Vec2::new(0.0, 0.0)).unwrap();
+        // u = (0, 0): the direction of b (pbrt-v4's parameterisation).
+        assert!((b - Vec2::new(1.0, 0.0)).length() < 1e-5, "{b}");
+        for i in 0..64 {
+            let u = Vec2::new((i % 8) as f32 / 8.0 + 0.05, (i / 8) as f32 / 8.0 + 0.05);
+            let b = sample_spherical_triangle(v, Vec3::ZERO, PI / 2.0, u).unwrap();
+            assert!(b.x >= 0.0 && b.y >= 0.0 && b.x + b.y <= 1.0 + 1e-6, "{b}");
+        }
+        assert!(
+            sample_spherical_triangle([Vec3::X, Vec3::X, Vec3::Z], Vec3::ZERO, 0.0, Vec2::ZERO)
+                .is_none()
+        );
+    }
+}
