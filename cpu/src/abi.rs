@@ -385,11 +385,12 @@ device_constants! { LIGHT_CONSTANTS;
     /// Light sampling picks a point on an emissive triangle uniformly in
     /// the solid angle it subtends from the shading point when that is at
     /// least this (steradians), by area below it
-    /// (`lights::spherical_sampling_angle`). Below it the triangle is far
-    /// for its size, and sampling it by area is nearly as good. pbrt-v4
-    /// uses 3e-4; f32 Arvo sampling was measured inaccurate there more often
-    /// (`cpu/tests/light_sampling.rs`).
-    SPHERICAL_SAMPLING_MIN: f32 = 1e-3;
+    /// (`lights::spherical_sampling_angle`). Sampling by area spreads its
+    /// weights over a triangle by about sqrt(omega) relative, which is lost
+    /// in a path's other noise below this: on the bundled scenes at 1e-3
+    /// (pbrt-v4 uses 3e-4) the Cornell box lost 22% per sample for no less
+    /// error (`scripts/before_after.sh`, docs/benchmarks.md).
+    SPHERICAL_SAMPLING_MIN: f32 = 0.1;
     /// ... and at most this: a triangle that covers nearly a hemisphere
     /// makes the spherical construction ill-conditioned (pbrt-v4's 6.22).
     SPHERICAL_SAMPLING_MAX: f32 = 6.22;
@@ -400,6 +401,12 @@ device_constants! { LIGHT_CONSTANTS;
     /// configurations, 0 of those above this bound failed a chi-square test,
     /// 148 of all those above the solid-angle bound did.
     SPHERICAL_SAMPLING_SHAPE: f32 = 0.1;
+    /// ... and only when the shading point is off the triangle's plane:
+    /// its height over the plane at least this fraction of its distance to
+    /// the farthest vertex. Closer to the plane the sampled directions
+    /// graze it and f32 misplaces the points they hit (a chi-square test
+    /// failed at 0.5% height, `cpu/tests/light_sampling.rs`).
+    SPHERICAL_SAMPLING_HEIGHT: f32 = 0.05;
 }
 
 device_struct! {

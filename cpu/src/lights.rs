@@ -48,7 +48,8 @@ pub fn luminance(c: Vec3) -> f32 {
 
 use crate::abi;
 pub use crate::abi::{
-    GpuEmitter, GpuLight, SPHERICAL_SAMPLING_MAX, SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
+    GpuEmitter, GpuLight, SPHERICAL_SAMPLING_HEIGHT, SPHERICAL_SAMPLING_MAX,
+    SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
 };
 
 /// The solid angle emitter triangle `v` subtends from `p` when light
@@ -59,6 +60,34 @@ pub use crate::abi::{
 /// that hits the triangle finds the density the light sample used.
 #[inline]
 pub fn spherical_sampling_angle(v: [Vec3; 3], p: Vec3) -> Option<f32> {
+    // Far for its size: omega <= area / d_min^2, and d_min >= the distance
+    // to the centroid less the centroid's farthest vertex. This exit, exact
+    // as a bound, spares most light samples the solid angle.
+    let c = (v[0] + v[1] + v[2]) / 3.0;
+    let r2 = (v[0] - c)
+        .length_squared()
+        .max((v[1] - c).length_squared())
+        .max((v[2] - c).length_squared());
+    let d2 = (p - c).length_squared();
+    if d2 > r2 {
+        let d_min = d2.sqrt() - r2.sqrt();
+        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
+        if area < SPHERICAL_SAMPLING_MIN * d_min * d_min {
+            return None;
+        }
+    }
+    // Nearly in the triangle's plane (height over the farthest vertex's
+    // distance): the sampled directions graze the plane, where f32 loses
+    // the point they hit.
+    let n = (v[1] - v[0]).cross(v[2] - v[0]);
+    let far2 = (v[0] - p)
+        .length_squared()
+        .max((v[1] - p).length_squared())
+        .max((v[2] - p).length_squared());
+    let height = n.dot(p - v[0]).abs();
+    if !(height >= SPHERICAL_SAMPLING_HEIGHT * n.length() * far2.sqrt()) {
+        return None;
+    }
     let (omega, shape) = spherical_triangle_shape(v, p);
     ((SPHERICAL_SAMPLING_MIN..=SPHERICAL_SAMPLING_MAX).contains(&omega)
         && shape >= SPHERICAL_SAMPLING_SHAPE)

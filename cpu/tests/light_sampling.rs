@@ -148,7 +148,7 @@ fn spherical_triangle_samples_follow_the_solid_angle() {
     // routes to area sampling are where the f32 construction is measured
     // to fail (up to 50% off in a cell).
     let mut rng = Pcg32::new(2024, 5);
-    let configs: Vec<([Vec3; 3], Vec3)> = (0..160)
+    let configs: Vec<([Vec3; 3], Vec3)> = (0..480)
         .map(|k| random_configuration(&mut rng, k))
         .filter(|&(v, p)| spherical_sampling_angle(v, p).is_some())
         .collect();
@@ -451,9 +451,9 @@ fn the_f32_sampler_follows_an_f64_reference() {
     let mut errs = vec![];
     for _ in 0..20000 {
         let p = Vec3::new(
-            2.0 * rng.f32() - 1.0,
-            1.97 * rng.f32(),
-            2.0 * rng.f32() - 1.0,
+            1.2 * rng.f32() - 0.6,
+            1.4 + 0.57 * rng.f32(),
+            1.2 * rng.f32() - 0.6,
         );
         if spherical_sampling_angle(v, p).is_none() {
             continue;

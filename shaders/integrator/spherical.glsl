@@ -116,6 +116,31 @@ bool sample_spherical_triangle(vec3 v0, vec3 v1, vec3 v2, vec3 p, float omega, v
 // lights::spherical_sampling_angle: the solid angle when light sampling
 // picks a point on the triangle by solid angle from p, else 0 (by area).
 float spherical_sampling_angle(vec3 v0, vec3 v1, vec3 v2, vec3 p) {
+    // Far for its size (omega <= area / d_min^2): by area, no solid angle.
+    vec3 c = (v0 + v1 + v2) / 3.0;
+    vec3 c0 = v0 - c;
+    vec3 c1 = v1 - c;
+    vec3 c2 = v2 - c;
+    float r2 = max(dot(c0, c0), max(dot(c1, c1), dot(c2, c2)));
+    vec3 pc = p - c;
+    float d2 = dot(pc, pc);
+    if (d2 > r2) {
+        float d_min = sqrt(d2) - sqrt(r2);
+        float area = 0.5 * length(cross(v1 - v0, v2 - v0));
+        if (area < SPHERICAL_SAMPLING_MIN * d_min * d_min) {
+            return 0.0;
+        }
+    }
+    // Nearly in the triangle's plane: by area (grazing directions).
+    vec3 n = cross(v1 - v0, v2 - v0);
+    vec3 f0 = v0 - p;
+    vec3 f1 = v1 - p;
+    vec3 f2 = v2 - p;
+    float far2 = max(dot(f0, f0), max(dot(f1, f1), dot(f2, f2)));
+    float height = abs(dot(n, p - v0));
+    if (!(height >= SPHERICAL_SAMPLING_HEIGHT * length(n) * sqrt(far2))) {
+        return 0.0;
+    }
     vec2 s = spherical_triangle_shape(v0, v1, v2, p);
     return (s.x >= SPHERICAL_SAMPLING_MIN && s.x <= SPHERICAL_SAMPLING_MAX
             && s.y >= SPHERICAL_SAMPLING_SHAPE) ? s.x : 0.0;
