@@ -40,6 +40,14 @@ fn sub_triangle(v: [DVec3; 3], n: usize, k: usize) -> [DVec3; 3] {
     }
 }
 
+/// Whether entry `k` of the 2 n^2 (cell, half) pairs is a sub-triangle of the
+/// subdivision (the upper half of a cell on the diagonal is not).
+fn valid_cell(n: usize, k: usize) -> bool {
+    let (cell, upper) = (k / 2, k % 2 == 1);
+    let (i, j) = (cell / n, cell % n);
+    if upper { i + j + 2 <= n } else { i + j < n }
+}
+
 /// Which sub-triangle barycentrics (b1, b2) fall in; `None` off the
 /// subdivision's valid cells (i + j >= n).
 fn sub_index(b: Vec2, n: usize) -> Option<usize> {
@@ -65,15 +73,7 @@ fn spherical_chi2(v: [Vec3; 3], p: Vec3, n_samples: usize, seed: u64) -> f64 {
     let pd = p.as_dvec3();
     let total = solid_angle_f64(vd, pd);
     let cells: Vec<usize> = (0..2 * grid * grid)
-        .filter(|k| {
-            let (cell, upper) = (k / 2, k % 2 == 1);
-            let (i, j) = (cell / grid, cell % grid);
-            if upper {
-                i + j + 2 <= grid
-            } else {
-                i + j < grid
-            }
-        })
+        .filter(|&k| valid_cell(grid, k))
         .collect();
     let expected: Vec<f64> = cells
         .iter()
@@ -195,15 +195,7 @@ fn a_wrong_spherical_sampler_fails_the_chi_square() {
         }
     }
     let worst = (0..2 * grid * grid)
-        .filter(|k| {
-            let (cell, upper) = (k / 2, k % 2 == 1);
-            let (i, j) = (cell / grid, cell % grid);
-            if upper {
-                i + j + 2 <= grid
-            } else {
-                i + j < grid
-            }
-        })
+        .filter(|&k| valid_cell(grid, k))
         .map(|k| {
             let e = solid_angle_f64(sub_triangle(vd, grid, k), p.as_dvec3()) / total * n as f64;
             (observed[k] - e).abs() / e.sqrt()

@@ -526,18 +526,15 @@ impl<'a> PathTracer<'a> {
         let mut rng = PathSampler::new(self.sampler, self.key, pixel, s);
         let mut ray = self.camera.ray(x, y, rng.pixel_2d());
 
-        let mut radiance = Vec3::ZERO;
-        let mut throughput = Vec3::ONE;
+        let (mut radiance, mut throughput) = (Vec3::ZERO, Vec3::ONE);
         let mut eta = 1.0f32;
         let mut depth = 0u32;
         // Whether an emitter the current ray finds could also have been
-        // found by light sampling at the previous vertex (it sampled lights
-        // and its BSDF sample was not a delta): only then is it MIS-weighted.
-        let mut prev_mis = false;
-        let mut prev_bsdf_pdf = 0.0f32;
-        let mut prev_bg_normal = Vec3::ZERO;
-        // The previous vertex, where light sampling would have started.
-        let mut prev_p = Vec3::ZERO;
+        // found by light sampling at the previous vertex, prev_p (it sampled
+        // lights and its BSDF sample was not a delta): only then is it
+        // MIS-weighted.
+        let (mut prev_mis, mut prev_bsdf_pdf) = (false, 0.0f32);
+        let (mut prev_bg_normal, mut prev_p) = (Vec3::ZERO, Vec3::ZERO);
 
         loop {
             *rays += 1;
