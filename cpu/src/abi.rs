@@ -411,7 +411,7 @@ device_constants! { LIGHT_CONSTANTS;
 
 device_struct! {
     /// One emissive triangle in emitter order (`Triangle::light`), as the GPU
-    /// reads it (std430, 16 bytes): `cdf` is the inclusive CDF of the power
+    /// reads it (std430, 32 bytes): `cdf` is the inclusive CDF of the power
     /// distribution at this entry, `pmf` its own probability.
     #[repr(C)]
     #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
@@ -421,9 +421,14 @@ device_struct! {
         pub cdf: f32,
         pub pmf: f32,
         pub area: f32,
+        /// The triangle's centroid and its distance to the farthest vertex:
+        /// the bounding sphere light sampling's far exit reads
+        /// (`lights::spherical_sampling_angle`), computed once.
+        pub center: [f32; 3],
+        pub radius: f32,
     }
 }
-const _: () = assert!(size_of::<GpuEmitter>() == 16);
+const _: () = assert!(size_of::<GpuEmitter>() == 32);
 
 device_struct! {
     /// A punctual light as the GPU reads it (std430, 48 bytes).

@@ -52,27 +52,41 @@ pub use crate::abi::{
     SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
 };
 
-/// The solid angle emitter triangle `v` subtends from `p` when light
-/// sampling picks its point by solid angle there (between
-/// [`SPHERICAL_SAMPLING_MIN`] and [`SPHERICAL_SAMPLING_MAX`], and not a
-/// sliver: shape at least [`SPHERICAL_SAMPLING_SHAPE`]), `None` when by
-/// area. A pure function of the triangle and the point, so a BSDF sample
-/// that hits the triangle finds the density the light sample used.
+impl GpuEmitter {
+    /// Emitter `tri` (vertices `v`) with its power distribution entry.
+    pub fn new(tri: u32, v: [Vec3; 3], cdf: f32, pmf: f32) -> Self {
+        let c = (v[0] + v[1] + v[2]) / 3.0;
+        let r2 = (v[0] - c)
+            .length_squared()
+            .max((v[1] - c).length_squared())
+            .max((v[2] - c).length_squared());
+        GpuEmitter {
+            tri,
+            cdf,
+            pmf,
+            area: 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length(),
+            center: c.into(),
+            radius: r2.sqrt(),
+        }
+    }
+}
+
+/// The solid angle emitter triangle `v` (emitter entry `e`) subtends from
+/// `p` when light sampling picks its point by solid angle there (between
+/// [`SPHERICAL_SAMPLING_MIN`] and [`SPHERICAL_SAMPLING_MAX`], not a sliver:
+/// shape at least [`SPHERICAL_SAMPLING_SHAPE`], and off its plane: height at
+/// least [`SPHERICAL_SAMPLING_HEIGHT`]), `None` when by area. A pure
+/// function of the triangle and the point, so a BSDF sample that hits the
+/// triangle finds the density the light sample used.
 #[inline]
-pub fn spherical_sampling_angle(v: [Vec3; 3], p: Vec3) -> Option<f32> {
+pub fn spherical_sampling_angle(v: [Vec3; 3], e: &GpuEmitter, p: Vec3) -> Option<f32> {
     // Far for its size: omega <= area / d_min^2, and d_min >= the distance
-    // to the centroid less the centroid's farthest vertex. This exit, exact
-    // as a bound, spares most light samples the solid angle.
-    let c = (v[0] + v[1] + v[2]) / 3.0;
-    let r2 = (v[0] - c)
-        .length_squared()
-        .max((v[1] - c).length_squared())
-        .max((v[2] - c).length_squared());
-    let d2 = (p - c).length_squared();
-    if d2 > r2 {
-        let d_min = d2.sqrt() - r2.sqrt();
-        let area = 0.5 * (v[1] - v[0]).cross(v[2] - v[0]).length();
-        if area < SPHERICAL_SAMPLING_MIN * d_min * d_min {
+    // to the centroid less the bounding radius. This exit, exact as a
+    // bound, spares most light samples the solid angle.
+    let d2 = (p - Vec3::from(e.center)).length_squared();
+    if d2 > e.radius * e.radius {
+        let d_min = d2.sqrt() - e.radius;
+        if e.area < SPHERICAL_SAMPLING_MIN * d_min * d_min {
             return None;
         }
     }
@@ -214,12 +228,8 @@ impl Lights {
             .zip(&powers)
             .map(|(&tri, &p)| {
                 acc += p;
-                GpuEmitter {
-                    tri,
-                    cdf: (acc / total) as f32,
-                    pmf: (p / total) as f32,
-                    area: scene.triangles[tri as usize].area(),
-                }
+                let v = scene.triangles[tri as usize].vertices();
+                GpuEmitter::new(tri, v, (acc / total) as f32, (p / total) as f32)
             })
             .collect();
         if let Some(last) = emitters.last_mut() {
@@ -283,7 +293,7 @@ impl Lights {
         let e = self.emitters[i as usize];
         let t = &scene.triangles[e.tri as usize];
         let v = t.vertices();
-        let omega = spherical_sampling_angle(v, p);
+        let omega = spherical_sampling_angle(v, &e, p);
         let b = match omega {
             Some(omega) => sample_spherical_triangle(v, p, omega, u)?,
             None => square_to_uniform_triangle(u),
@@ -393,7 +403,7 @@ impl Lights {
     pub fn area_pdf(&self, scene: &Scene, tri: u32, p: Vec3, wi: Vec3, dist: f32) -> f32 {
         let t = &scene.triangles[tri as usize];
         let e = self.emitters[t.light as usize];
-        if let Some(omega) = spherical_sampling_angle(t.vertices(), p) {
+        if let Some(omega) = spherical_sampling_angle(t.vertices(), &e, p) {
             return self.probs.area * e.pmf / omega;
         }
         let cos_l = t.geometric_normal().normalize().dot(wi).abs();

@@ -12,10 +12,11 @@
 //! heavy-tailed scenes without it) is in docs/benchmarks.md.
 
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use glint_cpu::adaptive::estimated_relmse;
 use glint_cpu::metrics::{ImageRef, compute};
-use glint_cpu::{Film, RenderOptions, SamplerKind};
+use glint_cpu::{Film, RenderOptions, SamplerKind, Scene};
 use rayon::prelude::*;
 
 const SEEDS: u64 = 20;
@@ -66,15 +67,41 @@ fn relmse(img: &Film, reference: &Film) -> f64 {
     m.relmse
 }
 
+/// A bundled scene with its reference (REF_SPP, independent sampler) and
+/// the reference's own estimated relMSE, subtracted from the true errors.
+struct Case {
+    name: String,
+    scene: Scene,
+    reference: Film,
+    ref_err: f64,
+}
+
+/// Every bundled scene's case, rendered once for both tests.
+fn cases() -> &'static [Case] {
+    static CASES: OnceLock<Vec<Case>> = OnceLock::new();
+    CASES.get_or_init(|| {
+        assets()
+            .par_iter()
+            .map(|path| {
+                let scene = glint_cpu::prepare::prepare_default(path).unwrap();
+                let reference = render(&scene, REF_SPP, 999, SamplerKind::Independent);
+                Case {
+                    name: path.file_stem().unwrap().to_string_lossy().into_owned(),
+                    ref_err: estimated_relmse(&reference),
+                    scene,
+                    reference,
+                }
+            })
+            .collect()
+    })
+}
+
 #[test]
 fn estimated_relmse_is_calibrated_on_every_bundled_scene() {
-    let rows: Vec<(String, &str, f64)> = assets()
+    let rows: Vec<(String, &str, f64)> = cases()
         .par_iter()
-        .flat_map_iter(|path| {
-            let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-            let scene = glint_cpu::prepare::prepare_default(path).unwrap();
-            let reference = render(&scene, REF_SPP, 999, SamplerKind::Independent);
-            let ref_err = estimated_relmse(&reference);
+        .flat_map_iter(|c| {
+            let (name, scene, reference, ref_err) = (&c.name, &c.scene, &c.reference, c.ref_err);
             [
                 (SamplerKind::Independent, "independent"),
                 (SamplerKind::Sobol, "sobol"),
@@ -83,9 +110,9 @@ fn estimated_relmse_is_calibrated_on_every_bundled_scene() {
             .map(|(sampler, label)| {
                 let (mut est, mut truth) = (0.0, 0.0);
                 for seed in 1..=SEEDS {
-                    let f = render(&scene, SPP, seed, sampler);
+                    let f = render(scene, SPP, seed, sampler);
                     est += estimated_relmse(&f);
-                    truth += (relmse(&f, &reference) - ref_err).max(1e-30);
+                    truth += (relmse(&f, reference) - ref_err).max(1e-30);
                 }
                 (name.clone(), label, est / truth)
             })
@@ -114,13 +141,10 @@ fn estimated_relmse_is_calibrated_on_every_bundled_scene() {
 /// `adaptive::TARGET_MARGIN`), and a larger target stops no later.
 #[test]
 fn target_error_meets_its_target_in_the_mean() {
-    let failures: Vec<String> = assets()
+    let failures: Vec<String> = cases()
         .par_iter()
-        .flat_map_iter(|path| {
-            let name = path.file_stem().unwrap().to_string_lossy().into_owned();
-            let scene = glint_cpu::prepare::prepare_default(path).unwrap();
-            let reference = render(&scene, REF_SPP, 999, SamplerKind::Independent);
-            let ref_err = estimated_relmse(&reference);
+        .flat_map_iter(|c| {
+            let (name, scene, reference, ref_err) = (&c.name, &c.scene, &c.reference, c.ref_err);
             let mut out = Vec::new();
             let mut spp = Vec::new();
             for target in [0.02, 0.005] {
@@ -128,10 +152,10 @@ fn target_error_meets_its_target_in_the_mean() {
                 for seed in 1..=10u64 {
                     let o = RenderOptions {
                         target_error: Some(target),
-                        ..options(&scene, 1 << 16, seed)
+                        ..options(scene, 1 << 16, seed)
                     };
-                    let f = glint_cpu::render(&scene, &o, &|_, _| {}).unwrap().0;
-                    truth += (relmse(&f, &reference) - ref_err).max(0.0);
+                    let f = glint_cpu::render(scene, &o, &|_, _| {}).unwrap().0;
+                    truth += (relmse(&f, reference) - ref_err).max(0.0);
                     total_spp += f.spp as u64;
                 }
                 let mean = truth / 10.0;

@@ -9,11 +9,16 @@ mod render_common;
 
 use glam::{DVec3, Vec2, Vec3};
 use glint_cpu::bvh::Ray;
-use glint_cpu::lights::{Lights, spherical_sampling_angle};
+use glint_cpu::lights::{GpuEmitter, Lights};
 use glint_cpu::sampling::{Pcg32, sample_cdf, square_to_uniform_triangle};
 use glint_cpu::spherical::{sample_spherical_triangle, triangle_solid_angle};
 use render_common::{emitter, look_at, quad, scene};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+/// Whether light sampling samples triangle `v` by solid angle from `p`.
+fn spherical_sampling_angle(v: [Vec3; 3], p: Vec3) -> Option<f32> {
+    glint_cpu::lights::spherical_sampling_angle(v, &GpuEmitter::new(0, v, 1.0, 1.0), p)
+}
 
 /// Solid angle in f64 (the reference the f32 sampler is held to).
 fn solid_angle_f64(v: [DVec3; 3], p: DVec3) -> f64 {

@@ -139,7 +139,8 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         uint i = sample_emitter_cdf(params.emitter_count, u_idx);
         Emitter e = emitters[i];
         Triangle t = triangles[e.tri];
-        float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p);
+        float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, e.center, e.radius,
+                                               e.area, p);
         vec2 b;
         if (omega > 0.0) {
             if (!sample_spherical_triangle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p, omega, u, b)) {
@@ -250,7 +251,8 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
 float lights_area_pdf(uint tri, vec3 p, vec3 wi, float dist) {
     Triangle t = triangles[tri];
     Emitter e = emitters[floatBitsToUint(t.p1.w)];
-    float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p);
+    float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, e.center, e.radius, e.area,
+                                           p);
     if (omega > 0.0) {
         return params.p_area * e.pmf / omega;
     }

@@ -114,19 +114,15 @@ bool sample_spherical_triangle(vec3 v0, vec3 v1, vec3 v2, vec3 p, float omega, v
 }
 
 // lights::spherical_sampling_angle: the solid angle when light sampling
-// picks a point on the triangle by solid angle from p, else 0 (by area).
-float spherical_sampling_angle(vec3 v0, vec3 v1, vec3 v2, vec3 p) {
+// picks a point on triangle (v0, v1, v2) by solid angle from p, else 0 (by
+// area). center, radius, area: the emitter's bounding sphere and area.
+float spherical_sampling_angle(vec3 v0, vec3 v1, vec3 v2, vec3 center, float radius, float area,
+                               vec3 p) {
     // Far for its size (omega <= area / d_min^2): by area, no solid angle.
-    vec3 c = (v0 + v1 + v2) / 3.0;
-    vec3 c0 = v0 - c;
-    vec3 c1 = v1 - c;
-    vec3 c2 = v2 - c;
-    float r2 = max(dot(c0, c0), max(dot(c1, c1), dot(c2, c2)));
-    vec3 pc = p - c;
+    vec3 pc = p - center;
     float d2 = dot(pc, pc);
-    if (d2 > r2) {
-        float d_min = sqrt(d2) - sqrt(r2);
-        float area = 0.5 * length(cross(v1 - v0, v2 - v0));
+    if (d2 > radius * radius) {
+        float d_min = sqrt(d2) - radius;
         if (area < SPHERICAL_SAMPLING_MIN * d_min * d_min) {
             return 0.0;
         }
