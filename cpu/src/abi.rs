@@ -407,6 +407,16 @@ device_constants! { LIGHT_CONSTANTS;
     /// graze it and f32 misplaces the points they hit (a chi-square test
     /// failed at 0.5% height, `cpu/tests/light_sampling.rs`).
     SPHERICAL_SAMPLING_HEIGHT: f32 = 0.05;
+    /// `spherical::atan2_nonneg` (Cephes' `atanf`, which both backends run
+    /// instead of the library's `atan`): the range-reduction bounds
+    /// tan(3 pi / 8) and tan(pi / 8) and the odd polynomial's coefficients
+    /// of t^9, t^7, t^5, t^3.
+    ATAN_TAN_3PI_8: f32 = 2.414_213_5;
+    ATAN_TAN_PI_8: f32 = 0.414_213_57;
+    ATAN_P9: f32 = 8.053_744_5e-2;
+    ATAN_P7: f32 = -1.387_768_6e-1;
+    ATAN_P5: f32 = 1.997_771_1e-1;
+    ATAN_P3: f32 = -3.333_295e-1;
 }
 
 device_struct! {

@@ -13,6 +13,8 @@
 use glam::{Vec2, Vec3};
 use std::f32::consts::PI;
 
+use crate::abi::{ATAN_P3, ATAN_P5, ATAN_P7, ATAN_P9, ATAN_TAN_3PI_8, ATAN_TAN_PI_8};
+
 /// atan(y / x) for y >= 0, in [0, pi], with the same operations on both
 /// backends: Cephes' `atanf` (range reduction to |t| <= tan(pi / 8) and
 /// a degree-9 odd polynomial, 2e-7 relative), because GLSL's `atan` is
@@ -24,9 +26,9 @@ pub fn atan2_nonneg(y: f32, x: f32) -> f32 {
     const PI_4: f32 = std::f32::consts::FRAC_PI_4;
     let (ax, flip) = if x < 0.0 { (-x, true) } else { (x, false) };
     // t = y / ax >= 0, reduced without forming it where it overflows.
-    let (base, t) = if y > 2.414_213_5 * ax {
+    let (base, t) = if y > ATAN_TAN_3PI_8 * ax {
         (PI_2, -ax / y)
-    } else if y > 0.414_213_57 * ax {
+    } else if y > ATAN_TAN_PI_8 * ax {
         (PI_4, (y - ax) / (y + ax))
     } else if ax > 0.0 {
         (0.0, y / ax)
@@ -34,9 +36,7 @@ pub fn atan2_nonneg(y: f32, x: f32) -> f32 {
         return 0.0;
     };
     let z = t * t;
-    let r = base
-        + (((8.053_744_5e-2 * z - 1.387_768_6e-1) * z + 1.997_771_1e-1) * z - 3.333_295e-1) * z * t
-        + t;
+    let r = base + (((ATAN_P9 * z + ATAN_P7) * z + ATAN_P5) * z + ATAN_P3) * z * t + t;
     if flip { PI - r } else { r }
 }
 

@@ -4,6 +4,8 @@
 #ifndef GLINT_INTEGRATOR_SPHERICAL_GLSL
 #define GLINT_INTEGRATOR_SPHERICAL_GLSL
 
+#include "glint_abi.glsl" // ATAN_*, SPHERICAL_SAMPLING_*: generated from cpu/src/abi.rs
+
 #define SPH_PI 3.14159265358979323846
 
 vec3 sph_normalize_or_zero(vec3 v) {
@@ -18,10 +20,10 @@ float atan2_nonneg(float y, float x) {
     float ax = abs(x);
     float base;
     float t;
-    if (y > 2.4142135 * ax) {
+    if (y > ATAN_TAN_3PI_8 * ax) {
         base = 1.57079632679489661923;
         t = -ax / y;
-    } else if (y > 0.41421357 * ax) {
+    } else if (y > ATAN_TAN_PI_8 * ax) {
         base = 0.78539816339744830962;
         t = (y - ax) / (y + ax);
     } else if (ax > 0.0) {
@@ -31,9 +33,7 @@ float atan2_nonneg(float y, float x) {
         return 0.0;
     }
     float z = t * t;
-    float r = base
-        + (((8.0537445e-2 * z - 1.3877686e-1) * z + 1.9977711e-1) * z - 3.333295e-1) * z * t
-        + t;
+    float r = base + (((ATAN_P9 * z + ATAN_P7) * z + ATAN_P5) * z + ATAN_P3) * z * t + t;
     return flip ? SPH_PI - r : r;
 }
 
