@@ -84,8 +84,14 @@ pub fn render_key(scene: &Scene, opts: &RenderOptions, scope: KeyScope) -> Strin
     hash_scene(&mut h, scene);
     h.add(
         format!(
-            "{}x{} depth {} camera {} {:?} {:?}",
-            opts.width, opts.height, opts.max_depth, opts.camera, opts.nee, opts.mis
+            "{}x{} depth {} camera {} {:?} {:?} {:?}",
+            opts.width,
+            opts.height,
+            opts.max_depth,
+            opts.camera,
+            opts.nee,
+            opts.mis,
+            opts.light_sampling
         )
         .as_bytes(),
     );

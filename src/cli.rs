@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use clap::{Parser, Subcommand, ValueEnum};
 use glint::backend::Backend;
-use glint::cpu::{Mis, SamplerKind};
+use glint::cpu::{LightSampling, Mis, SamplerKind};
 use serde::Serialize;
 
 #[derive(Parser, Debug)]
@@ -122,6 +122,27 @@ impl From<MisArg> for Mis {
     }
 }
 
+/// `--light-sampling solid-angle|area`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
+pub enum LightSamplingArg {
+    /// Uniform in the solid angle an emissive triangle subtends where
+    /// that is large (0.1 to 6.22 sr) and well conditioned, by area
+    /// elsewhere.
+    SolidAngle,
+    /// Uniform by area on every emissive triangle.
+    Area,
+}
+
+impl From<LightSamplingArg> for LightSampling {
+    fn from(m: LightSamplingArg) -> Self {
+        match m {
+            LightSamplingArg::SolidAngle => LightSampling::SolidAngle,
+            LightSamplingArg::Area => LightSampling::Area,
+        }
+    }
+}
+
 /// `--sampler`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
 #[serde(rename_all = "kebab-case")] // clap's value names (`to_args`)
@@ -222,6 +243,10 @@ pub struct RenderOpts {
     /// Multiple importance sampling of light and BSDF samples.
     #[arg(long, value_enum, default_value_t = MisArg::Power)]
     pub mis: MisArg,
+
+    /// How light sampling picks a point on an emissive triangle.
+    #[arg(long, value_enum, default_value_t = LightSamplingArg::SolidAngle)]
+    pub light_sampling: LightSamplingArg,
 
     /// Energy compensation (multiple scattering) for every rough model,
     /// glTF-derived ones included; a material's own extras.bsdf
@@ -702,6 +727,7 @@ mod tests {
             device: Some("llvmpipe".into()),
             nee: OnOff::Off,
             mis: MisArg::Balance,
+            light_sampling: LightSamplingArg::Area,
             multiscatter: OnOff::On,
             sampler: SamplerArg::Independent,
             kernel: KernelArg::Generic,

@@ -70,6 +70,7 @@ impl Stats<'_> {
         });
         v["nee"] = json!(self.options.nee);
         v["mis"] = json!(self.options.mis.name());
+        v["light_sampling"] = json!(self.options.light_sampling.name());
         v["sampler"] = json!(self.options.sampler.name());
         v["sample_start"] = json!(self.options.sample_start);
         if let Some(t) = self.options.time_limit {

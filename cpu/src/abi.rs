@@ -716,7 +716,10 @@ device_struct! {
         /// The environment map's rotation about +Y.
         pub env_rot_sin: f32,
         pub env_rot_cos: f32,
-        pub env_pad: [u32; 2],
+        /// 1: emissive triangles sampled by solid angle where it pays
+        /// (`RenderOptions::light_sampling`), 0: by area everywhere.
+        pub solid_angle: u32,
+        pub env_pad: u32,
     }
 }
 const _: () = assert!(size_of::<GpuParams>() == 176);

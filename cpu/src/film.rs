@@ -25,6 +25,8 @@ pub struct RenderOptions {
     pub mis: Mis,
     /// Where the random numbers come from.
     pub sampler: SamplerKind,
+    /// How light sampling picks a point on an emissive triangle.
+    pub light_sampling: LightSampling,
     /// First sample index rendered: a render covers sample indices
     /// `[sample_start, sample_start + spp)` of every pixel (shards).
     pub sample_start: u32,
@@ -41,6 +43,30 @@ pub struct RenderOptions {
     /// Per-pixel stopping once a pixel's estimated relative standard error
     /// is below this (`--adaptive`; `spp` is the per-pixel cap).
     pub adaptive: Option<f64>,
+}
+
+/// How next-event estimation picks a point on an emissive triangle
+/// (`--light-sampling`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum LightSampling {
+    /// Uniformly in the solid angle the triangle subtends, where that is
+    /// large and well conditioned (0.1 to 6.22 sr, no sliver, not grazing:
+    /// [`crate::lights::spherical_sampling_angle`]; Arvo 1995), by area
+    /// elsewhere.
+    #[default]
+    SolidAngle,
+    /// Uniformly by area everywhere (glint before solid-angle sampling;
+    /// kept to measure it against).
+    Area,
+}
+
+impl LightSampling {
+    pub fn name(self) -> &'static str {
+        match self {
+            LightSampling::SolidAngle => "solid-angle",
+            LightSampling::Area => "area",
+        }
+    }
 }
 
 /// Multiple importance sampling between next-event estimation and BSDF
@@ -152,6 +178,7 @@ impl RenderOptions {
             nee: true,
             mis: Mis::Power,
             sampler: SamplerKind::default(),
+            light_sampling: LightSampling::default(),
             sample_start: 0,
             time_limit: None,
             variance_batch: 0,

@@ -31,7 +31,7 @@ pub mod texture;
 
 pub use bsdf::{Bsdf, BsdfSample};
 pub use bvh::{Bvh, Bvh4, Bvh4Node, BvhNode, Hit, Ray};
-pub use film::{Film, Mis, OutputFormat, RenderOptions, RenderStats, SamplerKind};
+pub use film::{Film, LightSampling, Mis, OutputFormat, RenderOptions, RenderStats, SamplerKind};
 pub use frame::Frame;
 pub use integrator::{PathTracer, RenderError, render};
 pub use scene::{

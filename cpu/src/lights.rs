@@ -32,6 +32,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::envmap::EnvMap;
+use crate::film::LightSampling;
 use crate::frame::Frame;
 use crate::sampling::{
     UNIFORM_SPHERE_PDF, cosine_hemisphere_pdf, sample_cdf, square_to_cosine_hemisphere,
@@ -191,6 +192,9 @@ pub struct Lights {
     /// The environment map, when there is one: it is the background.
     pub envmap: Option<std::sync::Arc<EnvMap>>,
     pub probs: CategoryProbs,
+    /// How a point on an emissive triangle is picked (solid angle where it
+    /// pays, the default, or area everywhere).
+    pub sampling: LightSampling,
 }
 
 impl Lights {
@@ -251,6 +255,19 @@ impl Lights {
             background: scene.background,
             envmap: scene.envmap.clone(),
             probs,
+            sampling: LightSampling::default(),
+        }
+    }
+
+    /// The solid angle by which emitter `e` (triangle `v`) is sampled from
+    /// `p`, `None` where by area: [`spherical_sampling_angle`] under
+    /// [`LightSampling::SolidAngle`], always `None` under
+    /// [`LightSampling::Area`].
+    #[inline]
+    fn sampling_angle(&self, v: [Vec3; 3], e: &GpuEmitter, p: Vec3) -> Option<f32> {
+        match self.sampling {
+            LightSampling::SolidAngle => spherical_sampling_angle(v, e, p),
+            LightSampling::Area => None,
         }
     }
 
@@ -293,7 +310,7 @@ impl Lights {
         let e = self.emitters[i as usize];
         let t = &scene.triangles[e.tri as usize];
         let v = t.vertices();
-        let omega = spherical_sampling_angle(v, &e, p);
+        let omega = self.sampling_angle(v, &e, p);
         let b = match omega {
             Some(omega) => sample_spherical_triangle(v, p, omega, u)?,
             None => square_to_uniform_triangle(u),
@@ -403,7 +420,7 @@ impl Lights {
     pub fn area_pdf(&self, scene: &Scene, tri: u32, p: Vec3, wi: Vec3, dist: f32) -> f32 {
         let t = &scene.triangles[tri as usize];
         let e = self.emitters[t.light as usize];
-        if let Some(omega) = spherical_sampling_angle(t.vertices(), &e, p) {
+        if let Some(omega) = self.sampling_angle(t.vertices(), &e, p) {
             return self.probs.area * e.pmf / omega;
         }
         let cos_l = t.geometric_normal().normalize().dot(wi).abs();

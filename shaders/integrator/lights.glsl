@@ -127,6 +127,15 @@ struct LightSample {
     bool at_infinity;  // directional and background samples
 };
 
+// Lights::sampling_angle: the solid angle by which emitter e (triangle t)
+// is sampled from p, 0 where by area (always under --light-sampling area).
+float lights_sampling_angle(Triangle t, Emitter e, vec3 p) {
+    if (params.solid_angle == 0u) {
+        return 0.0;
+    }
+    return spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, e.center, e.radius, e.area, p);
+}
+
 bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
                    out LightSample ls) {
     ls.wi = vec3(0.0);
@@ -139,8 +148,7 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
         uint i = sample_emitter_cdf(params.emitter_count, u_idx);
         Emitter e = emitters[i];
         Triangle t = triangles[e.tri];
-        float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, e.center, e.radius,
-                                               e.area, p);
+        float omega = lights_sampling_angle(t, e, p);
         vec2 b;
         if (omega > 0.0) {
             if (!sample_spherical_triangle(t.p0.xyz, t.p1.xyz, t.p2.xyz, p, omega, u, b)) {
@@ -251,8 +259,7 @@ bool lights_sample(vec3 p, vec3 bg_normal, float u_cat, float u_idx, vec2 u,
 float lights_area_pdf(uint tri, vec3 p, vec3 wi, float dist) {
     Triangle t = triangles[tri];
     Emitter e = emitters[floatBitsToUint(t.p1.w)];
-    float omega = spherical_sampling_angle(t.p0.xyz, t.p1.xyz, t.p2.xyz, e.center, e.radius, e.area,
-                                           p);
+    float omega = lights_sampling_angle(t, e, p);
     if (omega > 0.0) {
         return params.p_area * e.pmf / omega;
     }

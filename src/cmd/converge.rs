@@ -266,6 +266,7 @@ fn reference_image(
         sample_start: 0,
         nee: true,
         mis: glint::cpu::Mis::Power,
+        light_sampling: glint::cpu::LightSampling::default(),
         ..base.clone()
     };
     let key = reference_key(scene, &opts);

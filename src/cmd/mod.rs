@@ -334,6 +334,7 @@ pub fn render_options(
         camera,
         nee: o.nee == OnOff::On,
         mis: o.mis.into(),
+        light_sampling: o.light_sampling.into(),
         sampler: o.sampler.into(),
         time_limit: o.time_limit,
         ..RenderOptions::new(width, height)

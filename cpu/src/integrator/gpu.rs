@@ -4,7 +4,7 @@
 
 use super::{RenderError, depth_limit, validate_options};
 use crate::camera::{PinholeCamera, scene_camera};
-use crate::film::RenderOptions;
+use crate::film::{LightSampling, RenderOptions};
 use crate::lights::Lights;
 use crate::lights::{GpuEmitter, GpuLight};
 use crate::sampling::seed_key;
@@ -81,7 +81,8 @@ pub fn gpu_scene_data(scene: &Scene, opts: &RenderOptions) -> Result<GpuSceneDat
         env_height: scene.envmap.as_ref().map_or(0, |e| e.height),
         env_rot_sin: scene.envmap.as_ref().map_or(0.0, |e| e.rotation.sin()),
         env_rot_cos: scene.envmap.as_ref().map_or(1.0, |e| e.rotation.cos()),
-        env_pad: [0; 2],
+        solid_angle: (opts.light_sampling == LightSampling::SolidAngle) as u32,
+        env_pad: 0,
     };
     Ok(GpuSceneData {
         params,

@@ -356,7 +356,10 @@ impl<'a> PathTracer<'a> {
         let camera = PinholeCamera::new(&scene_camera(scene, opts.camera), opts.width, opts.height);
         Ok(Self {
             scene,
-            lights: Lights::new(scene),
+            lights: Lights {
+                sampling: opts.light_sampling,
+                ..Lights::new(scene)
+            },
             camera,
             max_depth: depth_limit(opts.max_depth),
             key: seed_key(opts.seed),
