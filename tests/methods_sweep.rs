@@ -1,12 +1,14 @@
 //! The sampling methods' sweep (`glint::methods`, `glint stability
 //! --methods`) at its quick size, on the CPU (and on the GPU, which must
 //! follow it):
-//! - Veach's bound: in every cell, MIS (power heuristic, and balance) has a
-//!   relMSE at most 2x the better single technique's (3x at the sweep's
-//!   corners, where one technique's variance is infinite-like), at equal
-//!   samples: Veach's statement (thesis sec. 9.2), and free of the timing
-//!   noise an equal-time test would carry. The sweep itself reports equal
-//!   time.
+//! - Veach's bound ([`veach_bound`]), in every cell of every family, at
+//!   equal samples (free of the timing noise an equal-time test would
+//!   carry; the sweep itself reports equal time): the power heuristic's
+//!   relMSE at most 2x the better single technique's (3x at a family's
+//!   corners, where one technique's variance is infinite-like), and the
+//!   balance heuristic within Veach's theorem 9.2, which allows it an
+//!   additive (1/2) mu^2 / spp more. Where the better technique is nearly
+//!   exact, the power heuristic gets that allowance too.
 //! - Each technique unbiased in every cell: the image mean against the
 //!   reference's, by its standard error, at more samples where a
 //!   technique's heavy tail needs them ([`unbiased`]).
@@ -18,7 +20,7 @@
 use std::process::Command;
 
 use glint::cpu::{Film, RenderOptions};
-use glint::methods::{self, Cell, Sweep, Technique};
+use glint::methods::{self, Cell, Family, Model, Sweep, Technique};
 
 const SPP: u32 = 64;
 const REFERENCE_SPP: u32 = 2048;
@@ -135,24 +137,44 @@ fn unbiased(sweep: &Sweep, m: &Measured, t: Technique, film: &Film) -> Result<()
     ))
 }
 
+/// The most relMSE that MIS with heuristic `t` may have, at `SPP` samples,
+/// against the better single technique's `best` in `cell`.
+///
+/// - A constant factor k: 2, or 3 at a family's corners.
+/// - Veach's theorem 9.2 (thesis sec. 9.2.2): the balance heuristic's variance
+///   is at most the best strategy's plus (1 / min n_i - 1 / sum n_i) mu^2,
+///   here (1 - 1/2) mu^2 / SPP for a pixel mean of SPP samples of each
+///   technique: relMSE at most k best + 1 / (2 SPP). The term is real, not
+///   slack: where one technique is nearly exact (a uniform environment sun
+///   seen by a Lambert-like plate through light sampling, or by a
+///   near-mirror through BSDF sampling: relMSE 2e-8 and 1e-6 at 64 spp),
+///   the balance heuristic measures 100-300x worse than it (still within
+///   the term), and the power heuristic 20-40x.
+/// - The power heuristic: k best alone, unless the better technique is
+///   nearly exact (a per-sample relMSE, best x SPP, under 1e-2), where no
+///   constant factor can hold and it gets the balance heuristic's term.
+fn veach_bound(sweep: &Sweep, cell: &Cell, t: Technique, best: f64) -> f64 {
+    let k = if sweep.corner(cell) { 3.0 } else { 2.0 };
+    let term = 0.5 / SPP as f64;
+    let nearly_exact = best * (SPP as f64) < 1e-2;
+    match t {
+        Technique::MisPower if !nearly_exact => k * best,
+        _ => k * best + term,
+    }
+}
+
 #[test]
 fn mis_is_never_much_worse_than_the_best_technique_and_all_are_unbiased() {
     let sweep = Sweep::new(true);
     let measured = measure(&sweep);
-    let corner = |c: &Cell| {
-        let a = &sweep.alphas;
-        let r = &sweep.radii;
-        (c.alpha == a[0] || c.alpha == a[a.len() - 1])
-            && (c.radius == r[0] || c.radius == r[r.len() - 1])
-    };
     let mut failures = Vec::new();
     let mut table = Vec::new();
     for m in &measured {
         let e = |t| relmse(m, t);
         let best_single = e(Technique::Bsdf).min(e(Technique::Light));
-        let bound = if corner(&m.cell) { 3.0 } else { 2.0 };
         table.push(format!(
-            "{} alpha {} r {}: bsdf {:.3e} light {:.3e} balance {:.3e} power {:.3e}",
+            "{} {} alpha {} r {}: bsdf {:.3e} light {:.3e} balance {:.3e} power {:.3e}",
+            m.cell.family.name(),
             m.cell.model.name(),
             m.cell.alpha,
             m.cell.radius,
@@ -162,9 +184,10 @@ fn mis_is_never_much_worse_than_the_best_technique_and_all_are_unbiased() {
             e(Technique::MisPower)
         ));
         for t in [Technique::MisPower, Technique::MisBalance] {
-            if e(t) > bound * best_single {
+            let bound = veach_bound(&sweep, &m.cell, t, best_single);
+            if e(t) > bound {
                 failures.push(format!(
-                    "{:?}: {} relMSE {:.3e} > {bound} x {best_single:.3e}",
+                    "{:?}: {} relMSE {:.3e} > {bound:.3e} (best single {best_single:.3e})",
                     m.cell,
                     t.name(),
                     e(t)
@@ -196,11 +219,6 @@ fn the_gpu_follows_the_cpu_and_veachs_bound_holds_there() {
     use glint::backend::{Backend, GpuOptions, Renderer};
     let sweep = Sweep::new(true);
     let gpu = Renderer::new(Backend::Gpu, &GpuOptions::default()).unwrap();
-    let corner = |c: &Cell| {
-        let (a, r) = (&sweep.alphas, &sweep.radii);
-        (c.alpha == a[0] || c.alpha == a[a.len() - 1])
-            && (c.radius == r[0] || c.radius == r[r.len() - 1])
-    };
     let mut failures = Vec::new();
     for cell in sweep.cells() {
         let s = methods::scene(&cell);
@@ -223,11 +241,11 @@ fn the_gpu_follows_the_cpu_and_veachs_bound_holds_there() {
             e.insert(t, eg);
         }
         let best_single = e[&Technique::Bsdf].min(e[&Technique::Light]);
-        let bound = if corner(&cell) { 3.0 } else { 2.0 };
         for t in [Technique::MisPower, Technique::MisBalance] {
-            if e[&t] > bound * best_single {
+            let bound = veach_bound(&sweep, &cell, t, best_single);
+            if e[&t] > bound {
                 failures.push(format!(
-                    "{cell:?} gpu: {} {:.3e} > {bound} x {best_single:.3e}",
+                    "{cell:?} gpu: {} {:.3e} > {bound:.3e} (best single {best_single:.3e})",
                     t.name(),
                     e[&t]
                 ));
@@ -243,7 +261,7 @@ fn weights_that_sum_to_two_are_caught() {
     // Light sampling plus BSDF sampling, each at full weight: every path
     // counted twice, the image twice the reference.
     let sweep = Sweep::new(true);
-    let cell = sweep.cells()[sweep.radii.len() + 1];
+    let cell = sweep.cells()[sweep.radii(Family::Sphere).len() + 1];
     let s = methods::scene(&cell);
     let reference = reference(&sweep, &s);
     let o = |t: Technique| RenderOptions {
@@ -266,6 +284,66 @@ fn weights_that_sum_to_two_are_caught() {
     assert!(z(&power, &reference) <= 5.0);
 }
 
+/// What solid-angle sampling is for: under the quad family's large close
+/// light (two triangles of about 0.5 sr each from the plate), light
+/// sampling by solid angle has under half the relMSE it has by area at
+/// equal samples, on both models (measured 4-10x at 64 spp), and the
+/// switch is real on the GPU too (its relMSE follows the CPU's each way).
+#[test]
+fn solid_angle_sampling_beats_area_sampling_under_a_close_quad_light() {
+    use glint::backend::{Backend, GpuOptions, Renderer};
+    use glint::cpu::LightSampling;
+    let sweep = Sweep::new(true);
+    let gpu = Renderer::new(Backend::Gpu, &GpuOptions::default()).unwrap();
+    let mut failures = Vec::new();
+    for model in [Model::Conductor, Model::RoughPlastic] {
+        let cell = Cell {
+            family: Family::Quad,
+            model,
+            alpha: 1.0,
+            radius: *sweep.radii(Family::Quad).last().unwrap(),
+        };
+        let s = methods::scene(&cell);
+        let reference = reference(&sweep, &s);
+        let e = |sampling, on_gpu: bool| {
+            let o = RenderOptions {
+                spp: SPP,
+                light_sampling: sampling,
+                ..Technique::Light.options(&sweep.options(5))
+            };
+            let f = if on_gpu {
+                gpu.render(&s, &o, &|_, _| {}).unwrap().film
+            } else {
+                render(&s, &o)
+            };
+            methods::relmse(&f, &reference).unwrap()
+        };
+        let (area, solid) = (
+            e(LightSampling::Area, false),
+            e(LightSampling::SolidAngle, false),
+        );
+        let (g_area, g_solid) = (
+            e(LightSampling::Area, true),
+            e(LightSampling::SolidAngle, true),
+        );
+        eprintln!(
+            "{cell:?}: area {area:.3e} solid angle {solid:.3e} (gpu {g_area:.3e} {g_solid:.3e})"
+        );
+        if area <= 2.0 * solid || !area.is_finite() {
+            failures.push(format!(
+                "{cell:?}: area {area:.3e}, solid angle {solid:.3e}"
+            ));
+        }
+        for (g, c) in [(g_area, area), (g_solid, solid)] {
+            if !(g <= 1.25 * c && c <= 1.25 * g) {
+                failures.push(format!("{cell:?}: gpu {g:.3e}, cpu {c:.3e}"));
+            }
+        }
+    }
+    gpu.finish().unwrap();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
 #[test]
 fn command_writes_the_sweep_tables_and_chart() {
     let dir = std::env::temp_dir().join(format!("glint-methods-{}", std::process::id()));
@@ -280,30 +358,61 @@ fn command_writes_the_sweep_tables_and_chart() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let csv = std::fs::read_to_string(dir.join("methods.csv")).unwrap();
-    let mut lines = csv.lines();
-    assert_eq!(
-        lines.next(),
-        Some("backend,model,alpha,light_radius,technique,seconds,relmse")
-    );
     let sweep = Sweep::new(true);
-    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), sweep.cells().len() * Technique::ALL.len());
-    for r in &rows {
-        assert_eq!(r.len(), 7, "{r:?}");
-        assert_eq!(r[0], "cpu");
-        assert!(Technique::ALL.iter().any(|t| t.name() == r[4]), "{r:?}");
-        let seconds: f64 = r[5].parse().unwrap();
-        let relmse: f64 = r[6].parse().unwrap();
-        assert!(
-            seconds > 0.0 && relmse.is_finite() && relmse >= 0.0,
-            "{r:?}"
+    for family in Family::ALL {
+        let csv = std::fs::read_to_string(dir.join(format!("{}.csv", family.stem()))).unwrap();
+        let mut lines = csv.lines();
+        assert_eq!(
+            lines.next(),
+            Some("backend,model,alpha,light_radius,technique,seconds,relmse")
+        );
+        let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+        let cells = sweep.cells().iter().filter(|c| c.family == family).count();
+        assert_eq!(rows.len(), cells * Technique::ALL.len(), "{family:?}");
+        for r in &rows {
+            assert_eq!(r.len(), 7, "{r:?}");
+            assert_eq!(r[0], "cpu");
+            assert!(Technique::ALL.iter().any(|t| t.name() == r[4]), "{r:?}");
+            let radius: f32 = r[3].parse().unwrap();
+            assert!(sweep.radii(family).contains(&radius), "{r:?}");
+            let seconds: f64 = r[5].parse().unwrap();
+            let relmse: f64 = r[6].parse().unwrap();
+            assert!(
+                seconds > 0.0 && relmse.is_finite() && relmse >= 0.0,
+                "{r:?}"
+            );
+        }
+        for ext in ["svg", "png"] {
+            let f = dir.join(format!("{}.{ext}", family.stem()));
+            assert!(std::fs::metadata(&f).unwrap().len() > 1000, "{f:?}");
+        }
+    }
+    // The before/after: by area and by solid angle, light and mis-power,
+    // in every quad cell.
+    let ba = std::fs::read_to_string(dir.join("light-sampling.csv")).unwrap();
+    let quad = sweep
+        .cells()
+        .iter()
+        .filter(|c| c.family == Family::Quad)
+        .count();
+    assert_eq!(ba.lines().count(), 1 + quad * 2 * 2);
+    for sampling in ["area", "solid-angle"] {
+        assert_eq!(
+            ba.lines()
+                .filter(|l| l.split(',').nth(5) == Some(sampling))
+                .count(),
+            quad * 2
         );
     }
     let md = std::fs::read_to_string(dir.join("methods.md")).unwrap();
-    assert!(md.contains("## cpu, roughconductor") && md.contains("## cpu, roughplastic"));
-    for f in ["methods.svg", "methods.png"] {
-        assert!(std::fs::metadata(dir.join(f)).unwrap().len() > 1000, "{f}");
+    for h in [
+        "## cpu, roughconductor\n",
+        "## cpu, roughplastic\n",
+        "## cpu, roughplastic, quad\n",
+        "## cpu, roughconductor, envmap\n",
+        "## cpu, roughplastic, quad: light sampling by area (before) and by solid angle (after)",
+    ] {
+        assert!(md.contains(h), "{h}");
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

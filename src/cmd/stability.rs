@@ -8,7 +8,7 @@ use anyhow::{Context as _, Result, bail};
 use glint::backend::{Backend, GpuOptions, Renderer};
 use glint::cpu::Film;
 use glint::gpu::{Context, ContextDesc};
-use glint::methods;
+use glint::methods::{self, Family};
 use glint::stability::{self, COS, Size};
 
 use super::outputs::Outputs;
@@ -78,7 +78,7 @@ fn gpu_context(args: &StabilityArgs) -> Result<Option<Context>> {
 /// and, unless `--cpu-only`, the GPU.
 fn run_methods(args: &StabilityArgs) -> Result<()> {
     let dir = &args.dir;
-    let report = Report::reserve(dir, "methods")?;
+    let report = Report::reserve_files(dir, &methods_files())?;
     let sweep = methods::Sweep::new(args.quick);
     // Every cell renders through the backend interface, on one renderer
     // per backend made once.
@@ -109,14 +109,28 @@ fn run_methods(args: &StabilityArgs) -> Result<()> {
     }
     let md = methods::markdown(&rows, &sweep, &devices);
     let backends: Vec<String> = devices.iter().map(|d| d.0.clone()).collect();
-    let maps = methods::heatmaps(&rows, &sweep, &backends);
-    let title = "glint stability --methods: each technique over (GGX alpha, light radius)";
-    let radii: Vec<String> = sweep.radii.iter().map(|r| r.to_string()).collect();
-    let legend = format!(
-        "columns: light radius {}; green within 1.25x of the cell's best relMSE at equal time, amber within 2x, red beyond",
-        radii.join(" ")
-    );
-    report.write(&md, &methods::csv(&rows), title, &legend, &maps)?;
+    let mut files = vec![md.into_bytes()];
+    for family in Family::ALL {
+        let maps = methods::heatmaps(&rows, &sweep, &backends, family);
+        let title = format!(
+            "glint stability --methods, {} light: each technique over (GGX alpha, light size)",
+            family.name()
+        );
+        let radii: Vec<String> = sweep.radii(family).iter().map(|r| r.to_string()).collect();
+        let legend = format!(
+            "columns: {}, r = {}; green within 1.25x of the cell's best relMSE at equal time, amber within 2x, red beyond",
+            family.radius_meaning(),
+            radii.join(" ")
+        );
+        let (svg, png) = chart(&title, &legend, &maps)?;
+        files.extend([
+            methods::csv(&rows, family).into_bytes(),
+            svg.into_bytes(),
+            png,
+        ]);
+    }
+    files.push(methods::light_sampling_csv(&rows).into_bytes());
+    report.write_files(files)?;
     eprintln!(
         "glint: wrote {} ({} cells, {} measurements)",
         dir.join("methods.md").display(),
@@ -126,36 +140,74 @@ fn run_methods(args: &StabilityArgs) -> Result<()> {
     Ok(())
 }
 
-/// A sweep's four outputs, DIR/STEM.md, .csv, .svg and .png: reserved
-/// before the sweep runs, written together (whole or not at all).
+/// The methods sweep's outputs, in the order `run_methods` writes them:
+/// methods.md, then per family its CSV, SVG and PNG, then the quad
+/// family's before/after CSV.
+fn methods_files() -> Vec<String> {
+    let mut v = vec!["methods.md".to_string()];
+    for family in Family::ALL {
+        for ext in ["csv", "svg", "png"] {
+            v.push(format!("{}.{ext}", family.stem()));
+        }
+    }
+    v.push("light-sampling.csv".into());
+    v
+}
+
+/// A heat-map chart as SVG and PNG.
+fn chart(title: &str, legend: &str, maps: &[glint::chart::Heatmap]) -> Result<(String, Vec<u8>)> {
+    Ok((
+        glint::chart::heatmaps_svg(title, legend, maps)?,
+        glint::chart::heatmaps_png(title, legend, maps)?,
+    ))
+}
+
+/// A sweep's outputs (DIR/STEM.md, .csv, .svg and .png, or a list):
+/// reserved before the sweep runs, written together (whole or not at all).
 struct Report {
     outputs: Outputs,
-    slots: [usize; 4],
+    slots: Vec<usize>,
 }
 
 impl Report {
     fn reserve(dir: &std::path::Path, stem: &str) -> Result<Report> {
+        let names: Vec<String> = ["md", "csv", "svg", "png"]
+            .iter()
+            .map(|ext| format!("{stem}.{ext}"))
+            .collect();
+        Report::reserve_files(dir, &names)
+    }
+
+    fn reserve_files(dir: &std::path::Path, names: &[String]) -> Result<Report> {
         let mut outputs = Outputs::new();
-        let mut slots = [0; 4];
-        for (slot, ext) in slots.iter_mut().zip(["md", "csv", "svg", "png"]) {
-            *slot = outputs.reserve(&dir.join(format!("{stem}.{ext}")))?;
-        }
+        let slots = names
+            .iter()
+            .map(|n| outputs.reserve(&dir.join(n)))
+            .collect::<Result<Vec<_>>>()?;
         Ok(Report { outputs, slots })
     }
 
     fn write(
-        mut self,
+        self,
         md: &str,
         csv: &str,
         title: &str,
         legend: &str,
         maps: &[glint::chart::Heatmap],
     ) -> Result<()> {
-        let svg = glint::chart::heatmaps_svg(title, legend, maps)?;
-        let png = glint::chart::heatmaps_png(title, legend, maps)?;
-        let files: [&[u8]; 4] = [md.as_bytes(), csv.as_bytes(), svg.as_bytes(), &png];
+        let (svg, png) = chart(title, legend, maps)?;
+        self.write_files(vec![md.into(), csv.into(), svg.into(), png])
+    }
+
+    /// The reserved files' contents, in their order.
+    fn write_files(mut self, files: Vec<Vec<u8>>) -> Result<()> {
+        assert_eq!(
+            files.len(),
+            self.slots.len(),
+            "one content per reserved file"
+        );
         for (slot, bytes) in self.slots.into_iter().zip(files) {
-            self.outputs.write(slot, |w| Ok(w.write_all(bytes)?))?;
+            self.outputs.write(slot, |w| Ok(w.write_all(&bytes)?))?;
         }
         self.outputs.commit()
     }
