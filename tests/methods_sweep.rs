@@ -7,8 +7,12 @@
 //!   relMSE at most 2x the better single technique's (3x at a family's
 //!   corners, where one technique's variance is infinite-like), and the
 //!   balance heuristic within Veach's theorem 9.2, which allows it an
-//!   additive (1/2) mu^2 / spp more. Where the better technique is nearly
-//!   exact, the power heuristic gets that allowance too.
+//!   additive (1/2) mu^2 / spp more (the power heuristic is held to the
+//!   larger of its factor and that theorem's bound, which it needs only
+//!   where a technique is nearly exact).
+//! - The test of that test: MIS with weights 1/2 and 1/2 (the mean of the
+//!   two single techniques' images: unbiased, but blind to which is good
+//!   where) breaks the bound.
 //! - Each technique unbiased in every cell: the image mean against the
 //!   reference's, by its standard error, at more samples where a
 //!   technique's heavy tail needs them ([`unbiased`]).
@@ -140,25 +144,26 @@ fn unbiased(sweep: &Sweep, m: &Measured, t: Technique, film: &Film) -> Result<()
 /// The most relMSE that MIS with heuristic `t` may have, at `SPP` samples,
 /// against the better single technique's `best` in `cell`.
 ///
-/// - A constant factor k: 2, or 3 at a family's corners.
-/// - Veach's theorem 9.2 (thesis sec. 9.2.2): the balance heuristic's variance
-///   is at most the best strategy's plus (1 / min n_i - 1 / sum n_i) mu^2,
-///   here (1 - 1/2) mu^2 / SPP for a pixel mean of SPP samples of each
-///   technique: relMSE at most k best + 1 / (2 SPP). The term is real, not
-///   slack: where one technique is nearly exact (a uniform environment sun
-///   seen by a Lambert-like plate through light sampling, or by a
-///   near-mirror through BSDF sampling: relMSE 2e-8 and 1e-6 at 64 spp),
-///   the balance heuristic measures 100-300x worse than it (still within
-///   the term), and the power heuristic 20-40x.
-/// - The power heuristic: k best alone, unless the better technique is
-///   nearly exact (a per-sample relMSE, best x SPP, under 1e-2), where no
-///   constant factor can hold and it gets the balance heuristic's term.
+/// - The factor k: 2, or 3 at a family's corners.
+/// - Veach's theorem 9.2 (thesis sec. 9.2.2): the balance heuristic's
+///   variance is at most the best strategy's plus (1 / min n_i - 1 / sum
+///   n_i) mu^2, here (1 - 1/2) mu^2 / SPP for a pixel mean of SPP samples
+///   of each technique: relMSE at most best + 1 / (2 SPP). The term is
+///   real, not slack: where a technique is nearly exact (light sampling of
+///   a uniform environment sun seen by a rough plate, BSDF sampling of it
+///   seen by a near-mirror: relMSE 2e-8 and 1e-6 at 64 spp), the balance
+///   heuristic measures 100-300x worse than it, within the term. Balance:
+///   k best + the term.
+/// - The power heuristic: k best, or the balance heuristic's theorem
+///   bound where that is larger. The full sweep needs the second form
+///   only in the environment family (9 of 60 cells on the CPU, 11 of 60
+///   on the GPU, each with a nearly exact technique; docs/benchmarks.md),
+///   and there stays within it.
 fn veach_bound(sweep: &Sweep, cell: &Cell, t: Technique, best: f64) -> f64 {
     let k = if sweep.corner(cell) { 3.0 } else { 2.0 };
     let term = 0.5 / SPP as f64;
-    let nearly_exact = best * (SPP as f64) < 1e-2;
     match t {
-        Technique::MisPower if !nearly_exact => k * best,
+        Technique::MisPower => (k * best).max(best + term),
         _ => k * best + term,
     }
 }
@@ -254,6 +259,49 @@ fn the_gpu_follows_the_cpu_and_veachs_bound_holds_there() {
     }
     gpu.finish().unwrap();
     assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+/// Constant weights 1/2 and 1/2, the mean of the BSDF-sampled and the
+/// light-sampled image, is unbiased but keeps half of the failing
+/// technique's variance (a quarter of its relMSE): Veach's bound must
+/// reject it in the cells where one technique fails, Veach's sphere
+/// family's small lights under rough plates among them.
+#[test]
+fn constant_weights_break_veachs_bound() {
+    let sweep = Sweep::new(true);
+    let mut broken = Vec::new();
+    let cells: Vec<Cell> = sweep
+        .cells()
+        .into_iter()
+        .filter(|c| c.family == Family::Sphere)
+        .collect();
+    for cell in &cells {
+        let s = methods::scene(cell);
+        let reference = reference(&sweep, &s);
+        let o = |t: Technique| RenderOptions {
+            spp: SPP,
+            ..t.options(&sweep.options(5))
+        };
+        let light = render(&s, &o(Technique::Light));
+        let bsdf = render(&s, &o(Technique::Bsdf));
+        let mut half = light.clone();
+        for i in 0..half.sum.len() {
+            half.sum[i] = 0.5 * (light.sum[i] + bsdf.sum[i]);
+        }
+        let e = |f: &Film| methods::relmse(f, &reference).unwrap();
+        let best = e(&light).min(e(&bsdf));
+        let x = e(&half);
+        if x > veach_bound(&sweep, cell, Technique::MisPower, best) {
+            broken.push(format!("{cell:?}: {x:.3e} against best {best:.3e}"));
+        }
+    }
+    eprintln!("{}", broken.join("\n"));
+    assert!(
+        broken.len() * 2 >= cells.len(),
+        "constant weights broke the bound in only {} of {} cells",
+        broken.len(),
+        cells.len()
+    );
 }
 
 #[test]
