@@ -575,6 +575,12 @@ pub struct BenchArgs {
     /// Also write the figures as JSON to this file.
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
+
+    /// Render on the GPU with both traversals, glint's BVH and Vulkan ray
+    /// queries, and report them side by side (a device without ray
+    /// queries is an error).
+    #[arg(long)]
+    pub compare_traversals: bool,
 }
 
 #[derive(clap::Args, Debug)]

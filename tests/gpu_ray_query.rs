@@ -310,9 +310,68 @@ fn gpu_film(ctx: &Context, scene: &Scene, opts: &RenderOptions, t: Traversal) ->
 /// The Cornell box: the hardware traversal traces the software kernel's
 /// paths with the same seed (768 of 768 pixels, 2026-12-02), and agrees
 /// statistically with the CPU backend.
+///
+/// Then `glint bench --compare-traversals` on it (after the images, so the
+/// kernels it needs are in Mesa's disk cache, not compiled twice at once).
 #[test]
 fn hardware_traversal_images() {
     images(&["cornell.gltf"]);
+    if rq_context().is_some() {
+        bench_compares_traversals();
+    }
+}
+
+/// `glint bench --compare-traversals`: the GPU with both traversals and
+/// the CPU, one row each, and the hardware/software ratio, in the table
+/// and the JSON.
+fn bench_compares_traversals() {
+    let json = std::env::temp_dir().join(format!("glint-bench-rq-{}.json", std::process::id()));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell.gltf");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+        .args([
+            "bench",
+            "--width",
+            "32",
+            "--spp",
+            "2",
+            "--compare-traversals",
+            "--json",
+        ])
+        .arg(&json)
+        .arg(&scene)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(
+        stdout.contains("gpu hardware/software traversal samples/s ratio: "),
+        "{stdout}"
+    );
+    let doc: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let _ = std::fs::remove_file(&json);
+    let rows = doc["backends"].as_array().unwrap();
+    let names: Vec<(&str, Option<&str>)> = rows
+        .iter()
+        .map(|r| (r["backend"].as_str().unwrap(), r["traversal"].as_str()))
+        .collect();
+    assert_eq!(
+        names,
+        [
+            ("gpu", Some("software")),
+            ("gpu", Some("hardware")),
+            ("cpu", None)
+        ],
+        "{doc}"
+    );
+    let x = doc["hardware_over_software_samples_per_second"]
+        .as_f64()
+        .unwrap();
+    assert!(x > 0.0 && x.is_finite(), "{doc}");
 }
 
 /// The textured scene too (alpha masks, texture reads in the ray-query

@@ -5,7 +5,7 @@ use glint::backend::{Backend, BackendRender};
 
 use super::outputs::Outputs;
 use super::{check_params, load_scene, render_on};
-use crate::cli::BenchArgs;
+use crate::cli::{BenchArgs, RenderOpts, TraversalArg};
 
 /// `glint bench`: the same scene and options on both backends, in one run
 /// on one machine, so the figures compare; the fastest of `--repeat` renders
@@ -24,11 +24,26 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let (bvh, _) = glint::cpu::Bvh::build(&scene.triangles);
     let bvh_seconds = t.elapsed().as_secs_f64();
+    // The GPU with the options' traversal (or both), then the CPU.
+    let given = args.scene.opts.traversal;
+    let mut runs = vec![(Backend::Gpu, given)];
+    if args.compare_traversals {
+        for t in [TraversalArg::Software, TraversalArg::Hardware] {
+            if t != given {
+                runs.push((Backend::Gpu, t));
+            }
+        }
+    }
+    runs.push((Backend::Cpu, given));
     let mut rows = Vec::new();
-    for backend in [Backend::Gpu, Backend::Cpu] {
+    for (backend, traversal) in runs {
+        let ro = RenderOpts {
+            traversal,
+            ..args.scene.opts.clone()
+        };
         let mut best: Option<BackendRender> = None;
         for _ in 0..args.repeat {
-            let r = render_on(backend, &args.scene.scene, &args.scene.opts, &scene, &opts)?;
+            let r = render_on(backend, &args.scene.scene, &ro, &scene, &opts)?;
             if best
                 .as_ref()
                 .is_none_or(|b| r.render_seconds < b.render_seconds)
@@ -51,31 +66,50 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bvh_seconds
     );
     println!(
-        "{:<8} {:>9} {:>10} {:>14} {:>14}  device",
-        "backend", "setup s", "render s", "samples/s", "rays/s"
+        "{:<8} {:<9} {:>9} {:>10} {:>14} {:>14}  device",
+        "backend", "traversal", "setup s", "render s", "samples/s", "rays/s"
     );
     let mut json = Vec::new();
+    let sps = |r: &BackendRender| pixels * r.film.spp as f64 / r.render_seconds.max(1e-9);
     for (backend, r) in &rows {
-        let sps = pixels * r.film.spp as f64 / r.render_seconds.max(1e-9);
         let rps = r.rays as f64 / r.render_seconds.max(1e-9);
+        let traversal = r.traversal.map_or("-", |t| t.name());
         println!(
-            "{:<8} {:>9.3} {:>10.3} {:>14.0} {:>14.0}  {}",
+            "{:<8} {:<9} {:>9.3} {:>10.3} {:>14.0} {:>14.0}  {}",
             backend.name(),
+            traversal,
             r.setup_seconds,
             r.render_seconds,
-            sps,
+            sps(r),
             rps,
             r.device
         );
-        json.push(serde_json::json!({
+        let mut row = serde_json::json!({
             "backend": backend.name(), "device": r.device, "driver": r.driver,
             "setup_seconds": r.setup_seconds, "render_seconds": r.render_seconds,
-            "samples_per_second": sps, "rays_per_second": rps, "rays": r.rays,
-        }));
+            "samples_per_second": sps(r), "rays_per_second": rps, "rays": r.rays,
+        });
+        if let Some(t) = r.traversal {
+            row["traversal"] = serde_json::json!(t.name());
+        }
+        json.push(row);
     }
-    let sps = |r: &BackendRender| pixels * r.film.spp as f64 / r.render_seconds.max(1e-9);
-    let ratio = sps(&rows[0].1) / sps(&rows[1].1).max(1e-9);
+    let cpu = &rows[rows.len() - 1].1;
+    let ratio = sps(&rows[0].1) / sps(cpu).max(1e-9);
     println!("gpu/cpu samples/s ratio: {ratio:.3}");
+    // With both traversals: hardware over software, on the GPU.
+    let by = |name: &str| {
+        rows.iter()
+            .find(|(_, r)| r.traversal.is_some_and(|t| t.name() == name))
+            .map(|(_, r)| sps(r))
+    };
+    let hw_over_sw = match (by("hardware"), by("software")) {
+        (Some(h), Some(s)) if args.compare_traversals => Some(h / s.max(1e-9)),
+        _ => None,
+    };
+    if let Some(x) = hw_over_sw {
+        println!("gpu hardware/software traversal samples/s ratio: {x:.3}");
+    }
     if let Some(json_slot) = json_slot {
         let doc = serde_json::json!({
             "scene": args.scene.scene.display().to_string(),
@@ -85,6 +119,10 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "bvh_build_seconds": bvh_seconds,
             "backends": json, "gpu_over_cpu_samples_per_second": ratio,
         });
+        let mut doc = doc;
+        if let Some(x) = hw_over_sw {
+            doc["hardware_over_software_samples_per_second"] = serde_json::json!(x);
+        }
         let slot = json_slot;
         outputs.write(slot, |w| {
             serde_json::to_writer_pretty(&mut *w, &doc)?;
