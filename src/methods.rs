@@ -558,6 +558,21 @@ pub fn at_time(r: &Row, seconds: f64) -> f64 {
     r.relmse * r.seconds / seconds
 }
 
+impl Row {
+    /// The CSV columns that name the row: backend, model, alpha,
+    /// light_radius, technique.
+    fn key_columns(&self) -> String {
+        format!(
+            "{},{},{},{},{}",
+            self.backend,
+            self.cell.model.name(),
+            self.cell.alpha,
+            self.cell.radius,
+            self.technique.name()
+        )
+    }
+}
+
 /// The contract's CSV of one family's rows (default light sampling).
 pub fn csv(rows: &[Row], family: Family) -> String {
     let mut s = String::from("backend,model,alpha,light_radius,technique,seconds,relmse\n");
@@ -566,12 +581,8 @@ pub fn csv(rows: &[Row], family: Family) -> String {
         .filter(|r| r.cell.family == family && r.sampling == LightSampling::default())
     {
         s.push_str(&format!(
-            "{},{},{},{},{},{:.6},{:.6e}\n",
-            r.backend,
-            r.cell.model.name(),
-            r.cell.alpha,
-            r.cell.radius,
-            r.technique.name(),
+            "{},{:.6},{:.6e}\n",
+            r.key_columns(),
             r.seconds,
             r.relmse
         ));
@@ -590,12 +601,8 @@ pub fn light_sampling_csv(rows: &[Row]) -> String {
         .filter(|r| r.cell.family == Family::Quad && AREA_TECHNIQUES.contains(&r.technique))
     {
         s.push_str(&format!(
-            "{},{},{},{},{},{},{:.6},{},{:.6e}\n",
-            r.backend,
-            r.cell.model.name(),
-            r.cell.alpha,
-            r.cell.radius,
-            r.technique.name(),
+            "{},{},{:.6},{},{:.6e}\n",
+            r.key_columns(),
             r.sampling.name(),
             r.seconds,
             r.spp,

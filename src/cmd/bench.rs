@@ -24,35 +24,7 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let t = std::time::Instant::now();
     let (bvh, _) = glint::cpu::Bvh::build(&scene.triangles);
     let bvh_seconds = t.elapsed().as_secs_f64();
-    // The GPU with the options' traversal (or both), then the CPU.
-    let given = args.scene.opts.traversal;
-    let mut runs = vec![(Backend::Gpu, given)];
-    if args.compare_traversals {
-        for t in [TraversalArg::Software, TraversalArg::Hardware] {
-            if t != given {
-                runs.push((Backend::Gpu, t));
-            }
-        }
-    }
-    runs.push((Backend::Cpu, given));
-    let mut rows = Vec::new();
-    for (backend, traversal) in runs {
-        let ro = RenderOpts {
-            traversal,
-            ..args.scene.opts.clone()
-        };
-        let mut best: Option<BackendRender> = None;
-        for _ in 0..args.repeat {
-            let r = render_on(backend, &args.scene.scene, &ro, &scene, &opts)?;
-            if best
-                .as_ref()
-                .is_none_or(|b| r.render_seconds < b.render_seconds)
-            {
-                best = Some(r);
-            }
-        }
-        rows.push((backend, best.expect("repeat >= 1")));
-    }
+    let rows = render_rows(args, &scene, &opts)?;
     println!(
         "{}: {}x{}, {} spp, max depth {}, {} triangles; BVH {} nodes, depth {}, built in {:.4} s",
         args.scene.scene.display(),
@@ -131,4 +103,43 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         outputs.commit()?;
     }
     Ok(())
+}
+
+/// The rows of the table, each the fastest of `--repeat` renders: the GPU
+/// with the options' traversal (then the other one, with
+/// `--compare-traversals`), then the CPU.
+fn render_rows(
+    args: &BenchArgs,
+    scene: &glint::cpu::Scene,
+    opts: &glint::cpu::RenderOptions,
+) -> Result<Vec<(Backend, BackendRender)>> {
+    let given = args.scene.opts.traversal;
+    let mut runs = vec![(Backend::Gpu, given)];
+    if args.compare_traversals {
+        for t in [TraversalArg::Software, TraversalArg::Hardware] {
+            if t != given {
+                runs.push((Backend::Gpu, t));
+            }
+        }
+    }
+    runs.push((Backend::Cpu, given));
+    let mut rows = Vec::new();
+    for (backend, traversal) in runs {
+        let ro = RenderOpts {
+            traversal,
+            ..args.scene.opts.clone()
+        };
+        let mut best: Option<BackendRender> = None;
+        for _ in 0..args.repeat {
+            let r = render_on(backend, &args.scene.scene, &ro, scene, opts)?;
+            if best
+                .as_ref()
+                .is_none_or(|b| r.render_seconds < b.render_seconds)
+            {
+                best = Some(r);
+            }
+        }
+        rows.push((backend, best.expect("repeat >= 1")));
+    }
+    Ok(rows)
 }
