@@ -13,7 +13,8 @@
 //! same distance, and a grazing ray may hit in one and miss in the other: at
 //! most 1 in 10^4 rays may differ so. Images: the same seed traces the same
 //! paths as the software kernel, and passes the statistical comparison with
-//! the CPU backend. Degenerate scenes: empty, one triangle.
+//! the CPU backend. Degenerate scenes: empty, one triangle, 2^20 triangles
+//! of an instanced mesh with a coincident instance.
 //!
 //! Skipped (with a line on stderr) where the device has no ray queries.
 
@@ -238,6 +239,54 @@ fn hardware_traversal_matches_software_per_ray() {
             let hit = compare(&what, &tris, &rays, &hw, &sw);
             assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
         }
+    }
+    finish(ctx, log);
+}
+
+/// 2^20 triangles: the bunny instanced 16 times (the loader flattens a
+/// mesh that several nodes place, so an instance is a transformed copy),
+/// rotated, scaled and moved, one instance exactly on top of another (every
+/// hit there a tie between two identical triangles), cut at 2^20; 2 x 10^4
+/// rays, opaque and alpha-tested, against the software traversal.
+#[test]
+fn hardware_traversal_on_2_20_instanced_triangles() {
+    let Some((ctx, log)) = rq_context() else {
+        return;
+    };
+    let mesh = bunny();
+    let mut all = Vec::with_capacity(1 << 20);
+    for k in 0..16 {
+        // Instance 5 repeats instance 4's transform exactly.
+        let j = if k == 5 { 4 } else { k };
+        let m = glam::Mat4::from_scale_rotation_translation(
+            glam::Vec3::splat(1.0 + 0.1 * (j % 3) as f32),
+            glam::Quat::from_rotation_y(0.4 * j as f32),
+            glam::Vec3::new((j % 4) as f32 * 0.15, 0.0, (j / 4) as f32 * 0.15),
+        );
+        for t in &mesh {
+            let [a, b, c] = t.vertices().map(|v| m.transform_point3(v));
+            all.push(Triangle {
+                p0: a.into(),
+                p1: b.into(),
+                p2: c.into(),
+                ..*t
+            });
+        }
+    }
+    all.truncate(1 << 20);
+    let (bin, order) = Bvh::build(&all);
+    let tris: Vec<Triangle> = order.iter().map(|&i| all[i as usize]).collect();
+    let wide = Bvh4::collapse(&bin, &tris);
+    let rays = random_rays(&tris, 20_000, &mut Pcg32::from_state(0x1_0000));
+    for masked in [false, true] {
+        let hw = run_hardware(&ctx, &tris, &rays, masked);
+        let sw = run_software(&ctx, &wide, &tris, &rays, masked);
+        let what = format!(
+            "2^20 instanced{}",
+            if masked { " alpha-tested" } else { "" }
+        );
+        let hit = compare(&what, &tris, &rays, &hw, &sw);
+        assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
     }
     finish(ctx, log);
 }
