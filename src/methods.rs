@@ -34,7 +34,7 @@ use glam::{Mat4, Vec2, Vec3};
 use glint_cpu::bsdf::plastic::PlasticParams;
 use glint_cpu::bsdf::roughplastic::RoughPlasticParams;
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
-use glint_cpu::envmap::EnvMap;
+use glint_cpu::envmap::{EnvMap, uv_to_map_direction};
 use glint_cpu::metrics::{self, ImageRef};
 use glint_cpu::{
     Camera, Film, LightSampling, Material, Mis, NO_LIGHT, RenderOptions, Scene, Triangle,
@@ -374,7 +374,6 @@ fn quad(c: Vec3, axis: Vec3, r: f32, material: u32) -> [Triangle; 2] {
 /// [`SUN_POWER`] over their total solid angle.
 pub fn sun_envmap(dir: Vec3, r: f32) -> EnvMap {
     let (w, h) = ENVMAP_SIZE;
-    let probe = EnvMap::new(1, 1, &[[0.0; 3]], 1.0, 0.0);
     let cos_r = r.cos();
     let mut inside = vec![false; (w * h) as usize];
     let mut omega = 0.0f64;
@@ -383,7 +382,7 @@ pub fn sun_envmap(dir: Vec3, r: f32) -> EnvMap {
         let texel = (2.0 * PI / w as f32) * (PI / h as f32) * (PI * v).sin();
         for x in 0..w {
             let u = (x as f32 + 0.5) / w as f32;
-            if probe.uv_to_direction(Vec2::new(u, v)).dot(dir) >= cos_r {
+            if uv_to_map_direction(Vec2::new(u, v)).dot(dir) >= cos_r {
                 inside[(y * w + x) as usize] = true;
                 omega += texel as f64;
             }
@@ -394,6 +393,7 @@ pub fn sun_envmap(dir: Vec3, r: f32) -> EnvMap {
         .iter()
         .map(|&i| if i { [l; 3] } else { [0.0; 3] })
         .collect();
+    // No rotation: the map's directions are the world's.
     EnvMap::new(w, h, &rgb, 1.0, 0.0)
 }
 

@@ -28,6 +28,16 @@ pub const MAX_ENVMAP_SIDE: u32 = 16384;
 /// Most texels accepted (2^26: 1 GiB as RGBA f32 with the CDFs).
 pub const MAX_ENVMAP_TEXELS: u64 = 1 << 26;
 
+/// The direction of image coordinates (u, v) in the map's own frame
+/// (before its rotation): the mapping of the module documentation.
+pub fn uv_to_map_direction(uv: Vec2) -> Vec3 {
+    let theta = uv.y * PI;
+    let phi = uv.x * 2.0 * PI;
+    let (st, ct) = theta.sin_cos();
+    let (sp, cp) = phi.sin_cos();
+    Vec3::new(st * sp, ct, -st * cp)
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct EnvMap {
     pub width: u32,
@@ -191,11 +201,7 @@ impl EnvMap {
 
     /// World direction of image coordinates (u, v).
     pub fn uv_to_direction(&self, uv: Vec2) -> Vec3 {
-        let theta = uv.y * PI;
-        let phi = uv.x * 2.0 * PI;
-        let (st, ct) = theta.sin_cos();
-        let (sp, cp) = phi.sin_cos();
-        self.to_world(Vec3::new(st * sp, ct, -st * cp))
+        self.to_world(uv_to_map_direction(uv))
     }
 
     fn texel_of(&self, uv: Vec2) -> (u32, u32) {

@@ -1,7 +1,7 @@
 //! `glint bench`.
 
 use anyhow::{Result, bail};
-use glint::backend::{Backend, BackendRender};
+use glint::backend::{Backend, BackendRender, Traversal};
 
 use super::outputs::Outputs;
 use super::{check_params, load_scene, render_on};
@@ -70,12 +70,12 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let ratio = sps(&rows[0].1) / sps(cpu).max(1e-9);
     println!("gpu/cpu samples/s ratio: {ratio:.3}");
     // With both traversals: hardware over software, on the GPU.
-    let by = |name: &str| {
+    let by = |t: Traversal| {
         rows.iter()
-            .find(|(_, r)| r.traversal.is_some_and(|t| t.name() == name))
+            .find(|(_, r)| r.traversal == Some(t))
             .map(|(_, r)| sps(r))
     };
-    let hw_over_sw = match (by("hardware"), by("software")) {
+    let hw_over_sw = match (by(Traversal::Hardware), by(Traversal::Software)) {
         (Some(h), Some(s)) if args.compare_traversals => Some(h / s.max(1e-9)),
         _ => None,
     };
