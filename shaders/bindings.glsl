@@ -9,12 +9,14 @@
 //   4 materials, 5 emitters, 6 lights, 7 accum (written), 8 ray_counts
 //   (written), 9-12 texels, textures, material_textures, triangle_uvs,
 //   13-14 env_texels, env_dist, 15 ms_tables, 16 active_pixels; with
-//   GLINT_RAY_QUERY (the kernel pathtrace_rq, --traversal hardware;
-//   src/gpu/accel.rs) 17 tri_map and 18 tlas.
+//   GLINT_RAY_QUERY or GLINT_RAY_TRACING (the hardware traversals, the
+//   kernel pathtrace_rq and the ray tracing pipeline rt/; src/gpu/accel.rs)
+//   17 tri_map and 18 tlas.
 //
 // Push constants: uint sample_start, sample_count: a dispatch renders
 // samples [sample_start, sample_start + sample_count) of every pixel, one
-// invocation per pixel, 8x8 workgroups. Arrays may hold a dummy element
+// invocation per pixel, 8x8 workgroups (a ray tracing launch: the same
+// grid). In a ray tracing pipeline every stage sees every binding. Arrays may hold a dummy element
 // (Vulkan buffers cannot be empty): the counts in params are the truth.
 // glint_cpu::integrator::gpu_scene_data fills params and bindings 4-6.
 #ifndef GLINT_BINDINGS_GLSL

@@ -7,13 +7,7 @@
 // kernel `pathtrace_rq`), so the BSDFs, lights, sampler and film are the
 // same source.
 //
-// Geometry: without alpha-tested materials one opaque geometry whose
-// primitive i is triangles[i]. With them (RQ_MASKED != 0) geometry 0 holds
-// the opaque triangles (flagged opaque: the traversal never stops for
-// them) and geometry 1 the alpha-tested ones (non-opaque: each candidate
-// comes back to the loop below, which runs BVH_PRESENT, the alpha test);
-// tri_map maps them back: tri_map[0] is the opaque count n, then the
-// opaque triangles' indices, then the alpha-tested ones'.
+// Geometry and the map back to triangles[]: tri_map.glsl.
 //
 // The including kernel must, BEFORE including this file, declare
 //   - `uniform accelerationStructureEXT tlas` and a buffer array
@@ -33,14 +27,7 @@
 #endif
 
 #include "bvh_types.glsl"
-
-// The triangles[] index of primitive `prim` of geometry `geom`.
-uint rq_triangle(uint geom, uint prim) {
-    if (RQ_MASKED == 0u) {
-        return prim;
-    }
-    return geom == 0u ? tri_map[1u + prim] : tri_map[1u + tri_map[0] + prim];
-}
+#include "tri_map.glsl"
 
 // Runs the alpha test on each non-opaque candidate of query q, confirming
 // those it keeps; opaque triangles commit without coming here.

@@ -53,7 +53,7 @@ pub struct GpuOptions {
     pub device: Option<String>,
     /// The kernel built for the scene's features, or the generic one.
     pub kernel: KernelChoice,
-    /// glint's BVH or Vulkan ray queries (`--traversal`).
+    /// glint's BVH or Vulkan ray tracing (`--traversal`, `--ray-tracing`).
     pub traversal: Traversal,
     /// Keep the driver's compiled pipelines in the user's cache folder.
     pub pipeline_cache: bool,
@@ -109,7 +109,7 @@ pub fn render(
 }
 
 /// A backend made ready once, rendering any number of scenes: the CPU, or
-/// a Vulkan context (with `--traversal hardware`, one with ray queries),
+/// a Vulkan context (with `--traversal hardware`, one with ray tracing),
 /// made once, its validation messages checked after every render.
 /// [`render`] is one render through a new one; the methods sweep keeps
 /// one for all its cells.
@@ -134,7 +134,7 @@ impl Renderer {
                 };
                 Some(match gpu.traversal {
                     Traversal::Software => crate::gpu::Context::new(&desc)?,
-                    Traversal::Hardware => crate::gpu::Context::new_ray_query(&desc)?,
+                    _ => crate::gpu::Context::new_ray_tracing(&desc)?,
                 })
             }
             _ => None,

@@ -187,17 +187,33 @@ impl From<KernelArg> for glint::backend::KernelChoice {
 pub enum TraversalArg {
     /// glint's BVH, walked in the compute kernel.
     Software,
-    /// Vulkan ray queries against acceleration structures built on the
-    /// device (needs VK_KHR_ray_query and VK_KHR_acceleration_structure).
+    /// Vulkan ray tracing against acceleration structures built on the
+    /// device (needs VK_KHR_acceleration_structure, and VK_KHR_ray_query or
+    /// VK_KHR_ray_tracing_pipeline: --ray-tracing).
     Hardware,
 }
 
-impl From<TraversalArg> for glint::backend::Traversal {
-    fn from(t: TraversalArg) -> Self {
-        match t {
-            TraversalArg::Software => Self::Software,
-            TraversalArg::Hardware => Self::Hardware,
-        }
+/// `--ray-tracing`: which Vulkan API `--traversal hardware` traces with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum RayTracingArg {
+    /// Ray queries where the device has them, else the pipeline.
+    Auto,
+    /// Ray queries in the compute kernel (VK_KHR_ray_query).
+    Query,
+    /// A ray tracing pipeline: ray generation, hit and miss shaders
+    /// (VK_KHR_ray_tracing_pipeline).
+    Pipeline,
+}
+
+/// The GPU traversal of `--traversal` and `--ray-tracing`.
+pub fn traversal(t: TraversalArg, api: RayTracingArg) -> glint::backend::Traversal {
+    use glint::backend::Traversal;
+    match (t, api) {
+        (TraversalArg::Software, _) => Traversal::Software,
+        (TraversalArg::Hardware, RayTracingArg::Auto) => Traversal::Hardware,
+        (TraversalArg::Hardware, RayTracingArg::Query) => Traversal::RayQuery,
+        (TraversalArg::Hardware, RayTracingArg::Pipeline) => Traversal::Pipeline,
     }
 }
 
@@ -263,10 +279,15 @@ pub struct RenderOpts {
     #[arg(long, value_enum, default_value_t = KernelArg::Specialized)]
     pub kernel: KernelArg,
 
-    /// GPU: glint's BVH in the compute kernel, or Vulkan ray queries
-    /// against acceleration structures (a device without them is an error).
+    /// GPU: glint's BVH in the compute kernel, or Vulkan ray tracing
+    /// against acceleration structures (a device without it is an error).
     #[arg(long, value_enum, default_value_t = TraversalArg::Software)]
     pub traversal: TraversalArg,
+
+    /// GPU, --traversal hardware: ray queries in the compute kernel or a
+    /// ray tracing pipeline (auto: ray queries where the device has them).
+    #[arg(long, value_enum, default_value_t = RayTracingArg::Auto)]
+    pub ray_tracing: RayTracingArg,
 
     /// Stop at the last whole sample pass that fits this many seconds of
     /// sampling (--spp, when given, caps the samples; --stats reports the
@@ -576,9 +597,9 @@ pub struct BenchArgs {
     #[arg(long, value_name = "FILE.json")]
     pub json: Option<PathBuf>,
 
-    /// Render on the GPU with both traversals, glint's BVH and Vulkan ray
-    /// queries, and report them side by side (a device without ray
-    /// queries is an error).
+    /// Render on the GPU with every traversal, glint's BVH and Vulkan ray
+    /// tracing by each API the device has (ray queries, the pipeline), and
+    /// report them side by side (a device without ray tracing is an error).
     #[arg(long)]
     pub compare_traversals: bool,
 }
@@ -738,6 +759,7 @@ mod tests {
             sampler: SamplerArg::Independent,
             kernel: KernelArg::Generic,
             traversal: TraversalArg::Hardware,
+            ray_tracing: RayTracingArg::Pipeline,
             time_limit: Some(2.5),
             background: Some([0.1, 0.25, 3.0]),
             envmap: Some(PathBuf::from("sky dir/sky.hdr")),
@@ -769,6 +791,7 @@ mod tests {
         check::<SamplerArg>();
         check::<KernelArg>();
         check::<TraversalArg>();
+        check::<RayTracingArg>();
     }
 
     /// The --width/--height help states the limit in prose (a doc comment

@@ -28,8 +28,10 @@ pub struct Stats<'a> {
     pub options: &'a RenderOptions,
     /// GPU: the kernel that rendered ("specialized" or "generic").
     pub kernel: Option<&'static str>,
-    /// GPU: "software" (glint's BVH) or "hardware" (ray queries).
+    /// GPU: "software" (glint's BVH) or "hardware" (Vulkan ray tracing).
     pub traversal: Option<&'static str>,
+    /// GPU, hardware traversal: its API, "query" or "pipeline".
+    pub ray_tracing: Option<&'static str>,
     /// What the scene uses.
     pub features: Vec<&'static str>,
 }
@@ -82,6 +84,9 @@ impl Stats<'_> {
         }
         if let Some(t) = self.traversal {
             v["traversal"] = json!(t);
+        }
+        if let Some(t) = self.ray_tracing {
+            v["ray_tracing"] = json!(t);
         }
         if let Some(d) = &self.driver {
             v["driver"] = json!(d);

@@ -1,8 +1,10 @@
-//! `--traversal hardware`: shaders/ray_query.glsl (Vulkan ray queries
-//! against the acceleration structures of src/gpu/accel.rs) against the
-//! software traversal, under the validation layer.
+//! `--traversal hardware`, by both Vulkan APIs: shaders/ray_query.glsl (ray
+//! queries) and shaders/rt/ (a ray tracing pipeline, src/gpu/rt_pipeline.rs),
+//! against the acceleration structures of src/gpu/accel.rs, each against
+//! the software traversal, under the validation layer.
 //!
-//! Per ray (`tests/ray_query_test` against `tests/bvh_test` and, with an
+//! Per ray (`tests/ray_query_test` and `tests/rt_test` with its any-hit
+//! shader `tests/rt_mask_test`, against `tests/bvh_test` and, with an
 //! alpha test, `tests/bvh_mask_test`): the same triangle (or an exact
 //! duplicate of it), each hit point within rounding of the triangle's plane
 //! (not t within a relative bound: a grazing ray's t is ill-conditioned, and
@@ -16,7 +18,7 @@
 //! the CPU backend. Degenerate scenes: empty, one triangle, 2^20 triangles
 //! of an instanced mesh with a coincident instance.
 //!
-//! Skipped (with a line on stderr) where the device has no ray queries.
+//! Each API is skipped (with a line on stderr) where the device lacks it.
 
 mod common;
 #[path = "../cpu/tests/support/geometry.rs"]
@@ -28,6 +30,7 @@ use glint::cpu::compare::compare_films;
 use glint::cpu::{Bvh, Bvh4, Film, Ray, RenderOptions, Scene, Triangle};
 use glint::gpu::accel::Accel;
 use glint::gpu::render::{KernelChoice, Traversal, render_with};
+use glint::gpu::rt_pipeline::RtStages;
 use glint::gpu::{Buffer, BufferKind, Context, ContextDesc, GpuError, Kernel, KernelOptions};
 use glint::gpu::{ValidationLog, groups};
 
@@ -38,18 +41,37 @@ use geometry::{Pcg32, asset_triangles, bunny, random_rays};
 /// glint's watertight test 3.5, on 4 x 10^5 rays).
 const ON_PLANE: f64 = 16.0 * f32::EPSILON as f64;
 
-/// A ray-query context under validation, or `None` (skip) where the device
-/// lacks ray queries.
-fn rq_context() -> Option<(Context, Option<std::sync::Arc<ValidationLog>>)> {
+/// The hardware traversal's two APIs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Api {
+    Query,
+    Pipeline,
+}
+
+/// A ray tracing context under validation and the APIs it has, or `None`
+/// (skip) where the device has neither.
+fn rt_context() -> Option<(Context, Option<std::sync::Arc<ValidationLog>>, Vec<Api>)> {
     let desc = ContextDesc {
         device: None,
         validation: common::validation(),
         loader: None,
     };
-    match Context::new_ray_query(&desc) {
+    match Context::new_ray_tracing(&desc) {
         Ok(ctx) => {
             let log = ctx.validation_log();
-            Some((ctx, log))
+            let rt = ctx.ray_tracing();
+            let mut apis = Vec::new();
+            if rt.query {
+                apis.push(Api::Query);
+            } else {
+                eprintln!("ray queries skipped: the device lacks them");
+            }
+            if rt.pipeline.is_some() {
+                apis.push(Api::Pipeline);
+            } else {
+                eprintln!("the ray tracing pipeline skipped: the device lacks it");
+            }
+            Some((ctx, log, apis))
         }
         Err(e @ GpuError::NoRayQuery { .. }) => {
             eprintln!("skipped: {e}");
@@ -58,6 +80,15 @@ fn rq_context() -> Option<(Context, Option<std::sync::Arc<ValidationLog>>)> {
         Err(e) => panic!("cannot create a Vulkan context: {e}"),
     }
 }
+
+/// tests/rt_test.rgen's other stages: the path tracer's miss and closest-hit
+/// shaders, the test's alpha test; one ray per launch item.
+const RT_TEST_STAGES: RtStages = RtStages {
+    miss: &["rt/miss", "rt/shadow_miss"],
+    closest_hit: "rt/closest_hit",
+    any_hit: "tests/rt_mask_test",
+    group_size: [64, 1],
+};
 
 /// Drop the context and assert the layer said nothing.
 fn finish(ctx: Context, log: Option<std::sync::Arc<ValidationLog>>) {
@@ -85,8 +116,9 @@ fn pack(rays: &[Ray]) -> Vec<[f32; 8]> {
         .collect()
 }
 
-/// The hardware traversal of `rays` against `tris`, alpha-tested or not.
-fn run_hardware(ctx: &Context, tris: &[Triangle], rays: &[Ray], masked: bool) -> Traced {
+/// The hardware traversal of `rays` against `tris` by `api`, alpha-tested
+/// or not.
+fn run_hardware(ctx: &Context, tris: &[Triangle], rays: &[Ray], masked: bool, api: Api) -> Traced {
     let storage = |name: &str, bytes: &[u8]| {
         Buffer::from_slice(ctx, name, BufferKind::Storage, bytes).expect("buffer")
     };
@@ -96,13 +128,17 @@ fn run_hardware(ctx: &Context, tris: &[Triangle], rays: &[Ray], masked: bool) ->
     let ray_buf = storage("rays", bytemuck::cast_slice(&pack(rays)));
     let hits = storage("hits", &vec![0u8; rays.len() * 16]);
     let occluded = storage("occluded", &vec![7u8; rays.len() * 4]);
+    let (name, ray_tracing) = match api {
+        Api::Query => ("tests/ray_query_test", None),
+        Api::Pipeline => ("tests/rt_test", Some(RT_TEST_STAGES)),
+    };
     let options = KernelOptions {
         acceleration_structure: accel.tlas(),
+        ray_tracing,
         ..Default::default()
     };
     let kinds = [BufferKind::Storage; 5];
-    let mut k = Kernel::with_options(ctx, "tests/ray_query_test", &kinds, 12, &options)
-        .expect("ray query kernel");
+    let mut k = Kernel::with_options(ctx, name, &kinds, 12, &options).expect("hardware kernel");
     k.bind(&[&accel.tri_map, &tri_buf, &ray_buf, &hits, &occluded])
         .expect("bind");
     let push = [rays.len() as u32, masked as u32, 3];
@@ -220,7 +256,7 @@ fn compare(name: &str, tris: &[Triangle], rays: &[Ray], hw: &Traced, sw: &Traced
 /// every third triangle alpha-tested.
 #[test]
 fn hardware_traversal_matches_software_per_ray() {
-    let Some((ctx, log)) = rq_context() else {
+    let Some((ctx, log, apis)) = rt_context() else {
         return;
     };
     let mut rng = Pcg32::from_state(0x0a5e);
@@ -233,11 +269,16 @@ fn hardware_traversal_matches_software_per_ray() {
         let wide = Bvh4::collapse(&bin, &tris);
         let rays = random_rays(&tris, 100_000, &mut rng);
         for masked in [false, true] {
-            let hw = run_hardware(&ctx, &tris, &rays, masked);
             let sw = run_software(&ctx, &wide, &tris, &rays, masked);
-            let what = format!("{name}{}", if masked { " alpha-tested" } else { "" });
-            let hit = compare(&what, &tris, &rays, &hw, &sw);
-            assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
+            for &api in &apis {
+                let hw = run_hardware(&ctx, &tris, &rays, masked, api);
+                let what = format!(
+                    "{name}{} ({api:?})",
+                    if masked { " alpha-tested" } else { "" }
+                );
+                let hit = compare(&what, &tris, &rays, &hw, &sw);
+                assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
+            }
         }
     }
     finish(ctx, log);
@@ -250,7 +291,7 @@ fn hardware_traversal_matches_software_per_ray() {
 /// rays, opaque and alpha-tested, against the software traversal.
 #[test]
 fn hardware_traversal_on_2_20_instanced_triangles() {
-    let Some((ctx, log)) = rq_context() else {
+    let Some((ctx, log, apis)) = rt_context() else {
         return;
     };
     let mesh = bunny();
@@ -279,14 +320,16 @@ fn hardware_traversal_on_2_20_instanced_triangles() {
     let wide = Bvh4::collapse(&bin, &tris);
     let rays = random_rays(&tris, 20_000, &mut Pcg32::from_state(0x1_0000));
     for masked in [false, true] {
-        let hw = run_hardware(&ctx, &tris, &rays, masked);
         let sw = run_software(&ctx, &wide, &tris, &rays, masked);
-        let what = format!(
-            "2^20 instanced{}",
-            if masked { " alpha-tested" } else { "" }
-        );
-        let hit = compare(&what, &tris, &rays, &hw, &sw);
-        assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
+        for &api in &apis {
+            let hw = run_hardware(&ctx, &tris, &rays, masked, api);
+            let what = format!(
+                "2^20 instanced{} ({api:?})",
+                if masked { " alpha-tested" } else { "" }
+            );
+            let hit = compare(&what, &tris, &rays, &hw, &sw);
+            assert!(hit > rays.len() / 10, "{what}: too few hits ({hit})");
+        }
     }
     finish(ctx, log);
 }
@@ -294,16 +337,23 @@ fn hardware_traversal_on_2_20_instanced_triangles() {
 /// An empty scene misses everything; one triangle is hit where it is.
 #[test]
 fn hardware_traversal_degenerate_scenes() {
-    let Some((ctx, log)) = rq_context() else {
+    let Some((ctx, log, apis)) = rt_context() else {
         return;
     };
+    for &api in &apis {
+        degenerate_scenes(&ctx, api);
+    }
+    finish(ctx, log);
+}
+
+fn degenerate_scenes(ctx: &Context, api: Api) {
     let ray = |o: [f32; 3], d: [f32; 3]| Ray {
         o: o.into(),
         d: d.into(),
         tmax: f32::INFINITY,
     };
     let rays = vec![ray([0.2, 0.2, 0.0], [0.0, 0.0, 1.0]); 70];
-    let empty = run_hardware(&ctx, &[], &rays, false);
+    let empty = run_hardware(ctx, &[], &rays, false, api);
     assert!(empty.hits.iter().all(|h| h[1] == u32::MAX));
     assert!(empty.occluded.iter().all(|&o| o == 0));
     let one = [Triangle {
@@ -321,7 +371,7 @@ fn hardware_traversal_degenerate_scenes() {
             ..ray([0.2, 0.3, 0.0], [0.0, 0.0, 1.0])
         },
     ];
-    let r = run_hardware(&ctx, &one, &rays, false);
+    let r = run_hardware(ctx, &one, &rays, false, api);
     let t: Vec<f32> = r.hits.iter().map(|h| f32::from_bits(h[0])).collect();
     assert_eq!([r.hits[0][1], r.hits[1][1]], [0, 0]);
     assert!(
@@ -333,9 +383,8 @@ fn hardware_traversal_degenerate_scenes() {
         (u - 0.2).abs() < 1e-5 && (v - 0.3).abs() < 1e-5,
         "({u}, {v})"
     );
-    assert_eq!([r.hits[2][1], r.hits[3][1]], [u32::MAX, u32::MAX]);
-    assert_eq!(r.occluded, [1, 1, 0, 0]);
-    finish(ctx, log);
+    assert_eq!([r.hits[2][1], r.hits[3][1]], [u32::MAX, u32::MAX], "{api:?}");
+    assert_eq!(r.occluded, [1, 1, 0, 0], "{api:?}");
 }
 
 fn load(name: &str) -> Scene {
@@ -356,24 +405,25 @@ fn gpu_film(ctx: &Context, scene: &Scene, opts: &RenderOptions, t: Traversal) ->
         .film
 }
 
-/// The Cornell box: the hardware traversal traces the software kernel's
-/// paths with the same seed (768 of 768 pixels, 2026-12-02), and agrees
-/// statistically with the CPU backend.
+/// The Cornell box: the hardware traversal, by each API, traces the
+/// software kernel's paths with the same seed (768 of 768 pixels,
+/// 2026-12-02 and, for the pipeline, 2026-12-05), and agrees statistically
+/// with the CPU backend.
 ///
 /// Then `glint bench --compare-traversals` on it (after the images, so the
 /// kernels it needs are in Mesa's disk cache, not compiled twice at once).
 #[test]
 fn hardware_traversal_images() {
     images(&["cornell.gltf"]);
-    if rq_context().is_some() {
-        bench_compares_traversals();
+    if let Some((_, _, apis)) = rt_context() {
+        bench_compares_traversals(&apis);
     }
 }
 
-/// `glint bench --compare-traversals`: the GPU with both traversals and
-/// the CPU, one row each, and the hardware/software ratio, in the table
-/// and the JSON.
-fn bench_compares_traversals() {
+/// `glint bench --compare-traversals`: the GPU with the software traversal
+/// and the hardware one by each API the device has, and the CPU, one row
+/// each, and the hardware/software ratios, in the table and the JSON.
+fn bench_compares_traversals(apis: &[Api]) {
     let json = std::env::temp_dir().join(format!("glint-bench-rq-{}.json", std::process::id()));
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell.gltf");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
@@ -396,31 +446,40 @@ fn bench_compares_traversals() {
         "{stdout}{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    assert!(
-        stdout.contains("gpu hardware/software traversal samples/s ratio: "),
-        "{stdout}"
-    );
     let doc: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
     let _ = std::fs::remove_file(&json);
     let rows = doc["backends"].as_array().unwrap();
-    let names: Vec<(&str, Option<&str>)> = rows
+    let names: Vec<(&str, Option<&str>, Option<&str>)> = rows
         .iter()
-        .map(|r| (r["backend"].as_str().unwrap(), r["traversal"].as_str()))
+        .map(|r| {
+            (
+                r["backend"].as_str().unwrap(),
+                r["traversal"].as_str(),
+                r["ray_tracing"].as_str(),
+            )
+        })
         .collect();
-    assert_eq!(
-        names,
-        [
-            ("gpu", Some("software")),
-            ("gpu", Some("hardware")),
-            ("cpu", None)
-        ],
-        "{doc}"
-    );
-    let x = doc["hardware_over_software_samples_per_second"]
-        .as_f64()
-        .unwrap();
-    assert!(x > 0.0 && x.is_finite(), "{doc}");
+    let mut want = vec![("gpu", Some("software"), None)];
+    for api in apis {
+        let a = match api {
+            Api::Query => "query",
+            Api::Pipeline => "pipeline",
+        };
+        want.push(("gpu", Some("hardware"), Some(a)));
+        let x = doc["hardware_over_software_samples_per_second"][a]
+            .as_f64()
+            .unwrap();
+        assert!(x > 0.0 && x.is_finite(), "{doc}");
+        assert!(
+            stdout.contains(&format!(
+                "gpu hardware ({a})/software traversal samples/s ratio: "
+            )),
+            "{stdout}"
+        );
+    }
+    want.push(("cpu", None, None));
+    assert_eq!(names, want, "{doc}");
 }
 
 /// The textured scene too (alpha masks, texture reads in the ray-query
@@ -434,10 +493,10 @@ fn hardware_traversal_images_textured() {
 }
 
 fn images(names: &[&str]) {
-    let Some((ctx, log)) = rq_context() else {
+    let Some((ctx, log, apis)) = rt_context() else {
         return;
     };
-    for &name in names {
+    for (&name, &api) in names.iter().flat_map(|n| apis.iter().map(move |a| (n, a))) {
         let scene = load(name);
         let opts = RenderOptions {
             spp: 16,
@@ -445,7 +504,11 @@ fn images(names: &[&str]) {
             variance_batch: 4,
             ..RenderOptions::new(32, 24)
         };
-        let hw = gpu_film(&ctx, &scene, &opts, Traversal::Hardware);
+        let traversal = match api {
+            Api::Query => Traversal::RayQuery,
+            Api::Pipeline => Traversal::Pipeline,
+        };
+        let hw = gpu_film(&ctx, &scene, &opts, traversal);
         let sw = gpu_film(&ctx, &scene, &opts, Traversal::Software);
         let near = |a: glam::Vec3, b: glam::Vec3| {
             (a - b).abs().max_element() <= 1e-3 * a.abs().max(b.abs()).max_element().max(1e-3)
@@ -455,13 +518,16 @@ fn images(names: &[&str]) {
             .count();
         assert!(
             same as f64 >= 0.98 * hw.sum.len() as f64,
-            "{name}: only {same} of {} pixels trace the software kernel's paths",
+            "{name} ({api:?}): only {same} of {} pixels trace the software kernel's paths",
             hw.sum.len()
         );
         let (cpu, _) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
         let r = compare_films(&hw, &cpu).unwrap();
-        assert!(r.pass, "{name}: hardware traversal against the CPU: {r}");
-        eprintln!("{name}: {same} of {} pixels as software; {r}", hw.sum.len());
+        assert!(r.pass, "{name} ({api:?}) against the CPU: {r}");
+        eprintln!(
+            "{name} ({api:?}): {same} of {} pixels as software; {r}",
+            hw.sum.len()
+        );
     }
     finish(ctx, log);
 }

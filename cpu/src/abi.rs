@@ -759,8 +759,10 @@ pub struct Binding {
     /// The element type (the block's type for a uniform).
     pub ty: &'static str,
     pub resource: Resource,
-    /// Only in the ray-query kernel (`GLINT_RAY_QUERY`, `--traversal hardware`).
-    pub ray_query: bool,
+    /// Only in the hardware-traversal kernels (`--traversal hardware`: the
+    /// ray-query kernel, `GLINT_RAY_QUERY`, and the ray tracing pipeline,
+    /// `GLINT_RAY_TRACING`).
+    pub hardware: bool,
     pub doc: &'static str,
 }
 
@@ -776,14 +778,14 @@ const fn binding(
         name,
         ty,
         resource,
-        ray_query: false,
+        hardware: false,
         doc,
     }
 }
 
-const fn ray_query(b: Binding) -> Binding {
+const fn hardware(b: Binding) -> Binding {
     Binding {
-        ray_query: true,
+        hardware: true,
         ..b
     }
 }
@@ -895,14 +897,14 @@ pub const PATH_TRACER_BINDINGS: &[Binding] = &[
         Storage,
         "1 per pixel: 0 skips the pixel (--adaptive; all 1 otherwise)",
     ),
-    ray_query(binding(
+    hardware(binding(
         17,
         "tri_map",
         "uint",
         Storage,
         "the acceleration structure's geometries' triangles (one dummy without alpha tests)",
     )),
-    ray_query(binding(
+    hardware(binding(
         18,
         "tlas",
         "accelerationStructureEXT",
@@ -911,12 +913,12 @@ pub const PATH_TRACER_BINDINGS: &[Binding] = &[
     )),
 ];
 
-/// The bindings of the software-traversal kernel (`ray_query`: false) or
-/// of the ray-query kernel (true), in binding order.
-pub fn path_tracer_bindings(ray_query: bool) -> impl Iterator<Item = &'static Binding> {
+/// The bindings of the software-traversal kernel (`hardware`: false) or
+/// of the hardware-traversal ones (true), in binding order.
+pub fn path_tracer_bindings(hardware: bool) -> impl Iterator<Item = &'static Binding> {
     PATH_TRACER_BINDINGS
         .iter()
-        .filter(move |b| ray_query || !b.ray_query)
+        .filter(move |b| hardware || !b.hardware)
 }
 
 // ---------------------------------------------------------------- the generator
@@ -1096,8 +1098,8 @@ pub fn glsl_bindings() -> String {
         struct_layout(rust, fields, size, &[]).1
     };
     for b in PATH_TRACER_BINDINGS {
-        if b.ray_query {
-            out.push_str("#ifdef GLINT_RAY_QUERY\n");
+        if b.hardware {
+            out.push_str("#if defined(GLINT_RAY_QUERY) || defined(GLINT_RAY_TRACING)\n");
         }
         writeln!(out, "// binding {}: {}", b.binding, b.doc).unwrap();
         let n = b.binding;
@@ -1139,7 +1141,7 @@ pub fn glsl_bindings() -> String {
                 .unwrap();
             }
         }
-        if b.ray_query {
+        if b.hardware {
             out.push_str("#endif\n");
         }
     }

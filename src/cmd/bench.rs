@@ -5,7 +5,7 @@ use glint::backend::{Backend, BackendRender, Traversal};
 
 use super::outputs::Outputs;
 use super::{check_params, load_scene, render_on};
-use crate::cli::{BenchArgs, RenderOpts, TraversalArg};
+use crate::cli::{BenchArgs, RayTracingArg, RenderOpts, TraversalArg};
 
 /// `glint bench`: the same scene and options on both backends, in one run
 /// on one machine, so the figures compare; the fastest of `--repeat` renders
@@ -38,16 +38,16 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         bvh_seconds
     );
     println!(
-        "{:<8} {:<9} {:>9} {:>10} {:>14} {:>14}  device",
+        "{:<8} {:<20} {:>9} {:>10} {:>14} {:>14}  device",
         "backend", "traversal", "setup s", "render s", "samples/s", "rays/s"
     );
     let mut json = Vec::new();
     let sps = |r: &BackendRender| pixels * r.film.spp as f64 / r.render_seconds.max(1e-9);
     for (backend, r) in &rows {
         let rps = r.rays as f64 / r.render_seconds.max(1e-9);
-        let traversal = r.traversal.map_or("-", |t| t.name());
+        let traversal = r.traversal.map_or("-".to_string(), traversal_label);
         println!(
-            "{:<8} {:<9} {:>9.3} {:>10.3} {:>14.0} {:>14.0}  {}",
+            "{:<8} {:<20} {:>9.3} {:>10.3} {:>14.0} {:>14.0}  {}",
             backend.name(),
             traversal,
             r.setup_seconds,
@@ -63,24 +63,30 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         });
         if let Some(t) = r.traversal {
             row["traversal"] = serde_json::json!(t.name());
+            if let Some(api) = t.api() {
+                row["ray_tracing"] = serde_json::json!(api);
+            }
         }
         json.push(row);
     }
     let cpu = &rows[rows.len() - 1].1;
     let ratio = sps(&rows[0].1) / sps(cpu).max(1e-9);
     println!("gpu/cpu samples/s ratio: {ratio:.3}");
-    // With both traversals: hardware over software, on the GPU.
+    // With every traversal: each hardware API over software, on the GPU.
     let by = |t: Traversal| {
         rows.iter()
             .find(|(_, r)| r.traversal == Some(t))
             .map(|(_, r)| sps(r))
     };
-    let hw_over_sw = match (by(Traversal::Hardware), by(Traversal::Software)) {
-        (Some(h), Some(s)) if args.compare_traversals => Some(h / s.max(1e-9)),
-        _ => None,
-    };
-    if let Some(x) = hw_over_sw {
-        println!("gpu hardware/software traversal samples/s ratio: {x:.3}");
+    let mut hw_over_sw = serde_json::Map::new();
+    if let (true, Some(s)) = (args.compare_traversals, by(Traversal::Software)) {
+        for t in [Traversal::RayQuery, Traversal::Pipeline] {
+            if let (Some(h), Some(api)) = (by(t), t.api()) {
+                let x = h / s.max(1e-9);
+                println!("gpu hardware ({api})/software traversal samples/s ratio: {x:.3}");
+                hw_over_sw.insert(api.to_string(), serde_json::json!(x));
+            }
+        }
     }
     if let Some(json_slot) = json_slot {
         let doc = serde_json::json!({
@@ -92,8 +98,8 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             "backends": json, "gpu_over_cpu_samples_per_second": ratio,
         });
         let mut doc = doc;
-        if let Some(x) = hw_over_sw {
-            doc["hardware_over_software_samples_per_second"] = serde_json::json!(x);
+        if !hw_over_sw.is_empty() {
+            doc["hardware_over_software_samples_per_second"] = hw_over_sw.into();
         }
         let slot = json_slot;
         outputs.write(slot, |w| {
@@ -105,28 +111,44 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     Ok(())
 }
 
+/// "software", or "hardware (query)" / "hardware (pipeline)".
+fn traversal_label(t: Traversal) -> String {
+    match t.api() {
+        Some(api) => format!("{} ({api})", t.name()),
+        None => t.name().to_string(),
+    }
+}
+
 /// The rows of the table, each the fastest of `--repeat` renders: the GPU
-/// with the options' traversal (then the other one, with
-/// `--compare-traversals`), then the CPU.
+/// with the options' traversal (with `--compare-traversals`: software,
+/// then hardware by each API the device has), then the CPU.
 fn render_rows(
     args: &BenchArgs,
     scene: &glint::cpu::Scene,
     opts: &glint::cpu::RenderOptions,
 ) -> Result<Vec<(Backend, BackendRender)>> {
-    let given = args.scene.opts.traversal;
+    let given = (args.scene.opts.traversal, args.scene.opts.ray_tracing);
     let mut runs = vec![(Backend::Gpu, given)];
     if args.compare_traversals {
-        for t in [TraversalArg::Software, TraversalArg::Hardware] {
-            if t != given {
-                runs.push((Backend::Gpu, t));
+        runs = vec![(Backend::Gpu, (TraversalArg::Software, RayTracingArg::Auto))];
+        let rt = glint::gpu::context::ray_tracing_support(args.scene.opts.device.as_deref())?;
+        for (has, api) in [
+            (rt.query, RayTracingArg::Query),
+            (rt.pipeline.is_some(), RayTracingArg::Pipeline),
+        ] {
+            if has {
+                runs.push((Backend::Gpu, (TraversalArg::Hardware, api)));
+            } else {
+                eprintln!("warning: the device has no {api:?} ray tracing: its row is left out");
             }
         }
     }
     runs.push((Backend::Cpu, given));
     let mut rows = Vec::new();
-    for (backend, traversal) in runs {
+    for (backend, (traversal, ray_tracing)) in runs {
         let ro = RenderOpts {
             traversal,
+            ray_tracing,
             ..args.scene.opts.clone()
         };
         let mut best: Option<BackendRender> = None;

@@ -374,7 +374,7 @@ pub fn render_on(
     let gpu = GpuOptions {
         device: ro.device.clone(),
         kernel: ro.kernel.into(),
-        traversal: ro.traversal.into(),
+        traversal: crate::cli::traversal(ro.traversal, ro.ray_tracing),
         pipeline_cache: true,
     };
     let backend = backend.resolve(ro.device.as_deref());

@@ -145,6 +145,7 @@ fn stats_json(
         options: opts,
         kernel: r.kernel.map(|k| k.name()),
         traversal: r.traversal.map(|t| t.name()),
+        ray_tracing: r.traversal.and_then(|t| t.api()),
         features: r.features.names(),
     };
     control_stats(st.to_json(), &r.film, opts)

@@ -59,16 +59,17 @@ pub struct Accel<'a> {
 impl<'a> Accel<'a> {
     /// Build the structures over the first `count` triangles of
     /// `triangles`; `masked(i)`: triangle `i` is alpha-tested. The context
-    /// must have ray queries enabled ([`Context::new_ray_query`]).
+    /// must have acceleration structures enabled
+    /// ([`Context::new_ray_tracing`]).
     pub fn build(
         ctx: &'a Context,
         triangles: &Buffer<'a>,
         count: u32,
         masked: &dyn Fn(u32) -> bool,
     ) -> Result<Self, GpuError> {
-        if !ctx.ray_query() {
+        if !ctx.acceleration_structures() {
             return Err(GpuError::Invalid(
-                "acceleration structures need a context with ray queries enabled".into(),
+                "acceleration structures need a context with ray tracing enabled".into(),
             ));
         }
         let start = Instant::now();

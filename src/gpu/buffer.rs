@@ -71,9 +71,9 @@ impl<'a> Buffer<'a> {
             BufferKind::Uniform => vk::BufferUsageFlags::UNIFORM_BUFFER,
         } | vk::BufferUsageFlags::TRANSFER_SRC
             | vk::BufferUsageFlags::TRANSFER_DST;
-        // With ray queries on, a storage buffer may also feed an
+        // With acceleration structures on, a storage buffer may also feed an
         // acceleration structure build (the triangles' vertices).
-        let usage = if ctx.ray_query() && kind == BufferKind::Storage {
+        let usage = if ctx.acceleration_structures() && kind == BufferKind::Storage {
             usage
                 | vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
                 | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR
@@ -95,7 +95,7 @@ impl<'a> Buffer<'a> {
     /// A buffer of `len` bytes (at least [`MIN_SIZE`]) for Vulkan's own use
     /// (acceleration structure storage, scratch, build inputs), with
     /// `usage` plus transfers; never bound as a descriptor, so not held to
-    /// the binding limits. Needs [`Context::ray_query`] for device
+    /// the binding limits. Needs [`Context::acceleration_structures`] for device
     /// addresses.
     pub fn with_usage(
         ctx: &'a Context,

@@ -187,9 +187,8 @@ pub struct Context {
     validation_log: Option<Arc<ValidationLog>>,
     timings: ContextTimings,
     force_staging: bool,
-    /// Ray queries, acceleration structures and buffer device addresses are
-    /// enabled ([`Context::new_ray_query`]).
-    ray_query: bool,
+    /// What of Vulkan ray tracing is enabled ([`Context::new_ray_tracing`]).
+    ray_tracing: RayTracing,
     /// Every pipeline this context built, by what defines it
     /// ([`super::kernel::PipelineKey`]), kept until the context goes: a
     /// kernel made again (the next render of a sweep, a converge series,
@@ -219,6 +218,40 @@ fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
     }
 }
 
+/// What of Vulkan ray tracing a context enabled: acceleration structures
+/// and buffer device addresses, with ray queries, a ray tracing pipeline,
+/// or both (none of it for [`Context::new`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct RayTracing {
+    /// `VK_KHR_acceleration_structure` (and buffer device addresses).
+    pub acceleration_structures: bool,
+    /// `VK_KHR_ray_query`.
+    pub query: bool,
+    /// `VK_KHR_ray_tracing_pipeline`, with the device's shader binding
+    /// table sizes and alignments.
+    pub pipeline: Option<RtPipelineProperties>,
+}
+
+/// `VkPhysicalDeviceRayTracingPipelinePropertiesKHR`, what glint needs of it.
+#[derive(Clone, Copy, Debug)]
+pub struct RtPipelineProperties {
+    pub shader_group_handle_size: u32,
+    pub shader_group_handle_alignment: u32,
+    pub shader_group_base_alignment: u32,
+    pub max_ray_recursion_depth: u32,
+    pub max_ray_dispatch_invocation_count: u32,
+}
+
+/// What [`Context::create`] enables of ray tracing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum RayTracingWant {
+    None,
+    /// Everything the device has of queries and pipelines; at least one.
+    Any,
+    /// Ray queries, required.
+    Query,
+}
+
 struct Candidate {
     pd: vk::PhysicalDevice,
     name: String,
@@ -232,20 +265,28 @@ impl Context {
     /// Create a context: load the Vulkan loader, create the instance, pick a
     /// device, create the logical device, allocator and command pool.
     pub fn new(desc: &ContextDesc<'_>) -> Result<Context, GpuError> {
-        Self::create(desc, false)
+        Self::create(desc, RayTracingWant::None)
     }
 
-    /// [`Context::new`] with `VK_KHR_acceleration_structure`,
-    /// `VK_KHR_ray_query` (and `VK_KHR_deferred_host_operations`, which the
-    /// first requires) and buffer device addresses enabled, for
-    /// `--traversal hardware`; [`GpuError::NoRayQuery`] when the device
-    /// lacks any of them. Only this constructor enables them: the software
-    /// traversal runs on devices without.
+    /// [`Context::new`] with `VK_KHR_acceleration_structure` (and
+    /// `VK_KHR_deferred_host_operations`, which it requires), buffer device
+    /// addresses, and whichever of `VK_KHR_ray_query` and
+    /// `VK_KHR_ray_tracing_pipeline` the device has, for `--traversal
+    /// hardware` ([`Context::ray_tracing`] says which);
+    /// [`GpuError::NoRayQuery`] when it lacks acceleration structures or
+    /// both. Only these constructors enable them: the software traversal
+    /// runs on devices without.
+    pub fn new_ray_tracing(desc: &ContextDesc<'_>) -> Result<Context, GpuError> {
+        Self::create(desc, RayTracingWant::Any)
+    }
+
+    /// [`Context::new_ray_tracing`], failing unless the device has ray
+    /// queries.
     pub fn new_ray_query(desc: &ContextDesc<'_>) -> Result<Context, GpuError> {
-        Self::create(desc, true)
+        Self::create(desc, RayTracingWant::Query)
     }
 
-    fn create(desc: &ContextDesc<'_>, ray_query: bool) -> Result<Context, GpuError> {
+    fn create(desc: &ContextDesc<'_>, want: RayTracingWant) -> Result<Context, GpuError> {
         let t0 = Instant::now();
         // SAFETY: loading libvulkan runs its initialisers; this is the
         // documented way to use ash without linking the loader.
@@ -267,11 +308,17 @@ impl Context {
 
         let driver = driver_name(&instance, pd);
 
-        let device = create_device(&instance, pd, queue_family, ray_query, &candidate.name)?;
+        let (device, ray_tracing) =
+            create_device(&instance, pd, queue_family, want, &candidate.name)?;
         let queue = unsafe { device.get_device_queue(queue_family, 0) };
 
-        let (command_pool, allocator) =
-            command_pool_and_allocator(&instance, &device, pd, queue_family, ray_query)?;
+        let (command_pool, allocator) = command_pool_and_allocator(
+            &instance,
+            &device,
+            pd,
+            queue_family,
+            ray_tracing.acceleration_structures,
+        )?;
 
         let unified_memory = unified_memory(&instance, pd);
 
@@ -307,14 +354,25 @@ impl Context {
                 device_seconds,
             },
             force_staging: false,
-            ray_query,
+            ray_tracing,
             pipelines: Mutex::new(Default::default()),
         })
     }
 
-    /// Whether ray queries and acceleration structures are enabled.
+    /// Whether acceleration structures (and buffer device addresses) are
+    /// enabled.
+    pub fn acceleration_structures(&self) -> bool {
+        self.ray_tracing.acceleration_structures
+    }
+
+    /// Whether ray queries are enabled.
     pub fn ray_query(&self) -> bool {
-        self.ray_query
+        self.ray_tracing.query
+    }
+
+    /// What of ray tracing is enabled.
+    pub fn ray_tracing(&self) -> RayTracing {
+        self.ray_tracing
     }
 
     pub fn info(&self) -> &DeviceInfo {
@@ -407,54 +465,78 @@ impl Context {
     }
 }
 
-/// The device extensions `--traversal hardware` enables.
-const RAY_QUERY_EXTENSIONS: [&CStr; 3] = [
+/// The device extensions every hardware traversal needs.
+const ACCEL_EXTENSIONS: [&CStr; 2] = [
     ash::khr::acceleration_structure::NAME,
-    ash::khr::ray_query::NAME,
     ash::khr::deferred_host_operations::NAME,
 ];
 
-/// Whether `pd` has what [`Context::new_ray_query`] enables: the
-/// extensions, the acceleration structure and ray query features and
-/// buffer device addresses.
-fn check_ray_query(
+/// What of ray tracing `pd` has, for [`Context::new_ray_tracing`] (`want`
+/// Any) or [`Context::new_ray_query`] (Query): acceleration structures and
+/// buffer device addresses always, and ray queries, a ray tracing pipeline
+/// or (Any) either; [`GpuError::NoRayQuery`] names what is missing.
+fn check_ray_tracing(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
     name: &str,
     have12: &vk::PhysicalDeviceVulkan12Features<'_>,
-) -> Result<(), GpuError> {
+    want: RayTracingWant,
+) -> Result<RayTracing, GpuError> {
     let exts = unsafe { instance.enumerate_device_extension_properties(pd) }
         .map_err(vk_err("vkEnumerateDeviceExtensionProperties"))?;
-    let mut missing: Vec<String> = RAY_QUERY_EXTENSIONS
+    let has = |want: &CStr| exts.iter().any(|e| e.extension_name_as_c_str() == Ok(want));
+    let mut missing: Vec<String> = ACCEL_EXTENSIONS
         .iter()
-        .filter(|&&want| !exts.iter().any(|e| e.extension_name_as_c_str() == Ok(want)))
+        .filter(|&&e| !has(e))
         .map(|n| n.to_string_lossy().into_owned())
         .collect();
-    if missing.is_empty() {
-        let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
-        let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
-        let mut f = vk::PhysicalDeviceFeatures2::default()
-            .push_next(&mut accel)
-            .push_next(&mut rq);
-        unsafe { instance.get_physical_device_features2(pd, &mut f) };
-        if accel.acceleration_structure != vk::TRUE {
-            missing.push("accelerationStructure".into());
-        }
-        if rq.ray_query != vk::TRUE {
-            missing.push("rayQuery".into());
-        }
+    let mut accel = vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default();
+    let mut rq = vk::PhysicalDeviceRayQueryFeaturesKHR::default();
+    let mut rtp = vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default();
+    let mut f = vk::PhysicalDeviceFeatures2::default()
+        .push_next(&mut accel)
+        .push_next(&mut rq)
+        .push_next(&mut rtp);
+    unsafe { instance.get_physical_device_features2(pd, &mut f) };
+    if missing.is_empty() && accel.acceleration_structure != vk::TRUE {
+        missing.push("accelerationStructure".into());
     }
     if have12.buffer_device_address != vk::TRUE {
         missing.push("bufferDeviceAddress".into());
     }
-    if missing.is_empty() {
-        Ok(())
-    } else {
-        Err(GpuError::NoRayQuery {
+    let query = has(ash::khr::ray_query::NAME) && rq.ray_query == vk::TRUE;
+    let pipeline = has(ash::khr::ray_tracing_pipeline::NAME)
+        && rtp.ray_tracing_pipeline == vk::TRUE
+        && want != RayTracingWant::Query;
+    if !query && (want == RayTracingWant::Query || !pipeline) {
+        missing.push(match want {
+            RayTracingWant::Query => "VK_KHR_ray_query".into(),
+            _ => "VK_KHR_ray_query or VK_KHR_ray_tracing_pipeline".into(),
+        });
+    }
+    if !missing.is_empty() {
+        return Err(GpuError::NoRayQuery {
             device: name.to_string(),
             missing,
-        })
+        });
     }
+    let pipeline = pipeline.then(|| {
+        let mut p = vk::PhysicalDeviceRayTracingPipelinePropertiesKHR::default();
+        let mut props = vk::PhysicalDeviceProperties2::default().push_next(&mut p);
+        unsafe { instance.get_physical_device_properties2(pd, &mut props) };
+        RtPipelineProperties {
+            shader_group_handle_size: p.shader_group_handle_size,
+            shader_group_handle_alignment: p.shader_group_handle_alignment,
+            shader_group_base_alignment: p.shader_group_base_alignment,
+            max_ray_recursion_depth: p.max_ray_recursion_depth,
+            max_ray_dispatch_invocation_count: p.max_ray_dispatch_invocation_count,
+        }
+    });
+    Ok(RayTracing {
+        acceleration_structures: true,
+        query,
+        pipeline,
+    })
 }
 
 /// Destroys the instance (and messenger) when device setup fails part way.
@@ -556,14 +638,14 @@ fn create_instance(
 }
 
 /// The command pool on `queue_family` and the memory allocator (with
-/// buffer device addresses for ray queries); on failure, what exists is
+/// buffer device addresses for acceleration structures); on failure, what exists is
 /// destroyed, the device included.
 fn command_pool_and_allocator(
     instance: &ash::Instance,
     device: &ash::Device,
     pd: vk::PhysicalDevice,
     queue_family: u32,
-    ray_query: bool,
+    device_addresses: bool,
 ) -> Result<(vk::CommandPool, Allocator), GpuError> {
     let pool_info = vk::CommandPoolCreateInfo::default()
         .queue_family_index(queue_family)
@@ -581,7 +663,7 @@ fn command_pool_and_allocator(
         device: device.clone(),
         physical_device: pd,
         debug_settings: Default::default(),
-        buffer_device_address: ray_query,
+        buffer_device_address: device_addresses,
         allocation_sizes: Default::default(),
     }) {
         Ok(a) => a,
@@ -644,6 +726,18 @@ pub fn gpu_available(wanted: Option<&str>) -> bool {
     });
     unsafe { instance.destroy_instance(None) };
     found
+}
+
+/// What of ray tracing the device [`Context::new_ray_tracing`] would pick
+/// (for `wanted`) has: a context made and dropped; its error where the
+/// device has neither API.
+pub fn ray_tracing_support(wanted: Option<&str>) -> Result<RayTracing, GpuError> {
+    let desc = ContextDesc {
+        device: wanted,
+        validation: Validation::Off,
+        loader: None,
+    };
+    Ok(Context::new_ray_tracing(&desc)?.ray_tracing())
 }
 
 fn pick_device(instance: &ash::Instance, wanted: Option<&str>) -> Result<Candidate, GpuError> {
@@ -736,14 +830,14 @@ fn driver_name(instance: &ash::Instance, pd: vk::PhysicalDevice) -> String {
 }
 
 /// The logical device: the optional shader features kernels may use where
-/// the device has them, and the ray-query extensions with `ray_query`.
+/// the device has them, and what `want` asks of ray tracing.
 fn create_device(
     instance: &ash::Instance,
     pd: vk::PhysicalDevice,
     queue_family: u32,
-    ray_query: bool,
+    want: RayTracingWant,
     name: &str,
-) -> Result<ash::Device, GpuError> {
+) -> Result<(ash::Device, RayTracing), GpuError> {
     // Enable the optional shader features kernels may use when the device
     // has them; robustBufferAccess stays off (bounds checks cost speed and
     // kernels index in range).
@@ -773,21 +867,29 @@ fn create_device(
     let mut accel_features =
         vk::PhysicalDeviceAccelerationStructureFeaturesKHR::default().acceleration_structure(true);
     let mut rq_features = vk::PhysicalDeviceRayQueryFeaturesKHR::default().ray_query(true);
-    let device_extensions = if ray_query {
-        check_ray_query(instance, pd, name, &have12)?;
+    let mut rtp_features =
+        vk::PhysicalDeviceRayTracingPipelineFeaturesKHR::default().ray_tracing_pipeline(true);
+    let mut ray_tracing = RayTracing::default();
+    let mut device_extensions = Vec::new();
+    if want != RayTracingWant::None {
+        ray_tracing = check_ray_tracing(instance, pd, name, &have12, want)?;
         features12 = features12.buffer_device_address(true);
-        RAY_QUERY_EXTENSIONS.map(CStr::as_ptr).to_vec()
-    } else {
-        Vec::new()
-    };
+        device_extensions.extend(ACCEL_EXTENSIONS.map(CStr::as_ptr));
+    }
     let mut features = vk::PhysicalDeviceFeatures2::default()
         .features(features10)
         .push_next(&mut features11)
         .push_next(&mut features12);
-    if ray_query {
-        features = features
-            .push_next(&mut accel_features)
-            .push_next(&mut rq_features);
+    if ray_tracing.acceleration_structures {
+        features = features.push_next(&mut accel_features);
+    }
+    if ray_tracing.query {
+        device_extensions.push(ash::khr::ray_query::NAME.as_ptr());
+        features = features.push_next(&mut rq_features);
+    }
+    if ray_tracing.pipeline.is_some() {
+        device_extensions.push(ash::khr::ray_tracing_pipeline::NAME.as_ptr());
+        features = features.push_next(&mut rtp_features);
     }
 
     let priorities = [1.0f32];
@@ -798,7 +900,9 @@ fn create_device(
         .queue_create_infos(&queue_infos)
         .enabled_extension_names(&device_extensions)
         .push_next(&mut features);
-    unsafe { instance.create_device(pd, &device_info, None) }.map_err(vk_err("vkCreateDevice"))
+    let device = unsafe { instance.create_device(pd, &device_info, None) }
+        .map_err(vk_err("vkCreateDevice"))?;
+    Ok((device, ray_tracing))
 }
 
 /// Whether every device-local memory type is also host-visible and

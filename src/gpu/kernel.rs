@@ -30,6 +30,12 @@
 //! [`Kernel`] once, [`Kernel::bind`] the buffers, and call
 //! [`Kernel::dispatch`] or record [`Kernel::record_dispatch`] into a command
 //! buffer of your own.
+//!
+//! A kernel may also be the ray generation shader of a ray tracing pipeline
+//! ([`KernelOptions::ray_tracing`], src/gpu/rt_pipeline.rs): the same
+//! bindings and push constants, seen by every stage, and a dispatch of
+//! `groups` launches `groups * group_size` rays through its shader binding
+//! table.
 
 use std::ffi::CStr;
 
@@ -38,6 +44,7 @@ use ash::vk;
 use super::GpuError;
 use super::buffer::{Buffer, BufferKind};
 use super::context::Context;
+use super::rt_pipeline::{self, RtStages, Sbt};
 
 /// How a kernel's pipeline is built.
 #[derive(Clone, Copy, Debug, Default)]
@@ -50,6 +57,9 @@ pub struct KernelOptions<'s> {
     /// An acceleration structure at the binding after the buffers' (null:
     /// none), written once at creation.
     pub acceleration_structure: vk::AccelerationStructureKHR,
+    /// The kernel is the ray generation shader of a ray tracing pipeline
+    /// with these other stages (`None`: a compute kernel).
+    pub ray_tracing: Option<RtStages>,
 }
 
 /// What defines a built pipeline: the kernel, its descriptor types, push
@@ -60,6 +70,7 @@ pub(crate) struct PipelineKey {
     types: Vec<i32>,
     push_constant_size: u32,
     specialization: Vec<u32>,
+    ray_tracing: Option<RtStages>,
 }
 
 /// A built pipeline and its layouts, owned by the context's cache.
@@ -107,6 +118,8 @@ pub struct Kernel<'a> {
     /// The pipeline and layouts are the context's (its cache); else this
     /// kernel's own, to destroy (a build that failed half way).
     cached: bool,
+    /// A ray tracing pipeline's stages and shader binding table.
+    rt: Option<(RtStages, Sbt<'a>)>,
 }
 
 impl<'a> Kernel<'a> {
@@ -171,6 +184,7 @@ impl<'a> Kernel<'a> {
             set: vk::DescriptorSet::null(),
             bound: false,
             cached: false,
+            rt: None,
         };
         // `kernel`'s Drop destroys whatever it created if a step fails; the
         // pipeline and its layouts belong to the context's cache once there.
@@ -185,6 +199,7 @@ impl<'a> Kernel<'a> {
             types: types.iter().map(|t| t.as_raw()).collect(),
             push_constant_size,
             specialization: options.specialization.to_vec(),
+            ray_tracing: options.ray_tracing,
         };
         let cached = ctx
             .pipelines
@@ -198,8 +213,20 @@ impl<'a> Kernel<'a> {
                 kernel.pipeline = p.pipeline;
             }
             None => {
-                kernel.create_layouts(&types)?;
-                kernel.create_pipeline(code, options)?;
+                kernel.create_layouts(&types, stage_flags(options))?;
+                match &options.ray_tracing {
+                    None => kernel.create_pipeline(code, options)?,
+                    Some(stages) => {
+                        kernel.pipeline = rt_pipeline::create_pipeline(
+                            ctx,
+                            kernel.pipeline_layout,
+                            name,
+                            stages,
+                            options.specialization,
+                            options.cache,
+                        )?
+                    }
+                }
                 if let Ok(mut p) = ctx.pipelines.lock() {
                     p.0.insert(
                         key,
@@ -213,6 +240,9 @@ impl<'a> Kernel<'a> {
             }
         }
         kernel.cached = true;
+        if let Some(stages) = options.ray_tracing {
+            kernel.rt = Some((stages, Sbt::new(ctx, kernel.pipeline, &stages)?));
+        }
         if !types.is_empty() {
             kernel.create_descriptor_set(&types)?;
         }
@@ -224,7 +254,11 @@ impl<'a> Kernel<'a> {
 
     /// The descriptor set layout of `types` (binding i is types[i]) and the
     /// pipeline layout with the push constants.
-    fn create_layouts(&mut self, types: &[vk::DescriptorType]) -> Result<(), GpuError> {
+    fn create_layouts(
+        &mut self,
+        types: &[vk::DescriptorType],
+        stages: vk::ShaderStageFlags,
+    ) -> Result<(), GpuError> {
         let layout_bindings: Vec<_> = types
             .iter()
             .enumerate()
@@ -233,7 +267,7 @@ impl<'a> Kernel<'a> {
                     .binding(i as u32)
                     .descriptor_type(t)
                     .descriptor_count(1)
-                    .stage_flags(vk::ShaderStageFlags::COMPUTE)
+                    .stage_flags(stages)
             })
             .collect();
         self.set_layout = unsafe {
@@ -246,7 +280,7 @@ impl<'a> Kernel<'a> {
 
         let set_layouts = [self.set_layout];
         let ranges = [vk::PushConstantRange::default()
-            .stage_flags(vk::ShaderStageFlags::COMPUTE)
+            .stage_flags(stages)
             .offset(0)
             .size(self.push_constant_size)];
         let mut layout_info = vk::PipelineLayoutCreateInfo::default().set_layouts(&set_layouts);
@@ -424,6 +458,21 @@ impl<'a> Kernel<'a> {
                 self.name
             )));
         }
+        if let Some((stages, _)) = &self.rt {
+            let max = self
+                .ctx
+                .ray_tracing()
+                .pipeline
+                .map_or(0, |p| p.max_ray_dispatch_invocation_count) as u64;
+            let launch = launch_size(stages, groups);
+            if launch.iter().map(|&n| n as u64).product::<u64>() > max {
+                return Err(GpuError::Invalid(format!(
+                    "kernel '{}': a launch of {launch:?} rays exceeds the device limit of {max}",
+                    self.name
+                )));
+            }
+            return Ok(());
+        }
         let max = self.ctx.info().limits.max_compute_work_group_count;
         if groups.iter().zip(max).any(|(&g, m)| g > m) {
             return Err(GpuError::Invalid(format!(
@@ -445,12 +494,24 @@ impl<'a> Kernel<'a> {
     ) -> Result<(), GpuError> {
         self.check_dispatch(push_constants, groups)?;
         let d = &self.ctx.device;
+        let (bind_point, stages, stage) = match &self.rt {
+            None => (
+                vk::PipelineBindPoint::COMPUTE,
+                vk::ShaderStageFlags::COMPUTE,
+                vk::PipelineStageFlags::COMPUTE_SHADER,
+            ),
+            Some(_) => (
+                vk::PipelineBindPoint::RAY_TRACING_KHR,
+                rt_pipeline::RT_STAGE_FLAGS,
+                vk::PipelineStageFlags::RAY_TRACING_SHADER_KHR,
+            ),
+        };
         unsafe {
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::COMPUTE, self.pipeline);
+            d.cmd_bind_pipeline(cmd, bind_point, self.pipeline);
             if !self.bindings.is_empty() {
                 d.cmd_bind_descriptor_sets(
                     cmd,
-                    vk::PipelineBindPoint::COMPUTE,
+                    bind_point,
                     self.pipeline_layout,
                     0,
                     &[self.set],
@@ -458,15 +519,20 @@ impl<'a> Kernel<'a> {
                 );
             }
             if !push_constants.is_empty() {
-                d.cmd_push_constants(
-                    cmd,
-                    self.pipeline_layout,
-                    vk::ShaderStageFlags::COMPUTE,
-                    0,
-                    push_constants,
-                );
+                d.cmd_push_constants(cmd, self.pipeline_layout, stages, 0, push_constants);
             }
-            d.cmd_dispatch(cmd, groups[0], groups[1], groups[2]);
+            match &self.rt {
+                None => d.cmd_dispatch(cmd, groups[0], groups[1], groups[2]),
+                Some((rt_stages, sbt)) => {
+                    let [w, h, depth] = launch_size(rt_stages, groups);
+                    let [raygen, miss, hit, callable] = &sbt.regions;
+                    let loader = ash::khr::ray_tracing_pipeline::Device::new(
+                        &self.ctx.instance,
+                        &self.ctx.device,
+                    );
+                    loader.cmd_trace_rays(cmd, raygen, miss, hit, callable, w, h, depth);
+                }
+            }
             let barrier = [vk::MemoryBarrier::default()
                 .src_access_mask(vk::AccessFlags::SHADER_WRITE)
                 .dst_access_mask(
@@ -477,9 +543,8 @@ impl<'a> Kernel<'a> {
                 )];
             d.cmd_pipeline_barrier(
                 cmd,
-                vk::PipelineStageFlags::COMPUTE_SHADER,
-                vk::PipelineStageFlags::COMPUTE_SHADER
-                    | vk::PipelineStageFlags::TRANSFER
+                stage,
+                stage | vk::PipelineStageFlags::TRANSFER
                     | vk::PipelineStageFlags::HOST,
                 vk::DependencyFlags::empty(),
                 &barrier,
@@ -499,6 +564,23 @@ impl<'a> Kernel<'a> {
         })?;
         recorded
     }
+}
+
+/// The shader stages that see a kernel's bindings and push constants.
+fn stage_flags(options: &KernelOptions<'_>) -> vk::ShaderStageFlags {
+    match options.ray_tracing {
+        None => vk::ShaderStageFlags::COMPUTE,
+        Some(_) => rt_pipeline::RT_STAGE_FLAGS,
+    }
+}
+
+/// The ray generation launch of a dispatch of `groups`.
+fn launch_size(stages: &RtStages, groups: [u32; 3]) -> [u32; 3] {
+    [
+        groups[0].saturating_mul(stages.group_size[0]),
+        groups[1].saturating_mul(stages.group_size[1]),
+        groups[2],
+    ]
 }
 
 impl Drop for Kernel<'_> {

@@ -12,6 +12,7 @@ pub mod context;
 pub mod kernel;
 pub mod pipeline_cache;
 pub mod render;
+pub mod rt_pipeline;
 pub mod shaders;
 
 use ash::vk;
@@ -73,7 +74,7 @@ pub enum GpuError {
     #[error("no compiled kernel named '{0}' (shaders/{0}.comp)")]
     UnknownKernel(String),
     #[error(
-        "--traversal hardware needs Vulkan ray queries, which device '{device}' lacks (missing: {}); use --traversal software",
+        "--traversal hardware needs Vulkan ray tracing (acceleration structures, with ray queries or a ray tracing pipeline), which device '{device}' lacks (missing: {}); use --traversal software",
         missing.join(", ")
     )]
     NoRayQuery {

@@ -25,6 +25,7 @@ use glint_cpu::schedule::{Pacing, PassPlan, Schedule};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::accel::Accel;
+use super::rt_pipeline;
 use super::buffer::{Buffer, BufferKind};
 use super::context::Context;
 use super::kernel::{Kernel, KernelOptions, groups};
@@ -218,7 +219,7 @@ fn film_of(sums: &[[f32; 4]], width: u32, height: u32, spp: u32, batch: u32) -> 
 pub struct KernelConfig<'k> {
     pub name: &'k str,
     pub options: KernelOptions<'k>,
-    /// Hardware traversal (a ray-query kernel such as `pathtrace_rq`):
+    /// Hardware traversal (`pathtrace_rq` or the ray tracing pipeline):
     /// whether each triangle is alpha-tested. The render then builds the
     /// acceleration structures over the triangles and binds the tri_map
     /// (binding 17) and the TLAS (18; `abi::PATH_TRACER_BINDINGS`). `None`: the
@@ -541,30 +542,90 @@ impl KernelChoice {
     }
 }
 
-/// How the GPU kernel finds the ray's hits (`--traversal`).
+/// How the GPU kernel finds the ray's hits (`--traversal`, and for the
+/// hardware one `--ray-tracing`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Traversal {
     /// glint's own BVH, walked in the compute kernel (shaders/bvh.glsl).
     #[default]
     Software,
-    /// Vulkan ray queries against acceleration structures built on the
-    /// device (the kernel `pathtrace_rq`, shaders/ray_query.glsl).
+    /// Vulkan ray tracing against acceleration structures built on the
+    /// device, through whichever of the two below the device has
+    /// ([`Traversal::resolve`]).
     Hardware,
+    /// Ray queries in the compute kernel (`pathtrace_rq`,
+    /// shaders/ray_query.glsl).
+    RayQuery,
+    /// A ray tracing pipeline whose ray generation shader is the path
+    /// tracer (`rt/raygen`, shaders/rt/; src/gpu/rt_pipeline.rs).
+    Pipeline,
 }
 
 impl Traversal {
+    /// `--traversal`'s value (and `--stats` `traversal`).
     pub fn name(self) -> &'static str {
         match self {
             Traversal::Software => "software",
-            Traversal::Hardware => "hardware",
+            _ => "hardware",
         }
     }
 
-    /// The path tracing kernel of this traversal.
+    /// The hardware traversal's Vulkan API (`--stats` `ray_tracing`):
+    /// "query" or "pipeline"; `None` for the software one or one not yet
+    /// resolved.
+    pub fn api(self) -> Option<&'static str> {
+        match self {
+            Traversal::RayQuery => Some("query"),
+            Traversal::Pipeline => Some("pipeline"),
+            _ => None,
+        }
+    }
+
+    pub fn is_hardware(self) -> bool {
+        self != Traversal::Software
+    }
+
+    /// `Hardware` made concrete for `ctx`: ray queries where enabled (on
+    /// lavapipe they are 1.3-1.6x as fast as the pipeline, docs/benchmarks.md),
+    /// else the pipeline; the others as they are.
+    pub fn resolve(self, ctx: &Context) -> Traversal {
+        match self {
+            Traversal::Hardware if !ctx.ray_query() && ctx.ray_tracing().pipeline.is_some() => {
+                Traversal::Pipeline
+            }
+            Traversal::Hardware => Traversal::RayQuery,
+            t => t,
+        }
+    }
+
+    /// The path tracing kernel of this traversal (resolved).
     pub fn kernel_name(self) -> &'static str {
         match self {
             Traversal::Software => "pathtrace",
-            Traversal::Hardware => "pathtrace_rq",
+            Traversal::Hardware | Traversal::RayQuery => "pathtrace_rq",
+            Traversal::Pipeline => rt_pipeline::PATH_TRACER_RAYGEN,
+        }
+    }
+
+    /// Whether `ctx` has what this traversal needs.
+    fn check(self, ctx: &Context) -> Result<(), GpuError> {
+        let missing = match self {
+            Traversal::Software => None,
+            Traversal::Hardware | Traversal::RayQuery => {
+                (!ctx.ray_query()).then_some("VK_KHR_ray_query")
+            }
+            Traversal::Pipeline => ctx
+                .ray_tracing()
+                .pipeline
+                .is_none()
+                .then_some("VK_KHR_ray_tracing_pipeline"),
+        };
+        match missing {
+            Some(m) => Err(GpuError::NoRayQuery {
+                device: ctx.info().name.clone(),
+                missing: vec![m.to_string()],
+            }),
+            None => Ok(()),
         }
     }
 }
@@ -608,8 +669,9 @@ pub fn alpha_tested(scene: &Scene) -> Vec<bool> {
         .collect()
 }
 
-/// [`render_on`] with a choice of kernel and traversal (Hardware needs a
-/// context from [`Context::new_ray_query`]) and a pipeline cache.
+/// [`render_on`] with a choice of kernel and traversal (a hardware one
+/// needs a context from [`Context::new_ray_tracing`] with its API) and a
+/// pipeline cache.
 pub fn render_with(
     ctx: &Context,
     scene: &Scene,
@@ -619,15 +681,16 @@ pub fn render_with(
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
     let start = Instant::now();
+    let traversal = traversal.resolve(ctx);
+    traversal.check(ctx)?;
     let data = gpu_scene_data(scene, opts).map_err(|e| GpuError::Invalid(e.to_string()))?;
     let mut bytes = SceneBytes::new(scene, &data);
-    let masked = match traversal {
-        Traversal::Software => None,
-        Traversal::Hardware => {
-            // The ray-query kernel does not read the BVH.
-            bytes.bvh_nodes = &[];
-            Some(alpha_tested(scene))
-        }
+    let masked = if traversal.is_hardware() {
+        // The hardware traversals do not read the BVH.
+        bytes.bvh_nodes = &[];
+        Some(alpha_tested(scene))
+    } else {
+        None
     };
     let features = match kernel {
         KernelChoice::Specialized => Features::of(scene, opts),
@@ -644,6 +707,8 @@ pub fn render_with(
         options: KernelOptions {
             specialization: &spec,
             cache,
+            ray_tracing: (traversal == Traversal::Pipeline)
+                .then_some(rt_pipeline::PATH_TRACER_STAGES),
             ..Default::default()
         },
         hardware: masked.as_deref(),
