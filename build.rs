@@ -73,13 +73,7 @@ fn main() {
         let roots = [shader_root.clone(), generated_dir.clone()];
         let options = compile_options(*define, roots, manifest.clone());
         let kind = stage_kind(path).expect("filtered by stage");
-        match compiler.compile_into_spirv(
-            &source,
-            kind,
-            &display,
-            "main",
-            Some(&options),
-        ) {
+        match compiler.compile_into_spirv(&source, kind, &display, "main", Some(&options)) {
             Ok(artifact) => {
                 if artifact.get_num_warnings() > 0 {
                     for line in artifact.get_warning_messages().lines() {

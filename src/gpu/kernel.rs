@@ -544,8 +544,7 @@ impl<'a> Kernel<'a> {
             d.cmd_pipeline_barrier(
                 cmd,
                 stage,
-                stage | vk::PipelineStageFlags::TRANSFER
-                    | vk::PipelineStageFlags::HOST,
+                stage | vk::PipelineStageFlags::TRANSFER | vk::PipelineStageFlags::HOST,
                 vk::DependencyFlags::empty(),
                 &barrier,
                 &[],

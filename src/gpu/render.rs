@@ -25,10 +25,10 @@ use glint_cpu::schedule::{Pacing, PassPlan, Schedule};
 use glint_cpu::{Film, RenderOptions, RenderStats, Scene};
 
 use super::accel::Accel;
-use super::rt_pipeline;
 use super::buffer::{Buffer, BufferKind};
 use super::context::Context;
 use super::kernel::{Kernel, KernelOptions, groups};
+use super::rt_pipeline;
 use super::{GpuError, GpuRender};
 
 /// Aim for dispatches of about this long: well under any watchdog, long
@@ -586,8 +586,8 @@ impl Traversal {
     }
 
     /// `Hardware` made concrete for `ctx`: ray queries where enabled (on
-    /// lavapipe they are 1.3-1.6x as fast as the pipeline, docs/benchmarks.md),
-    /// else the pipeline; the others as they are.
+    /// lavapipe the pipeline runs at 0.93-0.97 of their speed,
+    /// docs/benchmarks.md), else the pipeline; the others as they are.
     pub fn resolve(self, ctx: &Context) -> Traversal {
         match self {
             Traversal::Hardware if !ctx.ray_query() && ctx.ray_tracing().pipeline.is_some() => {

@@ -135,7 +135,12 @@ pub(crate) fn create_pipeline(
     }
     // Module order: raygen, miss..., closest hit, any hit.
     let mut names = vec![(raygen, vk::ShaderStageFlags::RAYGEN_KHR)];
-    names.extend(stages.miss.iter().map(|&m| (m, vk::ShaderStageFlags::MISS_KHR)));
+    names.extend(
+        stages
+            .miss
+            .iter()
+            .map(|&m| (m, vk::ShaderStageFlags::MISS_KHR)),
+    );
     names.push((stages.closest_hit, vk::ShaderStageFlags::CLOSEST_HIT_KHR));
     names.push((stages.any_hit, vk::ShaderStageFlags::ANY_HIT_KHR));
     let mut modules = Vec::with_capacity(names.len());
@@ -200,7 +205,12 @@ pub(crate) fn create_pipeline(
             .layout(layout)];
         let loader = ash::khr::ray_tracing_pipeline::Device::new(&ctx.instance, &ctx.device);
         let pipelines = unsafe {
-            loader.create_ray_tracing_pipelines(vk::DeferredOperationKHR::null(), cache, &info, None)
+            loader.create_ray_tracing_pipelines(
+                vk::DeferredOperationKHR::null(),
+                cache,
+                &info,
+                None,
+            )
         };
         pipelines
             .map(|p| p[0])
@@ -304,9 +314,30 @@ mod tests {
     #[test]
     fn regions_start_on_the_base_alignment_and_records_on_the_handle_alignment() {
         let l = sbt_layout(&props(32, 32, 64), 2, 1);
-        assert_eq!(l.raygen, SbtRegion { offset: 0, stride: 32, size: 32 });
-        assert_eq!(l.miss, SbtRegion { offset: 64, stride: 32, size: 64 });
-        assert_eq!(l.hit, SbtRegion { offset: 128, stride: 32, size: 32 });
+        assert_eq!(
+            l.raygen,
+            SbtRegion {
+                offset: 0,
+                stride: 32,
+                size: 32
+            }
+        );
+        assert_eq!(
+            l.miss,
+            SbtRegion {
+                offset: 64,
+                stride: 32,
+                size: 64
+            }
+        );
+        assert_eq!(
+            l.hit,
+            SbtRegion {
+                offset: 128,
+                stride: 32,
+                size: 32
+            }
+        );
         assert_eq!(l.size, 160);
 
         let l = sbt_layout(&props(20, 32, 64), 3, 2);
