@@ -1,8 +1,7 @@
 // Hardware traversal (`--traversal hardware`): bvh.glsl's bvh_intersect and
 // bvh_occluded, under the same names and contracts, through Vulkan ray
 // queries (GL_EXT_ray_query) against the scene's acceleration structures
-// (src/gpu/accel.rs): one top-level instance of one bottom-level structure
-// holding every triangle. pathtrace.comp includes this file instead of
+// (src/gpu/accel.rs). pathtrace.comp includes this file instead of
 // bvh.glsl when build.rs compiles it with GLINT_RAY_QUERY defined (the
 // kernel `pathtrace_rq`), so the BSDFs, lights, sampler and film are the
 // same source.
@@ -33,7 +32,8 @@
 // those it keeps; opaque triangles commit without coming here.
 #define RQ_PROCEED(q, o, d)                                                              \
     while (rayQueryProceedEXT(q)) {                                                      \
-        uint ctri = rq_triangle(uint(rayQueryGetIntersectionGeometryIndexEXT(q, false)), \
+        uint ctri = rq_triangle(uint(rayQueryGetIntersectionInstanceCustomIndexEXT(q, false)), \
+                                uint(rayQueryGetIntersectionGeometryIndexEXT(q, false)), \
                                 uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, false))); \
         vec2 cb = rayQueryGetIntersectionBarycentricsEXT(q, false);                      \
         if (BVH_PRESENT(ctri, cb.x, cb.y, o, d)) {                                       \
@@ -52,7 +52,8 @@ bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
     }
     vec2 b = rayQueryGetIntersectionBarycentricsEXT(q, true);
     hit.t = rayQueryGetIntersectionTEXT(q, true);
-    hit.tri = rq_triangle(uint(rayQueryGetIntersectionGeometryIndexEXT(q, true)),
+    hit.tri = rq_triangle(uint(rayQueryGetIntersectionInstanceCustomIndexEXT(q, true)),
+                          uint(rayQueryGetIntersectionGeometryIndexEXT(q, true)),
                           uint(rayQueryGetIntersectionPrimitiveIndexEXT(q, true)));
     hit.u = b.x;
     hit.v = b.y;

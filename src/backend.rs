@@ -55,6 +55,9 @@ pub struct GpuOptions {
     pub kernel: KernelChoice,
     /// glint's BVH or Vulkan ray tracing (`--traversal`, `--ray-tracing`).
     pub traversal: Traversal,
+    /// Hardware traversal: bottom-level structures to split the scene into
+    /// (`--blas-parts`; 0 and 1: one).
+    pub blas_parts: u32,
     /// Keep the driver's compiled pipelines in the user's cache folder.
     pub pipeline_cache: bool,
 }
@@ -199,8 +202,12 @@ impl Renderer {
         let handle = cache
             .as_ref()
             .map_or(ash::vk::PipelineCache::null(), |c| c.handle());
-        let kernel = (self.gpu.kernel, self.gpu.traversal);
-        let r = crate::gpu::render::render_with(ctx, scene, opts, kernel, handle, progress)?;
+        let setup = crate::gpu::render::GpuSetup {
+            kernel: self.gpu.kernel,
+            traversal: self.gpu.traversal,
+            blas_parts: self.gpu.blas_parts,
+        };
+        let r = crate::gpu::render::render_with(ctx, scene, opts, setup, handle, progress)?;
         if let Some(c) = &cache {
             c.save();
         }

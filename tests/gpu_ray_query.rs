@@ -29,7 +29,7 @@ use std::path::Path;
 use glint::cpu::compare::compare_films;
 use glint::cpu::{Bvh, Bvh4, Film, Ray, RenderOptions, Scene, Triangle};
 use glint::gpu::accel::Accel;
-use glint::gpu::render::{KernelChoice, Traversal, render_with};
+use glint::gpu::render::{GpuSetup, KernelChoice, Traversal, render_with};
 use glint::gpu::rt_pipeline::RtStages;
 use glint::gpu::{Buffer, BufferKind, Context, ContextDesc, GpuError, Kernel, KernelOptions};
 use glint::gpu::{ValidationLog, groups};
@@ -117,14 +117,33 @@ fn pack(rays: &[Ray]) -> Vec<[f32; 8]> {
 }
 
 /// The hardware traversal of `rays` against `tris` by `api`, alpha-tested
-/// or not.
+/// or not, over one bottom-level structure.
 fn run_hardware(ctx: &Context, tris: &[Triangle], rays: &[Ray], masked: bool, api: Api) -> Traced {
+    run_hardware_parts(ctx, tris, rays, masked, api, 1)
+}
+
+/// [`run_hardware`] over `parts` bottom-level structures.
+fn run_hardware_parts(
+    ctx: &Context,
+    tris: &[Triangle],
+    rays: &[Ray],
+    masked: bool,
+    api: Api,
+    parts: u32,
+) -> Traced {
     let storage = |name: &str, bytes: &[u8]| {
         Buffer::from_slice(ctx, name, BufferKind::Storage, bytes).expect("buffer")
     };
     let tri_buf = storage("triangles", bytemuck::cast_slice(tris));
     let rule = |i: u32| masked && test_masked(i);
-    let accel = Accel::build(ctx, &tri_buf, tris.len() as u32, &rule).expect("acceleration");
+    let accel =
+        Accel::build_parts(ctx, &tri_buf, tris.len() as u32, &rule, parts).expect("acceleration");
+    let blas = if tris.is_empty() {
+        0
+    } else {
+        parts.min(tris.len() as u32)
+    };
+    assert_eq!(accel.stats.blas_count, blas);
     let ray_buf = storage("rays", bytemuck::cast_slice(&pack(rays)));
     let hits = storage("hits", &vec![0u8; rays.len() * 16]);
     let occluded = storage("occluded", &vec![7u8; rays.len() * 4]);
@@ -253,7 +272,9 @@ fn compare(name: &str, tris: &[Triangle], rays: &[Ray], hw: &Traced, sw: &Traced
 }
 
 /// 10^5 random rays against the bunny and the Cornell box, opaque and with
-/// every third triangle alpha-tested.
+/// every third triangle alpha-tested, over one bottom-level structure and
+/// over 7 (`--blas-parts`: each a cluster of the triangles, as a mesh is,
+/// one TLAS instance each, found again through its custom index).
 #[test]
 fn hardware_traversal_matches_software_per_ray() {
     let Some((ctx, log, apis)) = rt_context() else {
@@ -270,10 +291,10 @@ fn hardware_traversal_matches_software_per_ray() {
         let rays = random_rays(&tris, 100_000, &mut rng);
         for masked in [false, true] {
             let sw = run_software(&ctx, &wide, &tris, &rays, masked);
-            for &api in &apis {
-                let hw = run_hardware(&ctx, &tris, &rays, masked, api);
+            for (&api, parts) in apis.iter().flat_map(|a| [(a, 1), (a, 7)]) {
+                let hw = run_hardware_parts(&ctx, &tris, &rays, masked, api, parts);
                 let what = format!(
-                    "{name}{} ({api:?})",
+                    "{name}{} ({api:?}, {parts} BLAS)",
                     if masked { " alpha-tested" } else { "" }
                 );
                 let hit = compare(&what, &tris, &rays, &hw, &sw);
@@ -402,17 +423,34 @@ fn load(name: &str) -> Scene {
 /// software one is compiled (and cached on disk by Mesa) by other tests
 /// too, where the generic kernels cost minutes of cold LLVM compilation.
 fn gpu_film(ctx: &Context, scene: &Scene, opts: &RenderOptions, t: Traversal) -> Film {
-    let kernel = (KernelChoice::Specialized, t);
+    gpu_film_parts(ctx, scene, opts, t, 1)
+}
+
+/// [`gpu_film`] with the scene split into `blas_parts` bottom-level
+/// structures (hardware traversal).
+fn gpu_film_parts(
+    ctx: &Context,
+    scene: &Scene,
+    opts: &RenderOptions,
+    traversal: Traversal,
+    blas_parts: u32,
+) -> Film {
+    let setup = GpuSetup {
+        kernel: KernelChoice::Specialized,
+        traversal,
+        blas_parts,
+    };
     let cache = ash::vk::PipelineCache::null();
-    render_with(ctx, scene, opts, kernel, cache, &|_, _| {})
+    render_with(ctx, scene, opts, setup, cache, &|_, _| {})
         .unwrap()
         .film
 }
 
-/// The Cornell box: the hardware traversal, by each API, traces the
-/// software kernel's paths with the same seed (768 of 768 pixels,
-/// 2026-12-02 and, for the pipeline, 2026-12-05), and agrees statistically
-/// with the CPU backend.
+/// The Cornell box: the hardware traversal, by each API, over one
+/// bottom-level structure and over 5, traces the software kernel's paths
+/// with the same seed (768 of 768 pixels, 2026-12-02 and, for the pipeline
+/// and the split, 2026-12-05), and agrees statistically with the CPU
+/// backend.
 ///
 /// Then `glint bench --compare-traversals` on it (after the images, so the
 /// kernels it needs are in Mesa's disk cache, not compiled twice at once).
@@ -562,7 +600,10 @@ fn images(names: &[&str]) {
     let Some((ctx, log, apis)) = rt_context() else {
         return;
     };
-    for (&name, &api) in names.iter().flat_map(|n| apis.iter().map(move |a| (n, a))) {
+    let runs = names
+        .iter()
+        .flat_map(|n| apis.iter().flat_map(move |a| [(n, a, 1), (n, a, 5)]));
+    for (&name, &api, parts) in runs {
         let scene = load(name);
         let opts = RenderOptions {
             spp: 16,
@@ -574,7 +615,7 @@ fn images(names: &[&str]) {
             Api::Query => Traversal::RayQuery,
             Api::Pipeline => Traversal::Pipeline,
         };
-        let hw = gpu_film(&ctx, &scene, &opts, traversal);
+        let hw = gpu_film_parts(&ctx, &scene, &opts, traversal, parts);
         let sw = gpu_film(&ctx, &scene, &opts, Traversal::Software);
         let near = |a: glam::Vec3, b: glam::Vec3| {
             (a - b).abs().max_element() <= 1e-3 * a.abs().max(b.abs()).max_element().max(1e-3)
@@ -584,14 +625,17 @@ fn images(names: &[&str]) {
             .count();
         assert!(
             same as f64 >= 0.98 * hw.sum.len() as f64,
-            "{name} ({api:?}): only {same} of {} pixels trace the software kernel's paths",
+            "{name} ({api:?}, {parts} BLAS): only {same} of {} pixels trace the software kernel's paths",
             hw.sum.len()
         );
         let (cpu, _) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
         let r = compare_films(&hw, &cpu).unwrap();
-        assert!(r.pass, "{name} ({api:?}) against the CPU: {r}");
+        assert!(
+            r.pass,
+            "{name} ({api:?}, {parts} BLAS) against the CPU: {r}"
+        );
         eprintln!(
-            "{name} ({api:?}): {same} of {} pixels as software; {r}",
+            "{name} ({api:?}, {parts} BLAS): {same} of {} pixels as software; {r}",
             hw.sum.len()
         );
     }

@@ -10,8 +10,9 @@
 
 struct RtHit {
     float t;
-    // The acceleration structure's geometry and primitive index
-    // (tri_map.glsl turns them into a triangles[] index).
+    // The acceleration structure's instance custom index, geometry and
+    // primitive index (tri_map.glsl turns them into a triangles[] index).
+    uint instance;
     uint geometry;
     uint primitive;
     // Barycentrics of p1 and p2, as Hit.u and Hit.v.

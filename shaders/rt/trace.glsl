@@ -34,7 +34,8 @@ bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
         hit = Hit(tmax, BVH_NO_HIT, 0.0, 0.0);
         return false;
     }
-    hit = Hit(rt_hit.t, rq_triangle(rt_hit.geometry, rt_hit.primitive), rt_hit.u, rt_hit.v);
+    hit = Hit(rt_hit.t, rq_triangle(rt_hit.instance, rt_hit.geometry, rt_hit.primitive), rt_hit.u,
+              rt_hit.v);
     return true;
 }
 

@@ -375,6 +375,7 @@ pub fn render_on(
         device: ro.device.clone(),
         kernel: ro.kernel.into(),
         traversal: crate::cli::traversal(ro.traversal, ro.ray_tracing),
+        blas_parts: ro.blas_parts,
         pipeline_cache: true,
     };
     let backend = backend.resolve(ro.device.as_deref());

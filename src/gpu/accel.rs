@@ -1,23 +1,27 @@
 //! Acceleration structures for `--traversal hardware` (the kernel
-//! `pathtrace_rq`, shaders/ray_query.glsl), built on the device through a
-//! command buffer (lavapipe does not implement the host-side builds).
+//! `pathtrace_rq`, shaders/ray_query.glsl, and the ray tracing pipeline,
+//! shaders/rt/), built on the device through a command buffer (lavapipe
+//! does not implement the host-side builds).
 //!
-//! One bottom-level structure (BLAS) holds every triangle of the scene, read
-//! in place from the triangles buffer (binding 1: 48-byte `Triangle`s, so
-//! vertex `k` of triangle `i` is vertex `3i + k` at a 16-byte stride), and one
-//! top-level structure (TLAS) holds one identity instance of it. The scene is
-//! already flattened to world space, so per-mesh structures would need the
-//! loader to keep meshes and instances apart; one BLAS is what glint can
-//! build today (and a single structure is what the hardware traverses
-//! fastest when nothing is instanced).
+//! Bottom-level structures (BLAS) read the triangles in place from the
+//! triangles buffer (binding 1: 48-byte `Triangle`s, so vertex `k` of
+//! triangle `i` is vertex `3i + k` at a 16-byte stride); the top-level
+//! structure (TLAS) holds one identity instance of each. By default one
+//! BLAS holds every triangle of the scene: the scene is flattened to world
+//! space at load, so there is nothing to instance, and on lavapipe a split
+//! into per-object structures only costs (`--blas-parts`,
+//! docs/benchmarks.md). [`Accel::build_parts`] builds the split: contiguous
+//! ranges of the triangles (in BVH leaf order, so each range is a compact
+//! cluster, as a mesh is), one BLAS each.
 //!
-//! Without alpha-tested materials the BLAS has one opaque geometry, not
-//! indexed, so the primitive index is the triangle index. With them it has
-//! two indexed geometries, the opaque triangles (flagged opaque) and the
-//! alpha-tested ones (not), and the tri_map buffer maps them back (its
-//! layout: ray_query.glsl).
+//! Without alpha-tested materials a BLAS has one opaque geometry, not
+//! indexed, so the primitive index plus the instance's custom index is the
+//! triangle index. With them it has two indexed geometries, the opaque
+//! triangles (flagged opaque) and the alpha-tested ones (not), and the
+//! tri_map buffer maps them back from the instance's custom index (its
+//! layout: shaders/tri_map.glsl).
 //!
-//! The BLAS is built with `ALLOW_COMPACTION`, its compacted size queried
+//! Each BLAS is built with `ALLOW_COMPACTION`, its compacted size queried
 //! and the structure copied into a buffer of that size.
 
 use std::time::Instant;
@@ -32,7 +36,9 @@ use super::context::Context;
 #[derive(Clone, Copy, Debug, Default)]
 pub struct AccelStats {
     pub build_seconds: f64,
-    /// Bytes of the BLAS as built, and after compaction.
+    /// Bottom-level structures (TLAS instances).
+    pub blas_count: u32,
+    /// Bytes of the BLASes as built, and after compaction.
     pub blas_bytes: u64,
     pub compacted_bytes: u64,
     pub tlas_bytes: u64,
@@ -46,10 +52,11 @@ struct Structure<'a> {
     buffer: Buffer<'a>,
 }
 
-/// The scene's TLAS (and the BLAS it refers to) and the tri_map buffer.
+/// The scene's TLAS (and the BLASes it refers to) and the tri_map buffer.
 pub struct Accel<'a> {
     loader: ash::khr::acceleration_structure::Device,
-    blas: Option<Structure<'a>>,
+    /// Each BLAS with its instance's custom index.
+    blas: Vec<(Structure<'a>, u32)>,
     tlas: Option<Structure<'a>>,
     /// Binding 17 of `pathtrace_rq`.
     pub tri_map: Buffer<'a>,
@@ -67,18 +74,53 @@ impl<'a> Accel<'a> {
         count: u32,
         masked: &dyn Fn(u32) -> bool,
     ) -> Result<Self, GpuError> {
+        Self::build_parts(ctx, triangles, count, masked, 1)
+    }
+
+    /// [`Accel::build`] with the triangles split into `parts` contiguous
+    /// ranges of (nearly) equal size, one BLAS and one TLAS instance each
+    /// (at most one per triangle).
+    pub fn build_parts(
+        ctx: &'a Context,
+        triangles: &Buffer<'a>,
+        count: u32,
+        masked: &dyn Fn(u32) -> bool,
+        parts: u32,
+    ) -> Result<Self, GpuError> {
         if !ctx.acceleration_structures() {
             return Err(GpuError::Invalid(
                 "acceleration structures need a context with ray tracing enabled".into(),
             ));
         }
         let start = Instant::now();
-        let (opaque, alpha): (Vec<u32>, Vec<u32>) = (0..count).partition(|&i| !masked(i));
+        let parts = parts.clamp(1, count.max(1)) as u64;
+        let any_alpha = (0..count).any(masked);
+        // Per part: its range, its custom index and (with alpha tests) its
+        // opaque and alpha-tested triangles, whose map starts at the
+        // custom index (shaders/tri_map.glsl).
         let mut map = Vec::new();
-        if !alpha.is_empty() {
-            map.push(opaque.len() as u32);
-            map.extend(&opaque);
-            map.extend(&alpha);
+        let mut plan = Vec::new();
+        let mut masked_triangles = 0;
+        for p in 0..parts {
+            let range = (count as u64 * p / parts) as u32..(count as u64 * (p + 1) / parts) as u32;
+            if any_alpha {
+                let (opaque, alpha): (Vec<u32>, Vec<u32>) =
+                    range.clone().partition(|&i| !masked(i));
+                masked_triangles += alpha.len() as u32;
+                let custom = map.len() as u32;
+                map.push(opaque.len() as u32);
+                map.extend(&opaque);
+                map.extend(&alpha);
+                plan.push((range, custom, vec![opaque, alpha]));
+            } else {
+                plan.push((range.clone(), range.start, vec![]));
+            }
+        }
+        // The custom index has 24 bits (one part: always 0).
+        if plan.iter().any(|(_, custom, _)| *custom >= 1 << 24) {
+            return Err(GpuError::Invalid(format!(
+                "{count} triangles in {parts} acceleration structures: a custom index past 2^24"
+            )));
         }
         let tri_map = Buffer::from_slice(
             ctx,
@@ -88,22 +130,21 @@ impl<'a> Accel<'a> {
         )?;
         let mut accel = Accel {
             loader: ash::khr::acceleration_structure::Device::new(&ctx.instance, &ctx.device),
-            blas: None,
+            blas: Vec::new(),
             tlas: None,
             tri_map,
             stats: AccelStats {
-                masked_triangles: alpha.len() as u32,
+                masked_triangles,
                 ..Default::default()
             },
         };
         if count > 0 {
-            let groups = if alpha.is_empty() {
-                vec![]
-            } else {
-                vec![opaque, alpha]
-            };
-            accel.build_blas(ctx, triangles, count, &groups)?;
+            for (range, custom, groups) in &plan {
+                let blas = accel.build_blas(ctx, triangles, count, range.clone(), groups)?;
+                accel.blas.push((blas, *custom));
+            }
         }
+        accel.stats.blas_count = accel.blas.len() as u32;
         accel.build_tlas(ctx)?;
         accel.stats.build_seconds = start.elapsed().as_secs_f64();
         Ok(accel)
@@ -116,16 +157,17 @@ impl<'a> Accel<'a> {
             .map_or(vk::AccelerationStructureKHR::null(), |s| s.handle)
     }
 
-    /// The BLAS over `count` triangles: one opaque geometry, or (`groups`
-    /// non-empty) the opaque and the alpha-tested triangles as two indexed
-    /// geometries; then compacted.
+    /// The BLAS over triangles `range` of the `count`: one opaque geometry,
+    /// or (`groups` non-empty) the opaque and the alpha-tested triangles as
+    /// two indexed geometries; then compacted.
     fn build_blas(
         &mut self,
         ctx: &'a Context,
         triangles: &Buffer<'a>,
         count: u32,
+        range: std::ops::Range<u32>,
         groups: &[Vec<u32>],
-    ) -> Result<(), GpuError> {
+    ) -> Result<Structure<'a>, GpuError> {
         let indices: Vec<u32> = groups
             .iter()
             .flatten()
@@ -139,12 +181,12 @@ impl<'a> Accel<'a> {
             indices.len() as u64 * 4,
         )?;
         index_buf.write(&indices)?;
-        let vertices = vk::DeviceOrHostAddressConstKHR {
-            device_address: triangles.device_address(),
+        let vertices = |first: u32| vk::DeviceOrHostAddressConstKHR {
+            device_address: triangles.device_address() + 48 * first as u64,
         };
         let base = vk::AccelerationStructureGeometryTrianglesDataKHR::default()
             .vertex_format(vk::Format::R32G32B32_SFLOAT)
-            .vertex_data(vertices)
+            .vertex_data(vertices(0))
             .vertex_stride(16)
             .max_vertex(3 * count - 1)
             .index_type(vk::IndexType::NONE_KHR);
@@ -157,8 +199,12 @@ impl<'a> Accel<'a> {
         let mut geometries = Vec::new();
         let mut counts = Vec::new();
         if groups.is_empty() {
-            geometries.push(geometry(base, vk::GeometryFlagsKHR::OPAQUE));
-            counts.push(count);
+            // Not indexed: the range's triangles from its first vertex on.
+            let data = base
+                .vertex_data(vertices(range.start))
+                .max_vertex(3 * range.len() as u32 - 1);
+            geometries.push(geometry(data, vk::GeometryFlagsKHR::OPAQUE));
+            counts.push(range.len() as u32);
         }
         let mut offset = 0u64;
         for (g, tris) in groups.iter().enumerate() {
@@ -185,19 +231,19 @@ impl<'a> Accel<'a> {
             &counts,
             flags,
         )?;
-        self.stats.blas_bytes = built.buffer.size();
-        let compact = self.compact(ctx, &built)?;
-        self.stats.compacted_bytes = compact.buffer.size();
+        self.stats.blas_bytes += built.buffer.size();
+        let compact = self.compact(ctx, &built);
         self.destroy(built);
-        self.blas = Some(compact);
-        Ok(())
+        let compact = compact?;
+        self.stats.compacted_bytes += compact.buffer.size();
+        Ok(compact)
     }
 
-    /// The TLAS: one identity instance of the BLAS, or none for an empty
+    /// The TLAS: one identity instance of each BLAS, or none for an empty
     /// scene (every ray misses).
     fn build_tlas(&mut self, ctx: &'a Context) -> Result<(), GpuError> {
         let mut bytes = Vec::new();
-        if let Some(blas) = &self.blas {
+        for (blas, custom) in &self.blas {
             let reference = unsafe {
                 self.loader.get_acceleration_structure_device_address(
                     &vk::AccelerationStructureDeviceAddressInfoKHR::default()
@@ -208,7 +254,7 @@ impl<'a> Accel<'a> {
                 transform: vk::TransformMatrixKHR {
                     matrix: [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0],
                 },
-                instance_custom_index_and_mask: vk::Packed24_8::new(0, 0xff),
+                instance_custom_index_and_mask: vk::Packed24_8::new(*custom, 0xff),
                 instance_shader_binding_table_record_offset_and_flags: vk::Packed24_8::new(
                     0,
                     vk::GeometryInstanceFlagsKHR::TRIANGLE_FACING_CULL_DISABLE.as_raw() as u8,
@@ -230,7 +276,7 @@ impl<'a> Accel<'a> {
             "acceleration structure instances",
             vk::BufferUsageFlags::SHADER_DEVICE_ADDRESS
                 | vk::BufferUsageFlags::ACCELERATION_STRUCTURE_BUILD_INPUT_READ_ONLY_KHR,
-            64,
+            bytes.len().max(64) as u64,
         )?;
         instances.write(&bytes)?;
         let data = vk::AccelerationStructureGeometryInstancesDataKHR::default()
@@ -399,7 +445,8 @@ impl<'a> Accel<'a> {
 impl Drop for Accel<'_> {
     fn drop(&mut self) {
         // The structures go before their buffers (dropped after this).
-        for s in [self.tlas.take(), self.blas.take()].into_iter().flatten() {
+        let blas = std::mem::take(&mut self.blas).into_iter().map(|(s, _)| s);
+        for s in self.tlas.take().into_iter().chain(blas) {
             self.destroy(s);
         }
     }
@@ -431,12 +478,19 @@ unsafe fn barrier(
                 | vk::AccessFlags::ACCELERATION_STRUCTURE_WRITE_KHR
                 | vk::AccessFlags::SHADER_READ,
         )];
+    // Ray tracing shaders read them too where the pipeline is enabled (the
+    // stage is invalid where it is not).
+    let rt = match ctx.ray_tracing().pipeline {
+        Some(_) => vk::PipelineStageFlags::RAY_TRACING_SHADER_KHR,
+        None => vk::PipelineStageFlags::empty(),
+    };
     unsafe {
         ctx.device.cmd_pipeline_barrier(
             cmd,
             src_stage,
             vk::PipelineStageFlags::ACCELERATION_STRUCTURE_BUILD_KHR
-                | vk::PipelineStageFlags::COMPUTE_SHADER,
+                | vk::PipelineStageFlags::COMPUTE_SHADER
+                | rt,
             vk::DependencyFlags::empty(),
             &b,
             &[],

@@ -189,6 +189,7 @@ pub fn render_film(
         name: kernel_name,
         options: KernelOptions::default(),
         hardware: None,
+        blas_parts: 1,
     };
     render_film_range(ctx, &kernel, scene, width, height, range, progress)
 }
@@ -225,6 +226,9 @@ pub struct KernelConfig<'k> {
     /// (binding 17) and the TLAS (18; `abi::PATH_TRACER_BINDINGS`). `None`: the
     /// software BVH.
     pub hardware: Option<&'k [bool]>,
+    /// Hardware traversal: bottom-level structures to split the triangles
+    /// into (`--blas-parts`; 0 and 1: one).
+    pub blas_parts: u32,
 }
 
 /// The buffers one film render binds (`abi::PATH_TRACER_BINDINGS` 0-15),
@@ -374,9 +378,10 @@ fn build_accel<'c>(
     triangles: &Buffer<'c>,
     count: u32,
     masked: &[bool],
+    parts: u32,
 ) -> Result<Accel<'c>, GpuError> {
     let alpha = |i: u32| masked.get(i as usize).copied().unwrap_or(false);
-    Accel::build(ctx, triangles, count, &alpha)
+    Accel::build_parts(ctx, triangles, count, &alpha, parts)
 }
 
 /// The path-tracing kernel `cfg` names, its descriptor set laid out from
@@ -451,7 +456,13 @@ pub fn render_film_range(
     let accel = match kernel_cfg.hardware {
         Some(masked) => {
             let count = scene.triangles.len() / size_of::<glint_cpu::Triangle>();
-            Some(build_accel(ctx, triangles, count as u32, masked)?)
+            Some(build_accel(
+                ctx,
+                triangles,
+                count as u32,
+                masked,
+                kernel_cfg.blas_parts,
+            )?)
         }
         None => None,
     };
@@ -669,6 +680,26 @@ pub fn alpha_tested(scene: &Scene) -> Vec<bool> {
         .collect()
 }
 
+/// The GPU's choices for one render: kernel, traversal and, for the
+/// hardware traversal, the bottom-level structures to split the scene into.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GpuSetup {
+    pub kernel: KernelChoice,
+    pub traversal: Traversal,
+    /// 1: one BLAS over the scene (the default).
+    pub blas_parts: u32,
+}
+
+impl From<(KernelChoice, Traversal)> for GpuSetup {
+    fn from((kernel, traversal): (KernelChoice, Traversal)) -> Self {
+        GpuSetup {
+            kernel,
+            traversal,
+            blas_parts: 1,
+        }
+    }
+}
+
 /// [`render_on`] with a choice of kernel and traversal (a hardware one
 /// needs a context from [`Context::new_ray_tracing`] with its API) and a
 /// pipeline cache.
@@ -676,10 +707,15 @@ pub fn render_with(
     ctx: &Context,
     scene: &Scene,
     opts: &RenderOptions,
-    (kernel, traversal): (KernelChoice, Traversal),
+    setup: impl Into<GpuSetup>,
     cache: vk::PipelineCache,
     progress: &dyn Fn(u32, u32),
 ) -> Result<GpuRender, GpuError> {
+    let GpuSetup {
+        kernel,
+        traversal,
+        blas_parts,
+    } = setup.into();
     let start = Instant::now();
     let traversal = traversal.resolve(ctx);
     traversal.check(ctx)?;
@@ -712,6 +748,7 @@ pub fn render_with(
             ..Default::default()
         },
         hardware: masked.as_deref(),
+        blas_parts,
     };
     let r = render_film_range(ctx, &cfg, &bytes, opts.width, opts.height, range, progress)?;
     let info = ctx.info();
