@@ -596,6 +596,19 @@ fn warnings_strict_background_and_the_no_light_rule() {
     assert_eq!(mean_of_exr(&dir.join("dark.exr")), 0.0);
     let out = render(&["--background", "1,2"], "bad.exr");
     assert_one_line_error(&out, "R,G,B");
+    // The hardware traversal's options without it: a warning, not silence.
+    let out = render(
+        &["--background", "0.1,0.1,0.1", "--blas-parts", "4"],
+        "parts.exr",
+    );
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--blas-parts apply to --traversal hardware only: ignored"),
+        "{err}"
+    );
+    let out = render(&["--blas-parts", "0"], "zero.exr");
+    assert!(!out.status.success());
 }
 
 /// `glint info` of a bundled asset, which must succeed.

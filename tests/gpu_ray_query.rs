@@ -459,7 +459,49 @@ fn hardware_traversal_images() {
     images(&["cornell.gltf"]);
     if let Some((_, _, apis)) = rt_context() {
         bench_compares_traversals(&apis);
+        render_reports_the_api(&apis);
     }
+}
+
+/// `glint render --traversal hardware` with each `--ray-tracing` the device
+/// has (and `auto`) names the API it traced with in `--stats`.
+fn render_reports_the_api(apis: &[Api]) {
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/cornell.gltf");
+    let dir = std::env::temp_dir().join(format!("glint-rt-stats-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let auto = if apis.contains(&Api::Query) {
+        "query"
+    } else {
+        "pipeline"
+    };
+    let mut runs = vec![("auto", auto)];
+    runs.extend(apis.iter().map(|a| match a {
+        Api::Query => ("query", "query"),
+        Api::Pipeline => ("pipeline", "pipeline"),
+    }));
+    for (arg, want) in runs {
+        let stats = dir.join(format!("{arg}.json"));
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_glint"))
+            .args(["render", "--backend", "gpu", "--traversal", "hardware"])
+            .args(["--ray-tracing", arg, "--blas-parts", "3", "--width", "32"])
+            .args(["--spp", "2", "--quiet", "-o"])
+            .arg(dir.join(format!("{arg}.png")))
+            .arg("--stats")
+            .arg(&stats)
+            .arg(&scene)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let doc: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(doc["traversal"], "hardware", "{doc}");
+        assert_eq!(doc["ray_tracing"], want, "--ray-tracing {arg}: {doc}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// `glint bench --compare-traversals`: the GPU with the software traversal

@@ -319,6 +319,13 @@ pub fn render_options(
         .unwrap_or(1.0);
     let mut warnings = Vec::new();
     let (width, height) = image_size(o, aspect, &mut warnings)?;
+    if o.traversal == crate::cli::TraversalArg::Software
+        && (o.ray_tracing != crate::cli::RayTracingArg::Auto || o.blas_parts != 1)
+    {
+        warnings.push(
+            "--ray-tracing and --blas-parts apply to --traversal hardware only: ignored".into(),
+        );
+    }
     if o.strict
         && let Some(w) = warnings.first()
     {
