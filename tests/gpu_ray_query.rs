@@ -14,9 +14,12 @@
 //! a ray within rounding of a shared edge may report the neighbour at the
 //! same distance, and a grazing ray may hit in one and miss in the other: at
 //! most 1 in 10^4 rays may differ so. Images: the same seed traces the same
-//! paths as the software kernel, and passes the statistical comparison with
+//! paths as the software kernel (the Cornell box) and as the CPU path
+//! tracer (every bundled scene), and passes the statistical comparison with
 //! the CPU backend. Degenerate scenes: empty, one triangle, 2^20 triangles
-//! of an instanced mesh with a coincident instance.
+//! of an instanced mesh with a coincident instance. The per-ray and image
+//! tests run over one bottom-level structure and over several
+//! (`--blas-parts`).
 //!
 //! Each API is skipped (with a line on stderr) where the device lacks it.
 
@@ -566,32 +569,21 @@ fn bench_compares_traversals(apis: &[Api]) {
     assert_eq!(names, want, "{doc}");
 }
 
-/// The textured scene too (alpha masks, texture reads in the ray-query
-/// kernel): 7.8 minutes here, almost all of it Mesa's cold LLVM compile of
-/// the textured ray-query kernel on the 2-core VM (passed 2026-12-02, 768
-/// of 768 pixels as the software kernel's), too long for CI's budget.
-#[test]
-#[ignore = "7.8 min of cold shader compilation on 2 cores: cargo test --test gpu_ray_query -- --ignored"]
-fn hardware_traversal_images_textured() {
-    images(&["textured.gltf"]);
-}
-
-/// Every bundled scene through the ray tracing pipeline, with the generic
-/// kernel (one cold compile, 96 s here, serves all nine, where specialised
-/// pipelines would compile per feature set): it traces the CPU path
+/// Every bundled scene through the hardware traversal by each API, with
+/// the generic kernels (one cold compile each serves all nine scenes: 96 s
+/// for the pipeline, 224 s for the ray-query kernel here, where the
+/// specialised ones would compile per feature set, 7.8 min for the
+/// textured scene's ray-query kernel alone): it traces the CPU path
 /// tracer's paths with the same seed (as tests/pathtrace_kernel.rs holds
 /// the compute kernel to: sums and batch sums within 1e-3 relative in 98%
-/// of the pixels, ray counts within 1%) and agrees with the CPU statistically.
-/// The textured scene runs the path tracer's any-hit shader (its alpha
-/// masks) and texture reads in ray generation.
+/// of the pixels, ray counts within 1%) and agrees with the CPU
+/// statistically. The textured scene runs the alpha test (the pipeline's
+/// any-hit shader, the ray-query loop) and texture reads.
 #[test]
-fn hardware_pipeline_traces_the_cpu_paths_in_every_bundled_scene() {
+fn hardware_traversal_traces_the_cpu_paths_in_every_bundled_scene() {
     let Some((ctx, log, apis)) = rt_context() else {
         return;
     };
-    if !apis.contains(&Api::Pipeline) {
-        return;
-    }
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
     let mut names: Vec<String> = std::fs::read_dir(&dir)
         .unwrap()
@@ -600,7 +592,8 @@ fn hardware_pipeline_traces_the_cpu_paths_in_every_bundled_scene() {
         .collect();
     names.sort();
     assert!(names.len() >= 9, "{names:?}");
-    for name in &names {
+    let runs = apis.iter().flat_map(|&a| names.iter().map(move |n| (a, n)));
+    for (api, name) in runs {
         let scene = load(name);
         let opts = RenderOptions {
             spp: 16,
@@ -608,10 +601,15 @@ fn hardware_pipeline_traces_the_cpu_paths_in_every_bundled_scene() {
             variance_batch: 4,
             ..RenderOptions::new(32, 24)
         };
-        let kernel = (KernelChoice::Generic, Traversal::Pipeline);
+        let traversal = match api {
+            Api::Query => Traversal::RayQuery,
+            Api::Pipeline => Traversal::Pipeline,
+        };
+        let kernel = (KernelChoice::Generic, traversal);
         let cache = ash::vk::PipelineCache::null();
         let r = render_with(&ctx, &scene, &opts, kernel, cache, &|_, _| {}).unwrap();
-        assert_eq!(r.traversal, Traversal::Pipeline);
+        assert_eq!(r.traversal, traversal);
+        let name = format!("{name} ({api:?})");
         let (gpu, gpu_rays) = (r.film, r.stats.rays);
         let (cpu, cpu_stats) = glint::cpu::render(&scene, &opts, &|_, _| {}).unwrap();
         let near = |a: glam::Vec3, b: glam::Vec3| {
@@ -633,7 +631,7 @@ fn hardware_pipeline_traces_the_cpu_paths_in_every_bundled_scene() {
             cpu.sum.len()
         );
         assert!(rel < 0.01, "{name}: rays {gpu_rays} vs {}", cpu_stats.rays);
-        assert!(c.pass, "{name}: the pipeline against the CPU: {c}");
+        assert!(c.pass, "{name} against the CPU: {c}");
     }
     finish(ctx, log);
 }
