@@ -308,16 +308,7 @@ impl<'a> Kernel<'a> {
         }
         .map_err(|e| GpuError::from_vk("vkCreateShaderModule", e))?;
         let entry: &CStr = c"main";
-        // Constant i of the shader (`layout(constant_id = i)`) is the 4
-        // bytes options.specialization[i].
-        let map: Vec<vk::SpecializationMapEntry> = (0..options.specialization.len() as u32)
-            .map(|i| {
-                vk::SpecializationMapEntry::default()
-                    .constant_id(i)
-                    .offset(4 * i)
-                    .size(4)
-            })
-            .collect();
+        let map = specialization_map(options.specialization);
         let data: &[u8] = bytemuck::cast_slice(options.specialization);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&map)
@@ -563,6 +554,19 @@ impl<'a> Kernel<'a> {
         })?;
         recorded
     }
+}
+
+/// Constant i of the shader (`layout(constant_id = i)`) is the 4 bytes
+/// `values[i]`.
+pub(crate) fn specialization_map(values: &[u32]) -> Vec<vk::SpecializationMapEntry> {
+    (0..values.len() as u32)
+        .map(|i| {
+            vk::SpecializationMapEntry::default()
+                .constant_id(i)
+                .offset(4 * i)
+                .size(4)
+        })
+        .collect()
 }
 
 /// The shader stages that see a kernel's bindings and push constants.

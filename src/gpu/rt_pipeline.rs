@@ -153,14 +153,7 @@ pub(crate) fn create_pipeline(
                 .map_err(|e| GpuError::from_vk("vkCreateShaderModule", e))?;
             modules.push(module);
         }
-        let map: Vec<vk::SpecializationMapEntry> = (0..specialization.len() as u32)
-            .map(|i| {
-                vk::SpecializationMapEntry::default()
-                    .constant_id(i)
-                    .offset(4 * i)
-                    .size(4)
-            })
-            .collect();
+        let map = super::kernel::specialization_map(specialization);
         let spec = vk::SpecializationInfo::default()
             .map_entries(&map)
             .data(bytemuck::cast_slice(specialization));
@@ -180,24 +173,7 @@ pub(crate) fn create_pipeline(
                 }
             })
             .collect();
-        let general = |i: usize| {
-            vk::RayTracingShaderGroupCreateInfoKHR::default()
-                .ty(vk::RayTracingShaderGroupTypeKHR::GENERAL)
-                .general_shader(i as u32)
-                .closest_hit_shader(vk::SHADER_UNUSED_KHR)
-                .any_hit_shader(vk::SHADER_UNUSED_KHR)
-                .intersection_shader(vk::SHADER_UNUSED_KHR)
-        };
-        let n_miss = stages.miss.len();
-        let mut groups: Vec<_> = (0..=n_miss).map(general).collect();
-        groups.push(
-            vk::RayTracingShaderGroupCreateInfoKHR::default()
-                .ty(vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP)
-                .general_shader(vk::SHADER_UNUSED_KHR)
-                .closest_hit_shader(n_miss as u32 + 1)
-                .any_hit_shader(n_miss as u32 + 2)
-                .intersection_shader(vk::SHADER_UNUSED_KHR),
-        );
+        let groups = shader_groups(stages.miss.len() as u32);
         let info = [vk::RayTracingPipelineCreateInfoKHR::default()
             .stages(&stage_infos)
             .groups(&groups)
@@ -220,6 +196,31 @@ pub(crate) fn create_pipeline(
         unsafe { ctx.device.destroy_shader_module(m, None) };
     }
     result
+}
+
+/// The groups over the modules raygen, `n_miss` miss shaders, closest hit,
+/// any hit: one general group each for ray generation and the misses, then
+/// the triangles hit group.
+fn shader_groups(n_miss: u32) -> Vec<vk::RayTracingShaderGroupCreateInfoKHR<'static>> {
+    let group = |ty, general, closest, any| {
+        vk::RayTracingShaderGroupCreateInfoKHR::default()
+            .ty(ty)
+            .general_shader(general)
+            .closest_hit_shader(closest)
+            .any_hit_shader(any)
+            .intersection_shader(vk::SHADER_UNUSED_KHR)
+    };
+    let unused = vk::SHADER_UNUSED_KHR;
+    let mut groups: Vec<_> = (0..=n_miss)
+        .map(|i| group(vk::RayTracingShaderGroupTypeKHR::GENERAL, i, unused, unused))
+        .collect();
+    groups.push(group(
+        vk::RayTracingShaderGroupTypeKHR::TRIANGLES_HIT_GROUP,
+        unused,
+        n_miss + 1,
+        n_miss + 2,
+    ));
+    groups
 }
 
 /// A pipeline's shader binding table on the device and its regions, as
