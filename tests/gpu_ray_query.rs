@@ -33,7 +33,7 @@ use glint::cpu::compare::compare_films;
 use glint::cpu::{Bvh, Bvh4, Film, Ray, RenderOptions, Scene, Triangle};
 use glint::gpu::accel::Accel;
 use glint::gpu::render::{GpuSetup, KernelChoice, Traversal, render_with};
-use glint::gpu::rt_pipeline::RtStages;
+use glint::gpu::rt_pipeline::{PATH_TRACER_STAGES, RtStages};
 use glint::gpu::{Buffer, BufferKind, Context, ContextDesc, GpuError, Kernel, KernelOptions};
 use glint::gpu::{ValidationLog, groups};
 
@@ -87,10 +87,9 @@ fn rt_context() -> Option<(Context, Option<std::sync::Arc<ValidationLog>>, Vec<A
 /// tests/rt_test.rgen's other stages: the path tracer's miss and closest-hit
 /// shaders, the test's alpha test; one ray per launch item.
 const RT_TEST_STAGES: RtStages = RtStages {
-    miss: &["rt/miss", "rt/shadow_miss"],
-    closest_hit: "rt/closest_hit",
     any_hit: "tests/rt_mask_test",
     group_size: [64, 1],
+    ..PATH_TRACER_STAGES
 };
 
 /// Drop the context and assert the layer said nothing.

@@ -27,7 +27,6 @@ layout(location = RT_SHADOW_PAYLOAD) rayPayloadEXT uint rt_occluded;
 
 // Closest hit in [0, tmax].
 bool bvh_intersect(vec3 o, vec3 d, float tmax, out Hit hit) {
-    rt_hit.geometry = RT_MISS;
     traceRayEXT(tlas, gl_RayFlagsNoneEXT, 0xffu, 0u, 0u, RT_MISS_HIT, o, 0.0, d, tmax,
                 RT_HIT_PAYLOAD);
     if (rt_hit.geometry == RT_MISS) {

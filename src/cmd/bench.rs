@@ -130,7 +130,7 @@ fn render_rows(
     let given = (args.scene.opts.traversal, args.scene.opts.ray_tracing);
     let mut runs = vec![(Backend::Gpu, given)];
     if args.compare_traversals {
-        runs = vec![(Backend::Gpu, (TraversalArg::Software, RayTracingArg::Auto))];
+        runs[0].1 = (TraversalArg::Software, RayTracingArg::Auto);
         let rt = glint::gpu::context::ray_tracing_support(args.scene.opts.device.as_deref())?;
         for (has, api) in [
             (rt.query, RayTracingArg::Query),

@@ -189,6 +189,8 @@ pub struct Context {
     force_staging: bool,
     /// What of Vulkan ray tracing is enabled ([`Context::new_ray_tracing`]).
     ray_tracing: RayTracing,
+    /// `VK_KHR_ray_tracing_pipeline`'s functions, where it is enabled.
+    rt_pipeline_fn: Option<ash::khr::ray_tracing_pipeline::Device>,
     /// Every pipeline this context built, by what defines it
     /// ([`super::kernel::PipelineKey`]), kept until the context goes: a
     /// kernel made again (the next render of a sweep, a converge series,
@@ -219,12 +221,10 @@ fn type_rank(t: vk::PhysicalDeviceType) -> u32 {
 }
 
 /// What of Vulkan ray tracing a context enabled: acceleration structures
-/// and buffer device addresses, with ray queries, a ray tracing pipeline,
-/// or both (none of it for [`Context::new`]).
+/// and buffer device addresses come with ray queries, a ray tracing
+/// pipeline, or both (none of it for [`Context::new`]).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RayTracing {
-    /// `VK_KHR_acceleration_structure` (and buffer device addresses).
-    pub acceleration_structures: bool,
     /// `VK_KHR_ray_query`.
     pub query: bool,
     /// `VK_KHR_ray_tracing_pipeline`, with the device's shader binding
@@ -240,6 +240,14 @@ pub struct RtPipelineProperties {
     pub shader_group_base_alignment: u32,
     pub max_ray_recursion_depth: u32,
     pub max_ray_dispatch_invocation_count: u32,
+}
+
+impl RayTracing {
+    /// `VK_KHR_acceleration_structure` (and buffer device addresses): with
+    /// either API.
+    pub fn acceleration_structures(&self) -> bool {
+        self.query || self.pipeline.is_some()
+    }
 }
 
 /// What [`Context::create`] enables of ray tracing.
@@ -317,8 +325,13 @@ impl Context {
             &device,
             pd,
             queue_family,
-            ray_tracing.acceleration_structures,
+            ray_tracing.acceleration_structures(),
         )?;
+        // The pipeline's entry points, loaded once for every pipeline,
+        // shader binding table and launch.
+        let rt_pipeline_fn = ray_tracing
+            .pipeline
+            .map(|_| ash::khr::ray_tracing_pipeline::Device::new(&instance, &device));
 
         let unified_memory = unified_memory(&instance, pd);
 
@@ -355,6 +368,7 @@ impl Context {
             },
             force_staging: false,
             ray_tracing,
+            rt_pipeline_fn,
             pipelines: Mutex::new(Default::default()),
         })
     }
@@ -362,7 +376,7 @@ impl Context {
     /// Whether acceleration structures (and buffer device addresses) are
     /// enabled.
     pub fn acceleration_structures(&self) -> bool {
-        self.ray_tracing.acceleration_structures
+        self.ray_tracing.acceleration_structures()
     }
 
     /// Whether ray queries are enabled.
@@ -373,6 +387,26 @@ impl Context {
     /// What of ray tracing is enabled.
     pub fn ray_tracing(&self) -> RayTracing {
         self.ray_tracing
+    }
+
+    /// The ray tracing pipeline's functions and the device's properties
+    /// for it, or the error where the pipeline is not enabled.
+    pub(crate) fn rt_pipeline(
+        &self,
+    ) -> Result<
+        (
+            &ash::khr::ray_tracing_pipeline::Device,
+            RtPipelineProperties,
+        ),
+        GpuError,
+    > {
+        match (&self.rt_pipeline_fn, self.ray_tracing.pipeline) {
+            (Some(f), Some(p)) => Ok((f, p)),
+            _ => Err(GpuError::Invalid(
+                "a ray tracing pipeline needs a context with VK_KHR_ray_tracing_pipeline enabled"
+                    .into(),
+            )),
+        }
     }
 
     pub fn info(&self) -> &DeviceInfo {
@@ -532,11 +566,7 @@ fn check_ray_tracing(
             max_ray_dispatch_invocation_count: p.max_ray_dispatch_invocation_count,
         }
     });
-    Ok(RayTracing {
-        acceleration_structures: true,
-        query,
-        pipeline,
-    })
+    Ok(RayTracing { query, pipeline })
 }
 
 /// Destroys the instance (and messenger) when device setup fails part way.
@@ -880,7 +910,7 @@ fn create_device(
         .features(features10)
         .push_next(&mut features11)
         .push_next(&mut features12);
-    if ray_tracing.acceleration_structures {
+    if ray_tracing.acceleration_structures() {
         features = features.push_next(&mut accel_features);
     }
     if ray_tracing.query {

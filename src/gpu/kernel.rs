@@ -517,10 +517,7 @@ impl<'a> Kernel<'a> {
                 Some((rt_stages, sbt)) => {
                     let [w, h, depth] = launch_size(rt_stages, groups);
                     let [raygen, miss, hit, callable] = &sbt.regions;
-                    let loader = ash::khr::ray_tracing_pipeline::Device::new(
-                        &self.ctx.instance,
-                        &self.ctx.device,
-                    );
+                    let (loader, _) = self.ctx.rt_pipeline()?;
                     loader.cmd_trace_rays(cmd, raygen, miss, hit, callable, w, h, depth);
                 }
             }

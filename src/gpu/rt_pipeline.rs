@@ -44,7 +44,8 @@ pub const PATH_TRACER_STAGES: RtStages = RtStages {
     miss: &["rt/miss", "rt/shadow_miss"],
     closest_hit: "rt/closest_hit",
     any_hit: "rt/any_hit",
-    group_size: [8, 8],
+    // The compute kernel's grid (render.rs dispatches both alike).
+    group_size: [super::render::LOCAL_SIZE, super::render::LOCAL_SIZE],
 };
 
 /// The descriptor and push-constant stages of a ray tracing pipeline.
@@ -122,12 +123,7 @@ pub(crate) fn create_pipeline(
     specialization: &[u32],
     cache: vk::PipelineCache,
 ) -> Result<vk::Pipeline, GpuError> {
-    let Some(props) = ctx.ray_tracing().pipeline else {
-        return Err(GpuError::Invalid(
-            "a ray tracing pipeline needs a context with VK_KHR_ray_tracing_pipeline enabled"
-                .into(),
-        ));
-    };
+    let (loader, props) = ctx.rt_pipeline()?;
     if props.max_ray_recursion_depth < 1 {
         return Err(GpuError::Invalid(
             "the device's maxRayRecursionDepth is 0".into(),
@@ -179,7 +175,6 @@ pub(crate) fn create_pipeline(
             .groups(&groups)
             .max_pipeline_ray_recursion_depth(1)
             .layout(layout)];
-        let loader = ash::khr::ray_tracing_pipeline::Device::new(&ctx.instance, &ctx.device);
         let pipelines = unsafe {
             loader.create_ray_tracing_pipelines(
                 vk::DeferredOperationKHR::null(),
@@ -238,13 +233,10 @@ impl<'a> Sbt<'a> {
         pipeline: vk::Pipeline,
         stages: &RtStages,
     ) -> Result<Self, GpuError> {
-        let props = ctx.ray_tracing().pipeline.ok_or_else(|| {
-            GpuError::Invalid("a shader binding table needs a ray tracing pipeline".into())
-        })?;
+        let (loader, props) = ctx.rt_pipeline()?;
         let n_miss = stages.miss.len() as u32;
         let groups = n_miss + 2;
         let handle = props.shader_group_handle_size as usize;
-        let loader = ash::khr::ray_tracing_pipeline::Device::new(&ctx.instance, &ctx.device);
         let handles = unsafe {
             loader.get_ray_tracing_shader_group_handles(
                 pipeline,
