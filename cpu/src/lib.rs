@@ -16,6 +16,7 @@ pub mod features;
 pub mod film;
 pub mod frame;
 pub mod integrator;
+pub mod lanes;
 pub mod lights;
 pub mod loader;
 pub mod metrics;

@@ -5,10 +5,11 @@
 
 use glam::{Vec2, Vec3};
 
+use crate::lanes::V3;
+
 use super::fresnel::fresnel_conductor;
 use super::microfacet::{
-    MIN_ALPHA, ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility,
-    reflect_dir,
+    MIN_ALPHA, ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
 };
 use super::multiscatter::{conductor_ms_eval, fresnel_conductor_avg, ms_albedo};
 use super::warp::square_to_cosine_hemisphere;
@@ -21,11 +22,8 @@ pub fn rough_alphas(r: &Roughness) -> (f32, f32) {
 
 /// Mirror both directions to the upper hemisphere when wo is below it.
 pub fn two_sided(wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
-    if wo.z < 0.0 {
-        (Vec3::new(wo.x, wo.y, -wo.z), Vec3::new(wi.x, wi.y, -wi.z))
-    } else {
-        (wo, wi)
-    }
+    let (wo, wi) = lanes::two_sided(wo.into(), wi.into());
+    (wo.into(), wi.into())
 }
 
 /// With `multiscatter`: the tables' alpha (sqrt(alpha_u alpha_v)), the
@@ -57,13 +55,7 @@ pub fn conductor_eval(c: &ConductorParams, wo: Vec3, wi: Vec3) -> Vec3 {
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
     }
-    let (ax, ay) = rough_alphas(&c.roughness);
-    // wo, wi both above: the half vector has z > 0 and is never zero.
-    let wm = (wo + wi).normalize();
-    let f = fresnel_conductor(wo.dot(wm), c.eta, c.k) * c.specular_reflectance;
-    let separable = c.roughness.shadowing == Shadowing::Separable;
-    // Walter 2007 eq. 20: D F G / (4 |co| |ci|), with V = G / (4 |co| |ci|).
-    let f_ss = f * (ggx_d(wm, ax, ay) * ggx_visibility(wo, wi, ax, ay, separable));
+    let f_ss: Vec3 = lanes::rough_eval(&RoughConductor::of(c), wo.into(), wi.into()).into();
     match conductor_ms_params(c) {
         Some((a, sep, f_avg)) => f_ss + conductor_ms_eval(wo.z, wi.z, a, sep, f_avg),
         None => f_ss,
@@ -78,14 +70,7 @@ pub fn conductor_pdf(c: &ConductorParams, wo: Vec3, wi: Vec3) -> f32 {
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return 0.0;
     }
-    let (ax, ay) = rough_alphas(&c.roughness);
-    let wm = (wo + wi).normalize();
-    let dot = wo.dot(wm);
-    if dot <= 0.0 {
-        return 0.0;
-    }
-    // Reflection Jacobian dwm/dwi = 1 / (4 |wo . wm|) (Walter 2007 eq. 14).
-    let pdf_ss = ggx_pdf_visible(wo, wm, ax, ay) / (4.0 * dot);
+    let pdf_ss = lanes::rough_pdf(&RoughConductor::of(c), wo.into(), wi.into());
     match conductor_ms_params(c) {
         Some((a, sep, _)) => {
             let p = conductor_ms_prob(wo.z, a, sep);
@@ -111,40 +96,122 @@ pub fn conductor_sample(c: &ConductorParams, wo: Vec3, u: Vec2) -> Option<BsdfSa
             eta: 1.0,
         });
     }
-    let (ax, ay) = rough_alphas(&c.roughness);
     if let Some((a, sep, f_avg)) = conductor_ms_params(c) {
-        return conductor_sample_ms(c, wo_up, flip, u, (ax, ay), (a, sep, f_avg));
+        let ax_ay = rough_alphas(&c.roughness);
+        return conductor_sample_ms(c, wo_up, flip, u, ax_ay, (a, sep, f_avg));
     }
-    let wm = ggx_sample_visible(wo_up, ax, ay, u);
-    let dot = wo_up.dot(wm);
-    let mut wi = reflect_dir(wo_up, wm);
-    if wi.z <= 0.0 || dot <= 0.0 {
-        return None;
+    lanes::rough_sample(&RoughConductor::of(c), wo.into(), u.into()).single()
+}
+
+/// A rough conductor's parameters, one per lane (its single-scattering
+/// lobe: the multiple-scattering one stays scalar).
+#[derive(Clone, Copy, Debug)]
+pub struct RoughConductor<L> {
+    pub eta: V3<L>,
+    pub k: V3<L>,
+    pub specular_reflectance: V3<L>,
+    /// The clamped alphas ([`rough_alphas`]).
+    pub ax: L,
+    pub ay: L,
+    /// The same in every lane.
+    pub separable: bool,
+}
+
+impl RoughConductor<f32> {
+    pub fn of(c: &ConductorParams) -> Self {
+        let (ax, ay) = rough_alphas(&c.roughness);
+        Self {
+            eta: c.eta.into(),
+            k: c.k.into(),
+            specular_reflectance: c.specular_reflectance.into(),
+            ax,
+            ay,
+            separable: c.roughness.shadowing == Shadowing::Separable,
+        }
     }
-    // pdf and weight from the sampled microfacet normal (pbrt-v4 does the
-    // same): recomputing the half vector from wo + wi is ill-conditioned
-    // for near-specular lobes at grazing angles, where wo and wi are
-    // nearly opposite in the plane and their sum loses most of its bits.
-    let pdf = ggx_pdf_visible(wo_up, wm, ax, ay) / (4.0 * dot);
-    let g1 = ggx_g1(wo_up, ax, ay);
-    if !(pdf > 0.0) || !pdf.is_finite() || !(g1 > 0.0) {
-        return None;
+}
+
+/// The rough conductor's single-scattering lobe over any
+/// [`crate::lanes::Lane`] type: one source with the scalar forms above.
+pub mod lanes {
+    use super::RoughConductor;
+    use crate::bsdf::LaneSample;
+    use crate::bsdf::fresnel::lanes::fresnel_conductor;
+    use crate::bsdf::microfacet::lanes::{
+        ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
+    };
+    use crate::lanes::{Lane, V2, V3};
+
+    /// Both directions mirrored to the upper hemisphere where wo is below
+    /// it (Mitsuba's `twosided`).
+    #[inline(always)]
+    pub fn two_sided<L: Lane>(wo: V3<L>, wi: V3<L>) -> (V3<L>, V3<L>) {
+        let flip = wo.z.lt(L::zero());
+        let up = |w: V3<L>| V3::new(w.x, w.y, L::select(flip, -w.z, w.z));
+        (up(wo), up(wi))
     }
-    let separable = c.roughness.shadowing == Shadowing::Separable;
-    // f |cos_i| / pdf = F G2 / G1(wo) (Heitz 2018, eq. 19): D and the
-    // reflection Jacobian cancel.
-    let f = fresnel_conductor(dot, c.eta, c.k) * c.specular_reflectance;
-    let weight = f * (ggx_g2(wo_up, wi, ax, ay, separable) / g1);
-    if flip {
-        wi.z = -wi.z;
+
+    #[inline(always)]
+    fn fresnel<L: Lane>(c: &RoughConductor<L>, cos: L) -> V3<L> {
+        fresnel_conductor(cos, c.eta, c.k) * c.specular_reflectance
     }
-    Some(BsdfSample {
-        wi,
-        weight,
-        pdf,
-        delta: false,
-        eta: 1.0,
-    })
+
+    /// f(wo, wi): Walter 2007 eq. 20, D F G / (4 |co| |ci|), with
+    /// V = G / (4 |co| |ci|).
+    #[inline(always)]
+    pub fn rough_eval<L: Lane>(c: &RoughConductor<L>, wo: V3<L>, wi: V3<L>) -> V3<L> {
+        let (wo, wi) = two_sided(wo, wi);
+        let below = wo.z.le(L::zero()) | wi.z.le(L::zero());
+        // wo, wi both above: the half vector has z > 0 and is never zero.
+        let wm = (wo + wi).normalize();
+        let dv = ggx_d(wm, c.ax, c.ay) * ggx_visibility(wo, wi, c.ax, c.ay, c.separable);
+        let f = fresnel(c, wo.dot(wm)).scale(dv);
+        let zero = V3::new(L::zero(), L::zero(), L::zero());
+        V3::select(below, zero, f)
+    }
+
+    /// The density of [`rough_sample`].
+    #[inline(always)]
+    pub fn rough_pdf<L: Lane>(c: &RoughConductor<L>, wo: V3<L>, wi: V3<L>) -> L {
+        let (wo, wi) = two_sided(wo, wi);
+        let wm = (wo + wi).normalize();
+        let dot = wo.dot(wm);
+        let none = wo.z.le(L::zero()) | wi.z.le(L::zero()) | dot.le(L::zero());
+        // Reflection Jacobian dwm/dwi = 1 / (4 |wo . wm|) (Walter 2007 eq. 14).
+        let pdf = ggx_pdf_visible(wo, wm, c.ax, c.ay) / (L::splat(4.0) * dot);
+        L::select(none, L::zero(), pdf)
+    }
+
+    /// A visible-normal sample. pdf and weight come from the sampled
+    /// microfacet normal (pbrt-v4 does the same): recomputing the half
+    /// vector from wo + wi is ill-conditioned for near-specular lobes at
+    /// grazing angles, where wo and wi are nearly opposite in the plane
+    /// and their sum loses most of its bits.
+    #[inline(always)]
+    pub fn rough_sample<L: Lane>(c: &RoughConductor<L>, wo: V3<L>, u: V2<L>) -> LaneSample<L> {
+        let flip = wo.z.lt(L::zero());
+        let wo_up = V3::new(wo.x, wo.y, wo.z.abs());
+        let wm = ggx_sample_visible(wo_up, c.ax, c.ay, u);
+        let dot = wo_up.dot(wm);
+        let wi = reflect_dir(wo_up, wm);
+        let pdf = ggx_pdf_visible(wo_up, wm, c.ax, c.ay) / (L::splat(4.0) * dot);
+        let g1 = ggx_g1(wo_up, c.ax, c.ay);
+        let valid = !wo.z.eq(L::zero())
+            & !(wi.z.le(L::zero()) | dot.le(L::zero()))
+            & pdf.gt(L::zero())
+            & pdf.lt(L::splat(f32::INFINITY))
+            & g1.gt(L::zero());
+        // f |cos_i| / pdf = F G2 / G1(wo) (Heitz 2018, eq. 19): D and the
+        // reflection Jacobian cancel.
+        let g2 = ggx_g2(wo_up, wi, c.ax, c.ay, c.separable);
+        let weight = fresnel(c, dot).scale(g2 / g1);
+        LaneSample {
+            valid,
+            wi: V3::new(wi.x, wi.y, L::select(flip, -wi.z, wi.z)),
+            weight,
+            pdf,
+        }
+    }
 }
 
 /// [`conductor_sample`] with the Kulla-Conty lobe: u.x first picks the

@@ -54,32 +54,46 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 /// Equal to pbrt-v4's complex `FrComplex`; with k = 0 and eta > 1 it reduces
 /// to [`fresnel_dielectric`].
 pub fn fresnel_conductor_channel(cos_i: f32, eta: f32, k: f32) -> f32 {
-    let cos_i = cos_i.clamp(0.0, 1.0);
-    let cos2 = cos_i * cos_i;
-    let sin2 = (1.0 - cos2).max(0.0);
-    let eta2 = eta * eta;
-    let k2 = k * k;
-    let t0 = eta2 - k2 - sin2;
-    let a2b2 = (t0 * t0 + 4.0 * eta2 * k2).max(0.0).sqrt();
-    let a = (0.5 * (a2b2 + t0)).max(0.0).sqrt();
-    let t1 = a2b2 + cos2;
-    let t2 = 2.0 * a * cos_i;
-    // t1 + t2 = 0 only for a2b2 = 0 and cos_i = 0 (eta = 1, k = 0 at
-    // grazing): a vacuum "interface", whose grazing reflectance is 1.
-    let denom_s = t1 + t2;
-    if denom_s <= 0.0 {
-        return 1.0;
+    lanes::fresnel_conductor_channel(cos_i, eta, k)
+}
+
+/// The conductor's Fresnel term over any [`crate::lanes::Lane`] type (one
+/// source with the scalar form above; its early return is a select).
+pub mod lanes {
+    use crate::lanes::{Lane, V3};
+
+    #[inline(always)]
+    pub fn fresnel_conductor_channel<L: Lane>(cos_i: L, eta: L, k: L) -> L {
+        let cos_i = cos_i.clamp(0.0, 1.0);
+        let cos2 = cos_i * cos_i;
+        let sin2 = (L::one() - cos2).max(L::zero());
+        let eta2 = eta * eta;
+        let k2 = k * k;
+        let t0 = eta2 - k2 - sin2;
+        let a2b2 = (t0 * t0 + L::splat(4.0) * eta2 * k2).max(L::zero()).sqrt();
+        let a = (L::splat(0.5) * (a2b2 + t0)).max(L::zero()).sqrt();
+        let t1 = a2b2 + cos2;
+        let t2 = L::splat(2.0) * a * cos_i;
+        // t1 + t2 = 0 only for a2b2 = 0 and cos_i = 0 (eta = 1, k = 0 at
+        // grazing): a vacuum "interface", whose grazing reflectance is 1.
+        let denom_s = t1 + t2;
+        let rs = (t1 - t2) / denom_s;
+        let t3 = cos2 * a2b2 + sin2 * sin2;
+        let t4 = t2 * sin2;
+        let denom_p = t3 + t4;
+        let rp = L::select(denom_p.gt(L::zero()), rs * (t3 - t4) / denom_p, rs);
+        L::select(denom_s.le(L::zero()), L::one(), L::splat(0.5) * (rs + rp))
     }
-    let rs = (t1 - t2) / denom_s;
-    let t3 = cos2 * a2b2 + sin2 * sin2;
-    let t4 = t2 * sin2;
-    let denom_p = t3 + t4;
-    let rp = if denom_p > 0.0 {
-        rs * (t3 - t4) / denom_p
-    } else {
-        rs
-    };
-    0.5 * (rs + rp)
+
+    /// Per RGB channel.
+    #[inline(always)]
+    pub fn fresnel_conductor<L: Lane>(cos_i: L, eta: V3<L>, k: V3<L>) -> V3<L> {
+        V3::new(
+            fresnel_conductor_channel(cos_i, eta.x, k.x),
+            fresnel_conductor_channel(cos_i, eta.y, k.y),
+            fresnel_conductor_channel(cos_i, eta.z, k.z),
+        )
+    }
 }
 
 /// [`fresnel_conductor_channel`] for each RGB channel.

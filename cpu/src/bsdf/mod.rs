@@ -10,6 +10,7 @@
 // reads the same as the GLSL twin in shaders/bsdf.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+use crate::lanes::{Lane, V3};
 use glam::{Vec2, Vec3};
 
 pub mod clearcoat;
@@ -158,6 +159,30 @@ pub struct BsdfSample {
     pub delta: bool,
     /// Relative IOR eta_t/eta_i crossed by a transmission, 1 for reflection.
     pub eta: f32,
+}
+
+/// A non-delta reflection sample of the lane-generic BSDFs
+/// (`bsdf::*::lanes`): a [`BsdfSample`] per lane where `valid` holds.
+#[derive(Clone, Copy, Debug)]
+pub struct LaneSample<L: Lane> {
+    pub valid: L::Mask,
+    pub wi: V3<L>,
+    pub weight: V3<L>,
+    pub pdf: L,
+}
+
+impl LaneSample<f32> {
+    /// The one lane's sample (reflection: not a delta, eta 1).
+    #[inline(always)]
+    pub fn single(self) -> Option<BsdfSample> {
+        self.valid.then(|| BsdfSample {
+            wi: self.wi.into(),
+            weight: self.weight.into(),
+            pdf: self.pdf,
+            delta: false,
+            eta: 1.0,
+        })
+    }
 }
 
 impl Bsdf {

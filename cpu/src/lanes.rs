@@ -1,0 +1,537 @@
+//! Lanes: the BSDF and sampling math written once over a lane type, so that
+//! one source runs one path per call (`f32`, the scalar reference the GPU
+//! matches) or eight side by side ([`F32x8`]), as Mitsuba 3 writes its
+//! plugins once over Dr.Jit's types.
+//!
+//! - [`Lane`] is the arithmetic the shared code may use: the four
+//!   operations, comparisons giving a [`Lane::Mask`], `select` in place of
+//!   a branch, `sqrt`, `abs`, `min`/`max`/`clamp` with `f32`'s NaN rules,
+//!   and `sin_cos`. A branch of the scalar code becomes a select of both
+//!   sides; a lane whose inputs make NaN or infinity on the side not taken
+//!   is harmless, since the select drops it.
+//! - `f32` implements it with the plain scalar operations (its mask is a
+//!   `bool`), so the one-lane instantiation computes what the scalar code
+//!   always did, bit for bit (the BSDF tests and the GPU twins pin it).
+//! - [`F32x8`] is eight `f32` in an array, every operation a loop over the
+//!   lanes that LLVM turns into SIMD instructions of the function it is
+//!   compiled in: callers run the wide code in a function compiled for
+//!   AVX2 (and FMA-free, so the lanes round as the scalar code does) where
+//!   [`SimdLevel::detect`] finds it, and in a baseline SSE2 function
+//!   elsewhere ([`simd_at!`](crate::simd_at) makes both copies). The operations are exact per lane
+//!   (IEEE add, sub, mul, div, sqrt), except `sin_cos`: a Cody-Waite
+//!   reduction and Cephes' minimax polynomials, within 2e-7 of libm on the
+//!   angles the samplers use (|x| <= 2 pi).
+//! - [`V3`] is a 3-vector of lanes with glam's formulas (`dot` summed in
+//!   x, y, z order, `normalize` as v * (1 / |v|)), so that `V3<f32>`
+//!   rounds as `glam::Vec3` does.
+
+use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
+
+use glam::{Vec2, Vec3};
+
+/// The arithmetic the lane-generic code uses (see the module notes).
+pub trait Lane:
+    Copy
+    + std::fmt::Debug
+    + Add<Output = Self>
+    + Sub<Output = Self>
+    + Mul<Output = Self>
+    + Div<Output = Self>
+    + Neg<Output = Self>
+{
+    /// One boolean per lane.
+    type Mask: Copy
+        + std::fmt::Debug
+        + BitAnd<Output = Self::Mask>
+        + BitOr<Output = Self::Mask>
+        + Not<Output = Self::Mask>;
+    /// Lanes side by side.
+    const LANES: usize;
+    fn splat(v: f32) -> Self;
+    fn lt(self, o: Self) -> Self::Mask;
+    fn le(self, o: Self) -> Self::Mask;
+    fn gt(self, o: Self) -> Self::Mask;
+    fn eq(self, o: Self) -> Self::Mask;
+    /// `t` in the lanes where `m` holds, else `f`.
+    fn select(m: Self::Mask, t: Self, f: Self) -> Self;
+    fn sqrt(self) -> Self;
+    fn abs(self) -> Self;
+    /// `f32::min` per lane (a NaN operand gives the other).
+    fn min(self, o: Self) -> Self;
+    /// `f32::max` per lane.
+    fn max(self, o: Self) -> Self;
+    /// `f32::clamp` per lane (NaN stays NaN).
+    fn clamp(self, lo: f32, hi: f32) -> Self;
+    /// `(sin, cos)`: libm's for `f32`, a polynomial for wide lanes.
+    fn sin_cos(self) -> (Self, Self);
+    /// Whether any lane of `m` holds.
+    fn any(m: Self::Mask) -> bool;
+    /// Lane `i` (i < LANES).
+    fn lane(self, i: usize) -> f32;
+    #[inline(always)]
+    fn zero() -> Self {
+        Self::splat(0.0)
+    }
+    #[inline(always)]
+    fn one() -> Self {
+        Self::splat(1.0)
+    }
+}
+
+impl Lane for f32 {
+    type Mask = bool;
+    const LANES: usize = 1;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> bool {
+        self < o
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> bool {
+        self <= o
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> bool {
+        self > o
+    }
+    #[inline(always)]
+    fn eq(self, o: Self) -> bool {
+        self == o
+    }
+    #[inline(always)]
+    fn select(m: bool, t: Self, f: Self) -> Self {
+        if m { t } else { f }
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        f32::sqrt(self)
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        f32::abs(self)
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        f32::min(self, o)
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        f32::max(self, o)
+    }
+    #[inline(always)]
+    fn clamp(self, lo: f32, hi: f32) -> Self {
+        f32::clamp(self, lo, hi)
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        f32::sin_cos(self)
+    }
+    #[inline(always)]
+    fn any(m: bool) -> bool {
+        m
+    }
+    #[inline(always)]
+    fn lane(self, _: usize) -> f32 {
+        self
+    }
+}
+
+/// Eight `f32` lanes (see the module notes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C, align(32))]
+pub struct F32x8(pub [f32; 8]);
+
+/// Eight lane booleans, all bits set where true (a blend mask).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, align(32))]
+pub struct Mask8(pub [u32; 8]);
+
+impl Mask8 {
+    /// The lanes `0..n` (n <= 8).
+    pub fn first(n: usize) -> Self {
+        Self(std::array::from_fn(|i| if i < n { !0 } else { 0 }))
+    }
+
+    #[inline(always)]
+    pub fn test(self, i: usize) -> bool {
+        self.0[i] != 0
+    }
+}
+
+macro_rules! lanewise {
+    ($f:expr; $($a:expr),+) => {
+        std::array::from_fn(|i| $f($($a.0[i]),+))
+    };
+}
+
+macro_rules! f32x8_op {
+    ($tr:ident, $m:ident, $op:tt) => {
+        impl $tr for F32x8 {
+            type Output = Self;
+            #[inline(always)]
+            fn $m(self, o: Self) -> Self {
+                Self(lanewise!(|a: f32, b: f32| a $op b; self, o))
+            }
+        }
+    };
+}
+f32x8_op!(Add, add, +);
+f32x8_op!(Sub, sub, -);
+f32x8_op!(Mul, mul, *);
+f32x8_op!(Div, div, /);
+
+impl Neg for F32x8 {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self(self.0.map(|a| -a))
+    }
+}
+
+macro_rules! mask8_op {
+    ($tr:ident, $m:ident, $op:tt) => {
+        impl $tr for Mask8 {
+            type Output = Self;
+            #[inline(always)]
+            fn $m(self, o: Self) -> Self {
+                Self(lanewise!(|a: u32, b: u32| a $op b; self, o))
+            }
+        }
+    };
+}
+mask8_op!(BitAnd, bitand, &);
+mask8_op!(BitOr, bitor, |);
+
+impl Not for Mask8 {
+    type Output = Self;
+    #[inline(always)]
+    fn not(self) -> Self {
+        Self(self.0.map(|a| !a))
+    }
+}
+
+#[inline(always)]
+fn mask_of(b: bool) -> u32 {
+    if b { !0 } else { 0 }
+}
+
+// Cody-Waite split of pi/2 (Cephes' DP1..DP3 doubled) and Cephes' sinf /
+// cosf minimax coefficients on [-pi/4, pi/4].
+const PIO2_1: f32 = 1.570_312_5;
+const PIO2_2: f32 = 4.837_513e-4;
+const PIO2_3: f32 = 7.549_79e-8;
+const SIN_C: [f32; 3] = [-1.666_665_5e-1, 8.332_161e-3, -1.951_529_6e-4];
+const COS_C: [f32; 3] = [4.166_664_6e-2, -1.388_731_6e-3, 2.443_315_7e-5];
+
+/// `(sin x, cos x)` of one lane by the wide polynomial (what every lane of
+/// [`F32x8::sin_cos`] computes; scalar and branch-free so the loop over the
+/// lanes vectorises: SSE2 has no rounding instruction, so the quadrant
+/// rounds half away from zero through a truncating conversion).
+#[inline(always)]
+fn sin_cos_poly(x: f32) -> (f32, f32) {
+    let t = x * std::f32::consts::FRAC_2_PI;
+    let k = (t + if t < 0.0 { -0.5 } else { 0.5 }) as i32;
+    let q = k as f32;
+    let r = ((x - q * PIO2_1) - q * PIO2_2) - q * PIO2_3;
+    let r2 = r * r;
+    let s = r + r * r2 * (SIN_C[0] + r2 * (SIN_C[1] + r2 * SIN_C[2]));
+    let c = 1.0 - 0.5 * r2 + r2 * r2 * (COS_C[0] + r2 * (COS_C[1] + r2 * COS_C[2]));
+    // Quadrant k mod 4: (s, c), (c, -s), (-s, -c), (-c, s).
+    let (a, b) = if k & 1 == 0 { (s, c) } else { (c, s) };
+    let sin = if k & 2 != 0 { -a } else { a };
+    let cos = if (k + 1) & 2 != 0 { -b } else { b };
+    (sin, cos)
+}
+
+impl Lane for F32x8 {
+    type Mask = Mask8;
+    const LANES: usize = 8;
+    #[inline(always)]
+    fn splat(v: f32) -> Self {
+        Self([v; 8])
+    }
+    #[inline(always)]
+    fn lt(self, o: Self) -> Mask8 {
+        Mask8(lanewise!(|a: f32, b: f32| mask_of(a < b); self, o))
+    }
+    #[inline(always)]
+    fn le(self, o: Self) -> Mask8 {
+        Mask8(lanewise!(|a: f32, b: f32| mask_of(a <= b); self, o))
+    }
+    #[inline(always)]
+    fn gt(self, o: Self) -> Mask8 {
+        Mask8(lanewise!(|a: f32, b: f32| mask_of(a > b); self, o))
+    }
+    #[inline(always)]
+    fn eq(self, o: Self) -> Mask8 {
+        Mask8(lanewise!(|a: f32, b: f32| mask_of(a == b); self, o))
+    }
+    #[inline(always)]
+    fn select(m: Mask8, t: Self, f: Self) -> Self {
+        Self(std::array::from_fn(|i| {
+            f32::from_bits((t.0[i].to_bits() & m.0[i]) | (f.0[i].to_bits() & !m.0[i]))
+        }))
+    }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        Self(self.0.map(f32::sqrt))
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        Self(self.0.map(f32::abs))
+    }
+    #[inline(always)]
+    fn min(self, o: Self) -> Self {
+        Self(lanewise!(f32::min; self, o))
+    }
+    #[inline(always)]
+    fn max(self, o: Self) -> Self {
+        Self(lanewise!(f32::max; self, o))
+    }
+    #[inline(always)]
+    fn clamp(self, lo: f32, hi: f32) -> Self {
+        Self(self.0.map(|a| a.clamp(lo, hi)))
+    }
+    #[inline(always)]
+    fn sin_cos(self) -> (Self, Self) {
+        let sc = self.0.map(sin_cos_poly);
+        (Self(sc.map(|p| p.0)), Self(sc.map(|p| p.1)))
+    }
+    #[inline(always)]
+    fn any(m: Mask8) -> bool {
+        m.0.iter().fold(0, |a, b| a | b) != 0
+    }
+    #[inline(always)]
+    fn lane(self, i: usize) -> f32 {
+        self.0[i]
+    }
+}
+
+/// A 3-vector of lanes, with glam's formulas.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V3<L> {
+    pub x: L,
+    pub y: L,
+    pub z: L,
+}
+
+/// A 2-vector of lanes (the samplers' random pairs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct V2<L> {
+    pub x: L,
+    pub y: L,
+}
+
+impl<L: Lane> V3<L> {
+    #[inline(always)]
+    pub fn new(x: L, y: L, z: L) -> Self {
+        Self { x, y, z }
+    }
+    #[inline(always)]
+    pub fn splat(v: Vec3) -> Self {
+        Self::new(L::splat(v.x), L::splat(v.y), L::splat(v.z))
+    }
+    #[inline(always)]
+    pub fn dot(self, o: Self) -> L {
+        (self.x * o.x) + (self.y * o.y) + (self.z * o.z)
+    }
+    #[inline(always)]
+    pub fn length_squared(self) -> L {
+        self.dot(self)
+    }
+    /// `self * s` componentwise.
+    #[inline(always)]
+    pub fn scale(self, s: L) -> Self {
+        Self::new(self.x * s, self.y * s, self.z * s)
+    }
+    /// glam's `normalize`: v * (1 / |v|).
+    #[inline(always)]
+    pub fn normalize(self) -> Self {
+        self.scale(L::one() / self.length_squared().sqrt())
+    }
+    #[inline(always)]
+    pub fn select(m: L::Mask, t: Self, f: Self) -> Self {
+        Self::new(
+            L::select(m, t.x, f.x),
+            L::select(m, t.y, f.y),
+            L::select(m, t.z, f.z),
+        )
+    }
+    /// Lane `i` as a glam vector.
+    #[inline(always)]
+    pub fn lane(self, i: usize) -> Vec3 {
+        Vec3::new(self.x.lane(i), self.y.lane(i), self.z.lane(i))
+    }
+}
+
+impl<L: Lane> Add for V3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self::new(self.x + o.x, self.y + o.y, self.z + o.z)
+    }
+}
+
+impl<L: Lane> Sub for V3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn sub(self, o: Self) -> Self {
+        Self::new(self.x - o.x, self.y - o.y, self.z - o.z)
+    }
+}
+
+/// Componentwise product.
+impl<L: Lane> Mul for V3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Self::new(self.x * o.x, self.y * o.y, self.z * o.z)
+    }
+}
+
+/// Each component divided by `s`.
+impl<L: Lane> Div<L> for V3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn div(self, s: L) -> Self {
+        Self::new(self.x / s, self.y / s, self.z / s)
+    }
+}
+
+impl<L: Lane> Neg for V3<L> {
+    type Output = Self;
+    #[inline(always)]
+    fn neg(self) -> Self {
+        Self::new(-self.x, -self.y, -self.z)
+    }
+}
+
+impl From<Vec3> for V3<f32> {
+    #[inline(always)]
+    fn from(v: Vec3) -> Self {
+        Self::new(v.x, v.y, v.z)
+    }
+}
+
+impl From<V3<f32>> for Vec3 {
+    #[inline(always)]
+    fn from(v: V3<f32>) -> Self {
+        Vec3::new(v.x, v.y, v.z)
+    }
+}
+
+impl From<Vec2> for V2<f32> {
+    #[inline(always)]
+    fn from(v: Vec2) -> Self {
+        Self { x: v.x, y: v.y }
+    }
+}
+
+impl From<[Vec3; 8]> for V3<F32x8> {
+    fn from(v: [Vec3; 8]) -> Self {
+        Self::new(
+            F32x8(v.map(|a| a.x)),
+            F32x8(v.map(|a| a.y)),
+            F32x8(v.map(|a| a.z)),
+        )
+    }
+}
+
+impl From<[Vec2; 8]> for V2<F32x8> {
+    fn from(v: [Vec2; 8]) -> Self {
+        Self {
+            x: F32x8(v.map(|a| a.x)),
+            y: F32x8(v.map(|a| a.y)),
+        }
+    }
+}
+
+/// The widest instruction set the wide lanes run on here.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SimdLevel {
+    /// x86-64's baseline (two 4-wide halves per 8 lanes), or plain loops
+    /// off x86.
+    Sse2,
+    /// 8 lanes per instruction.
+    Avx2,
+}
+
+impl SimdLevel {
+    /// What this CPU has (cached by std).
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return Self::Avx2;
+        }
+        Self::Sse2
+    }
+
+    /// Every level this CPU runs, baseline first (the tests run each).
+    pub fn available() -> Vec<Self> {
+        let mut v = vec![Self::Sse2];
+        if Self::detect() == Self::Avx2 {
+            v.push(Self::Avx2);
+        }
+        v
+    }
+}
+
+/// `simd_at!(level, fn(args: T, ...) -> R { body } (values, ...))`: the
+/// function literal instantiated twice, once compiled for AVX2 and once for
+/// the baseline, and called for `level` (the baseline where the CPU lacks
+/// AVX2). The lane-generic code must be `#[inline(always)]` all the way
+/// down for the AVX2 copy to hold it; a closure would not do, since it is
+/// compiled once, without the feature, and called. The body sees no local
+/// variables, only its arguments.
+#[macro_export]
+macro_rules! simd_at {
+    ($level:expr, fn($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty $body:block ($($val:expr),* $(,)?)) => {{
+        #[inline(always)]
+        fn body($($arg: $ty),*) -> $ret $body
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2($($arg: $ty),*) -> $ret {
+            body($($arg),*)
+        }
+        match $level {
+            #[cfg(target_arch = "x86_64")]
+            $crate::lanes::SimdLevel::Avx2
+                if $crate::lanes::SimdLevel::detect() == $crate::lanes::SimdLevel::Avx2 =>
+            {
+                // SAFETY: the CPU has AVX2 (checked just above).
+                unsafe { avx2($($val),*) }
+            }
+            _ => body($($val),*),
+        }
+    }};
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sin_cos_polynomial_is_libm_within_2e_7() {
+        let mut worst = 0.0f32;
+        for i in -20_000..=20_000 {
+            let x = i as f32 * (std::f32::consts::TAU / 20_000.0);
+            let (s, c) = sin_cos_poly(x);
+            let (rs, rc) = x.sin_cos();
+            worst = worst.max((s - rs).abs()).max((c - rc).abs());
+        }
+        assert!(worst <= 2e-7, "worst {worst:e}");
+    }
+
+    #[test]
+    fn select_keeps_the_masked_lanes_bits() {
+        let t = F32x8([f32::NAN, 1.0, f32::INFINITY, -0.0, 2.0, 3.0, 4.0, 5.0]);
+        let f = F32x8::splat(7.0);
+        let m = Mask8::first(2);
+        let r = F32x8::select(m, t, f);
+        assert!(r.0[0].is_nan());
+        assert_eq!(&r.0[1..], &[1.0, 7.0, 7.0, 7.0, 7.0, 7.0, 7.0]);
+    }
+}

@@ -1,0 +1,555 @@
+//! The wide lanes against the scalar path, per call: every lane-generic
+//! function (`bsdf::*::lanes`) run on eight lanes at each SIMD level this
+//! CPU has must give, lane by lane, what its scalar form gives on that
+//! lane's inputs: the same bits where the function is exact arithmetic,
+//! within the polynomial sine's error where it samples an angle. Batches
+//! mix ordinary inputs with the ones the branches exist for (directions on
+//! the horizon or below it, the disk's centre, NaN), and lanes that a
+//! caller has masked off hold garbage that must not reach the others.
+
+use glam::{Vec2, Vec3};
+use glint_cpu::bsdf::conductor::{self, RoughConductor};
+use glint_cpu::bsdf::microfacet::{self, MIN_ALPHA};
+use glint_cpu::bsdf::{BsdfSample, LaneSample};
+use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse, fresnel, warp};
+use glint_cpu::lanes::{F32x8, Lane, Mask8, SimdLevel, V2, V3};
+use glint_cpu::simd_at;
+
+/// xorshift32: the tests' own numbers.
+struct Rand(u32);
+
+impl Rand {
+    fn f(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 17;
+        self.0 ^= self.0 << 5;
+        (self.0 >> 8) as f32 / 16_777_216.0
+    }
+    fn dir(&mut self) -> Vec3 {
+        let z = 1.0 - 2.0 * self.f();
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let phi = std::f32::consts::TAU * self.f();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    }
+    fn alpha(&mut self) -> f32 {
+        MIN_ALPHA + self.f() * self.f()
+    }
+}
+
+/// Lane `i`'s special case, if it has one: 0 ordinary, 1 on the horizon,
+/// 2 NaN, 3 straight up, 4 the square's centre (u = 1/2).
+fn special(batch: usize, i: usize) -> usize {
+    if batch % 4 == 0 { 0 } else { (batch + i) % 5 }
+}
+
+fn dir_for(r: &mut Rand, kind: usize) -> Vec3 {
+    match kind {
+        1 => {
+            let d = r.dir();
+            Vec3::new(d.x, d.y, 0.0).normalize_or(Vec3::X)
+        }
+        2 => Vec3::new(f32::NAN, 0.3, 0.5),
+        3 => Vec3::Z,
+        _ => r.dir(),
+    }
+}
+
+fn u_for(r: &mut Rand, kind: usize) -> Vec2 {
+    if kind == 4 {
+        Vec2::splat(0.5)
+    } else {
+        Vec2::new(r.f(), r.f())
+    }
+}
+
+/// Bit-equal, or both NaN.
+fn same(a: f32, b: f32) -> bool {
+    a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
+}
+
+/// Within `tol` relative (to 1 at least), or both NaN.
+fn close(a: f32, b: f32, tol: f32) -> bool {
+    (a.is_nan() && b.is_nan()) || (a - b).abs() <= tol * a.abs().max(b.abs()).max(1.0)
+}
+
+fn same3(a: Vec3, b: Vec3) -> bool {
+    (0..3).all(|k| same(a[k], b[k]))
+}
+
+fn close3(a: Vec3, b: Vec3, tol: f32) -> bool {
+    (0..3).all(|k| close(a[k], b[k], tol))
+}
+
+const BATCHES: usize = 400;
+/// The polynomial sine against libm (2e-7), carried through the warps.
+const SIN_TOL: f32 = 2e-5;
+
+/// Run `wide` at every SIMD level on 8 lanes made by `inputs(batch, lane)`
+/// and compare each lane with `scalar` via `check`.
+fn each_level<I, W, S>(
+    mut inputs: impl FnMut(usize, usize) -> I,
+    wide: impl Fn(SimdLevel, [I; 8]) -> [W; 8],
+    scalar: impl Fn(I) -> S,
+    check: impl Fn(&W, &S) -> bool,
+    name: &str,
+) where
+    I: Copy + std::fmt::Debug,
+    W: std::fmt::Debug,
+    S: std::fmt::Debug,
+{
+    for level in SimdLevel::available() {
+        for b in 0..BATCHES {
+            let lanes: [I; 8] = std::array::from_fn(|i| inputs(b, i));
+            let out = wide(level, lanes);
+            for i in 0..8 {
+                let s = scalar(lanes[i]);
+                assert!(
+                    check(&out[i], &s),
+                    "{name} at {level:?}, batch {b} lane {i}: inputs {:?}: wide {:?}, scalar {s:?}",
+                    lanes[i],
+                    out[i]
+                );
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn v3x8(v: [Vec3; 8]) -> V3<F32x8> {
+    v.into()
+}
+
+#[inline(always)]
+fn lanes3(v: V3<F32x8>) -> [Vec3; 8] {
+    std::array::from_fn(|i| v.lane(i))
+}
+
+#[inline(always)]
+fn lanes1(v: F32x8) -> [f32; 8] {
+    v.0
+}
+
+/// A wide sample's lanes as scalar samples.
+#[inline(always)]
+fn samples(s: LaneSample<F32x8>) -> [Option<BsdfSample>; 8] {
+    std::array::from_fn(|i| {
+        s.valid.test(i).then(|| BsdfSample {
+            wi: s.wi.lane(i),
+            weight: s.weight.lane(i),
+            pdf: s.pdf.0[i],
+            delta: false,
+            eta: 1.0,
+        })
+    })
+}
+
+/// Two samples agree: both none, or the same within `tol`. A lane whose
+/// scalar sample sits on the validity edge (wi on the horizon, within the
+/// polynomial's error) may fall either way.
+fn samples_agree(w: &Option<BsdfSample>, s: &Option<BsdfSample>, tol: f32) -> bool {
+    match (w, s) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            close3(a.wi, b.wi, tol)
+                && close3(a.weight, b.weight, 1e3 * tol)
+                && close(a.pdf, b.pdf, 1e3 * tol)
+        }
+        (Some(x), None) | (None, Some(x)) => x.wi.z.abs() < 1e-4,
+    }
+}
+
+/// A microfacet test's lanes: a direction, a second direction (wi or a
+/// microfacet normal) and the two alphas.
+type Mf = (Vec3, Vec3, f32, f32);
+
+#[inline(always)]
+fn split(l: [Mf; 8]) -> (V3<F32x8>, V3<F32x8>, F32x8, F32x8) {
+    (
+        v3x8(l.map(|x| x.0)),
+        v3x8(l.map(|x| x.1)),
+        F32x8(l.map(|x| x.2)),
+        F32x8(l.map(|x| x.3)),
+    )
+}
+
+#[test]
+fn microfacet_terms_are_the_scalar_bits_in_every_lane() {
+    use microfacet::lanes as m;
+    let mut r = Rand(0x1234_5678);
+    let inputs: Vec<[Mf; 8]> = (0..BATCHES)
+        .map(|b| {
+            std::array::from_fn(|i| {
+                let k = special(b, i);
+                (dir_for(&mut r, k), dir_for(&mut r, 0), r.alpha(), r.alpha())
+            })
+        })
+        .collect();
+    let at = |b: usize, i: usize| inputs[b][i];
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Mf; 8]) -> [f32; 8] {
+                let (_, wm, ax, ay) = split(l);
+                lanes1(m::ggx_d(wm.normalize(), ax, ay))
+            }(l))
+        },
+        |(_, wm, ax, ay)| microfacet::ggx_d(wm.normalize(), ax, ay),
+        |a, b| same(*a, *b),
+        "ggx_d",
+    );
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Mf; 8]) -> [f32; 8] {
+                let (w, _, ax, ay) = split(l);
+                lanes1(m::ggx_g1(w, ax, ay))
+            }(l))
+        },
+        |(w, _, ax, ay)| microfacet::ggx_g1(w, ax, ay),
+        |a, b| same(*a, *b),
+        "ggx_g1",
+    );
+    for sep in [false, true] {
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Mf; 8], sep: bool) -> [f32; 8] {
+                    let (wo, wi, ax, ay) = split(l);
+                    lanes1(m::ggx_g2(wo, wi, ax, ay, sep))
+                }(l, sep))
+            },
+            |(wo, wi, ax, ay)| microfacet::ggx_g2(wo, wi, ax, ay, sep),
+            |a, b| same(*a, *b),
+            "ggx_g2",
+        );
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Mf; 8], sep: bool) -> [f32; 8] {
+                    let (wo, wi, ax, ay) = split(l);
+                    lanes1(m::ggx_visibility(wo, wi, ax, ay, sep))
+                }(l, sep))
+            },
+            |(wo, wi, ax, ay)| microfacet::ggx_visibility(wo, wi, ax, ay, sep),
+            |a, b| same(*a, *b),
+            "ggx_visibility",
+        );
+    }
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Mf; 8]) -> [f32; 8] {
+                let (w, wm, ax, ay) = split(l);
+                lanes1(m::ggx_pdf_visible(w, wm, ax, ay))
+            }(l))
+        },
+        |(w, wm, ax, ay)| microfacet::ggx_pdf_visible(w, wm, ax, ay),
+        |a, b| same(*a, *b),
+        "ggx_pdf_visible",
+    );
+    // u from the alphas' fractions: the sample's own numbers per lane.
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Mf; 8]) -> [Vec3; 8] {
+                let (w, _, ax, ay) = split(l);
+                let u = V2 { x: F32x8(ax.0.map(|a| (a * 7.0).fract())), y: F32x8(ay.0.map(|a| (a * 5.0).fract())) };
+                lanes3(m::ggx_sample_visible(w, ax, ay, u))
+            }(l))
+        },
+        |(w, _, ax, ay)| {
+            microfacet::ggx_sample_visible(
+                w,
+                ax,
+                ay,
+                Vec2::new((ax * 7.0).fract(), (ay * 5.0).fract()),
+            )
+        },
+        |a, b| close3(*a, *b, SIN_TOL),
+        "ggx_sample_visible",
+    );
+}
+
+#[test]
+fn conductor_fresnel_is_the_scalar_bits_in_every_lane() {
+    type Fr = (f32, f32, f32);
+    let mut r = Rand(99);
+    let mut gen_in = |b: usize, i: usize| -> Fr {
+        match special(b, i) {
+            1 => (0.0, 1.0, 0.0),
+            2 => (f32::NAN, 1.5, 2.0),
+            3 => (1.0, 0.2 + 3.0 * r.f(), 5.0 * r.f()),
+            _ => (r.f() * 1.2 - 0.1, 0.1 + 3.0 * r.f(), 5.0 * r.f()),
+        }
+    };
+    let inputs: Vec<[Fr; 8]> = (0..BATCHES)
+        .map(|b| std::array::from_fn(|i| gen_in(b, i)))
+        .collect();
+    each_level(
+        |b, i| inputs[b][i],
+        |lv, l| {
+            simd_at!(lv, fn(l: [Fr; 8]) -> [f32; 8] {
+                lanes1(fresnel::lanes::fresnel_conductor_channel(
+                    F32x8(l.map(|x| x.0)),
+                    F32x8(l.map(|x| x.1)),
+                    F32x8(l.map(|x| x.2)),
+                ))
+            }(l))
+        },
+        |(c, eta, k)| fresnel::fresnel_conductor_channel(c, eta, k),
+        |a, b| same(*a, *b),
+        "fresnel_conductor_channel",
+    );
+}
+
+/// A Lambertian test's lanes: rho, wo, wi, u.
+type Df = (Vec3, Vec3, Vec3, Vec2);
+
+#[test]
+fn diffuse_lanes_are_the_scalar_lambertian() {
+    use diffuse::lanes as d;
+    let mut r = Rand(7);
+    let inputs: Vec<[Df; 8]> = (0..BATCHES)
+        .map(|b| {
+            std::array::from_fn(|i| {
+                let k = special(b, i);
+                let rho = Vec3::new(r.f(), r.f(), r.f());
+                (rho, dir_for(&mut r, k), r.dir(), u_for(&mut r, k))
+            })
+        })
+        .collect();
+    let at = |b: usize, i: usize| inputs[b][i];
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Df; 8]) -> [Vec3; 8] {
+                lanes3(d::diffuse_eval(v3x8(l.map(|x| x.0)), v3x8(l.map(|x| x.1)), v3x8(l.map(|x| x.2))))
+            }(l))
+        },
+        |(rho, wo, wi, _)| diffuse::diffuse_eval(rho, wo, wi),
+        |a, b| same3(*a, *b),
+        "diffuse_eval",
+    );
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Df; 8]) -> [f32; 8] {
+                lanes1(d::diffuse_pdf(v3x8(l.map(|x| x.1)), v3x8(l.map(|x| x.2))))
+            }(l))
+        },
+        |(_, wo, wi, _)| diffuse::diffuse_pdf(wo, wi),
+        |a, b| same(*a, *b),
+        "diffuse_pdf",
+    );
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Df; 8]) -> [Option<BsdfSample>; 8] {
+                samples(d::diffuse_sample(v3x8(l.map(|x| x.0)), v3x8(l.map(|x| x.1)), l.map(|x| x.3).into()))
+            }(l))
+        },
+        |(rho, wo, _, u)| diffuse::diffuse_sample(rho, wo, u),
+        |a, b| samples_agree(a, b, SIN_TOL),
+        "diffuse_sample",
+    );
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [Df; 8]) -> [Vec3; 8] {
+                lanes3(warp::lanes::square_to_cosine_hemisphere(l.map(|x| x.3).into()))
+            }(l))
+        },
+        |(_, _, _, u)| warp::square_to_cosine_hemisphere(u),
+        |a, b| close3(*a, *b, SIN_TOL),
+        "square_to_cosine_hemisphere",
+    );
+}
+
+fn conductor_params(r: &mut Rand, separable: bool) -> ConductorParams {
+    ConductorParams {
+        eta: Vec3::new(0.2 + r.f(), 0.4 + r.f(), 1.0 + r.f()),
+        k: Vec3::new(3.0 * r.f(), 3.0 * r.f(), 3.0 * r.f()),
+        specular_reflectance: Vec3::new(r.f(), r.f(), r.f()),
+        roughness: Roughness {
+            alpha_u: r.alpha(),
+            alpha_v: r.alpha(),
+            shadowing: if separable {
+                Shadowing::Separable
+            } else {
+                Shadowing::Correlated
+            },
+            multiscatter: false,
+        },
+    }
+}
+
+/// Eight conductors' parameters as lanes.
+fn conductor_lanes(c: [ConductorParams; 8]) -> RoughConductor<F32x8> {
+    let p = c.map(|c| RoughConductor::of(&c));
+    RoughConductor {
+        eta: v3x8(p.map(|p| p.eta.into())),
+        k: v3x8(p.map(|p| p.k.into())),
+        specular_reflectance: v3x8(p.map(|p| p.specular_reflectance.into())),
+        ax: F32x8(p.map(|p| p.ax)),
+        ay: F32x8(p.map(|p| p.ay)),
+        separable: p[0].separable,
+    }
+}
+
+/// A conductor test's lanes: the BSDF, wo, wi, u.
+type Cd = (ConductorParams, Vec3, Vec3, Vec2);
+
+#[inline(always)]
+fn cd_eval(l: [Cd; 8]) -> [Vec3; 8] {
+    let c = conductor_lanes(l.map(|x| x.0));
+    lanes3(conductor::lanes::rough_eval(
+        &c,
+        v3x8(l.map(|x| x.1)),
+        v3x8(l.map(|x| x.2)),
+    ))
+}
+
+#[inline(always)]
+fn cd_pdf(l: [Cd; 8]) -> [f32; 8] {
+    let c = conductor_lanes(l.map(|x| x.0));
+    lanes1(conductor::lanes::rough_pdf(
+        &c,
+        v3x8(l.map(|x| x.1)),
+        v3x8(l.map(|x| x.2)),
+    ))
+}
+
+#[inline(always)]
+fn cd_sample(l: [Cd; 8]) -> [Option<BsdfSample>; 8] {
+    let c = conductor_lanes(l.map(|x| x.0));
+    samples(conductor::lanes::rough_sample(
+        &c,
+        v3x8(l.map(|x| x.1)),
+        l.map(|x| x.3).into(),
+    ))
+}
+
+#[test]
+fn rough_conductor_lanes_are_the_scalar_bsdf() {
+    for sep in [false, true] {
+        let mut r = Rand(31 + sep as u32);
+        let inputs: Vec<[Cd; 8]> = (0..BATCHES)
+            .map(|b| {
+                std::array::from_fn(|i| {
+                    let k = special(b, i);
+                    let c = conductor_params(&mut r, sep);
+                    (c, dir_for(&mut r, k), r.dir(), u_for(&mut r, k))
+                })
+            })
+            .collect();
+        let at = |b: usize, i: usize| inputs[b][i];
+        each_level(
+            at,
+            |lv, l| simd_at!(lv, fn(l: [Cd; 8]) -> [Vec3; 8] { cd_eval(l) }(l)),
+            |(p, wo, wi, _)| conductor::conductor_eval(&p, wo, wi),
+            |a, b| same3(*a, *b),
+            "conductor_eval",
+        );
+        each_level(
+            at,
+            |lv, l| simd_at!(lv, fn(l: [Cd; 8]) -> [f32; 8] { cd_pdf(l) }(l)),
+            |(p, wo, wi, _)| conductor::conductor_pdf(&p, wo, wi),
+            |a, b| same(*a, *b),
+            "conductor_pdf",
+        );
+        each_level(
+            at,
+            |lv, l| simd_at!(lv, fn(l: [Cd; 8]) -> [Option<BsdfSample>; 8] { cd_sample(l) }(l)),
+            |(p, wo, _, u)| conductor::conductor_sample(&p, wo, u),
+            |a, b| samples_agree(a, b, SIN_TOL),
+            "conductor_sample",
+        );
+    }
+}
+
+/// Lanes a caller has masked off may hold anything (NaN, infinities, the
+/// previous path's leftovers): the live lanes' results are the same bits.
+#[test]
+fn masked_off_lanes_do_not_reach_the_live_ones() {
+    let mut r = Rand(5);
+    let live = Mask8::first(5);
+    let run = |lv: SimdLevel, l: [Cd; 8]| {
+        simd_at!(lv, fn(l: [Cd; 8]) -> ([Option<BsdfSample>; 8], [Option<BsdfSample>; 8]) {
+            let wo = v3x8(l.map(|x| x.1));
+            (cd_sample(l), samples(diffuse::lanes::diffuse_sample(wo, wo, l.map(|x| x.3).into())))
+        }(l))
+    };
+    for level in SimdLevel::available() {
+        for _ in 0..BATCHES {
+            let l: [Cd; 8] = std::array::from_fn(|_| {
+                (
+                    conductor_params(&mut r, false),
+                    r.dir(),
+                    r.dir(),
+                    Vec2::new(r.f(), r.f()),
+                )
+            });
+            let mut junk = l;
+            for x in &mut junk[5..] {
+                x.0.eta = Vec3::splat(f32::NAN);
+                x.0.k = Vec3::splat(f32::INFINITY);
+                x.1 = Vec3::new(f32::NAN, f32::INFINITY, -0.0);
+                x.3 = Vec2::new(f32::NAN, 1e30);
+            }
+            let (a, da) = run(level, l);
+            let (b, db) = run(level, junk);
+            for i in (0..8).filter(|&i| live.test(i)) {
+                assert_eq!(a[i], b[i], "conductor lane {i} at {level:?}");
+                assert_eq!(da[i], db[i], "diffuse lane {i} at {level:?}");
+            }
+        }
+    }
+}
+
+/// Every SIMD level gives the same bits (the lanes are IEEE arithmetic,
+/// whatever the instruction width).
+#[test]
+fn simd_levels_agree_bit_for_bit() {
+    let mut r = Rand(77);
+    for _ in 0..BATCHES {
+        let l: [Cd; 8] = std::array::from_fn(|_| {
+            (
+                conductor_params(&mut r, false),
+                r.dir(),
+                r.dir(),
+                Vec2::new(r.f(), r.f()),
+            )
+        });
+        let outs: Vec<_> = SimdLevel::available()
+            .into_iter()
+            .map(|lv| simd_at!(lv, fn(l: [Cd; 8]) -> [Option<BsdfSample>; 8] { cd_sample(l) }(l)))
+            .collect();
+        for o in &outs[1..] {
+            assert_eq!(o, &outs[0]);
+        }
+    }
+}
+
+/// `F32x8::sin_cos` is within 2e-7 of libm over the angles the samplers
+/// draw, and the scalar lane type is libm itself.
+#[test]
+fn wide_sine_is_libm_within_its_bound() {
+    for level in SimdLevel::available() {
+        let worst = simd_at!(level, fn() -> f32 {
+            let mut worst = 0.0f32;
+            for j in 0..5_000 {
+                let x = F32x8(std::array::from_fn(|i| {
+                    (j * 8 + i) as f32 * (2.0 * std::f32::consts::TAU / 40_000.0) - std::f32::consts::TAU
+                }));
+                let (s, c) = x.sin_cos();
+                for i in 0..8 {
+                    let (rs, rc) = x.0[i].sin_cos();
+                    worst = worst.max((s.0[i] - rs).abs()).max((c.0[i] - rc).abs());
+                }
+            }
+            worst
+        }());
+        assert!(worst <= 2e-7, "{level:?}: {worst:e}");
+    }
+    assert_eq!(1.25f32.sin_cos(), Lane::sin_cos(1.25f32));
+}

@@ -1,0 +1,173 @@
+//! BSDF calls per second, scalar against eight lanes, printed with
+//! `--nocapture` (release figures: `cargo test --release -p glint-cpu --test
+//! lanes_throughput -- --ignored --nocapture`; a benchmark the suite skips).
+//! Each round samples, evaluates and takes the density of the rough
+//! conductor (GGX, visible normals, complex Fresnel) and the Lambertian
+//! for the same 2^16 random (wo, wi, u) per BSDF: the scalar functions one
+//! call per lane, then the lane-generic ones on [`F32x8`] at each SIMD
+//! level this CPU has, interleaved round by round so a change of load falls
+//! on all alike.
+//! Speeds are printed, never asserted; what is asserted is that every
+//! variant sums to the same valid-sample count.
+
+use std::time::Instant;
+
+use glam::{Vec2, Vec3};
+use glint_cpu::bsdf::conductor::{self, RoughConductor};
+use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse};
+use glint_cpu::lanes::{F32x8, Lane, SimdLevel, V2, V3};
+use glint_cpu::simd_at;
+
+const N: usize = 1 << 16;
+
+struct Inputs {
+    c: ConductorParams,
+    wo: Vec<Vec3>,
+    wi: Vec<Vec3>,
+    u: Vec<Vec2>,
+}
+
+fn inputs() -> Inputs {
+    let mut s = 0x9e37_79b9u32;
+    let mut f = move || {
+        s ^= s << 13;
+        s ^= s >> 17;
+        s ^= s << 5;
+        (s >> 8) as f32 / 16_777_216.0
+    };
+    let mut dir = || {
+        let z = f();
+        let r = (1.0 - z * z).sqrt();
+        let phi = std::f32::consts::TAU * f();
+        Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    };
+    let wo = (0..N).map(|_| dir()).collect();
+    let wi = (0..N).map(|_| dir()).collect();
+    let mut s2 = 17u32;
+    let mut g = move || {
+        s2 = s2.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (s2 >> 8) as f32 / 16_777_216.0
+    };
+    let u = (0..N).map(|_| Vec2::new(g(), g())).collect();
+    Inputs {
+        c: ConductorParams {
+            eta: Vec3::new(0.2, 0.92, 1.1),
+            k: Vec3::new(3.9, 2.45, 2.14),
+            specular_reflectance: Vec3::ONE,
+            roughness: Roughness {
+                alpha_u: 0.3,
+                alpha_v: 0.1,
+                shadowing: Shadowing::Correlated,
+                multiscatter: false,
+            },
+        },
+        wo,
+        wi,
+        u,
+    }
+}
+
+fn pack3(v: &[Vec3]) -> V3<F32x8> {
+    let a: [Vec3; 8] = v.try_into().unwrap();
+    a.into()
+}
+
+fn pack2(v: &[Vec2]) -> V2<F32x8> {
+    let a: [Vec2; 8] = v.try_into().unwrap();
+    a.into()
+}
+
+/// What every variant folds its results into (so nothing is optimised away):
+/// the count of valid samples and a sum of f and pdf that the optimiser
+/// cannot drop.
+fn scalar(inp: &Inputs) -> usize {
+    let mut n = 0;
+    let mut acc = 0.0f32;
+    for i in 0..N {
+        let (wo, wi, u) = (inp.wo[i], inp.wi[i], inp.u[i]);
+        if let Some(s) = conductor::conductor_sample(&inp.c, wo, u) {
+            n += 1;
+            acc += s.weight.x + s.pdf;
+        }
+        acc +=
+            conductor::conductor_eval(&inp.c, wo, wi).y + conductor::conductor_pdf(&inp.c, wo, wi);
+        if let Some(s) = diffuse::diffuse_sample(Vec3::splat(0.5), wo, u) {
+            n += 1;
+            acc += s.pdf;
+        }
+        acc += diffuse::diffuse_eval(Vec3::splat(0.5), wo, wi).x + diffuse::diffuse_pdf(wo, wi);
+    }
+    std::hint::black_box(acc);
+    n
+}
+
+#[inline(always)]
+fn wide(inp: &Inputs) -> usize {
+    let p = RoughConductor::of(&inp.c);
+    let c = RoughConductor {
+        eta: V3::splat(p.eta.into()),
+        k: V3::splat(p.k.into()),
+        specular_reflectance: V3::splat(p.specular_reflectance.into()),
+        ax: F32x8::splat(p.ax),
+        ay: F32x8::splat(p.ay),
+        separable: p.separable,
+    };
+    let rho = V3::splat(Vec3::splat(0.5));
+    let mut n = 0;
+    let mut acc = F32x8::zero();
+    for i in (0..N).step_by(8) {
+        let wo = pack3(&inp.wo[i..i + 8]);
+        let wi = pack3(&inp.wi[i..i + 8]);
+        let u = pack2(&inp.u[i..i + 8]);
+        let s = conductor::lanes::rough_sample(&c, wo, u);
+        n += s.valid.0.iter().filter(|&&m| m != 0).count();
+        acc = acc + F32x8::select(s.valid, s.weight.x + s.pdf, F32x8::zero());
+        acc = acc
+            + conductor::lanes::rough_eval(&c, wo, wi).y
+            + conductor::lanes::rough_pdf(&c, wo, wi);
+        let d = diffuse::lanes::diffuse_sample(rho, wo, u);
+        n += d.valid.0.iter().filter(|&&m| m != 0).count();
+        acc = acc + F32x8::select(d.valid, d.pdf, F32x8::zero());
+        acc =
+            acc + diffuse::lanes::diffuse_eval(rho, wo, wi).x + diffuse::lanes::diffuse_pdf(wo, wi);
+    }
+    std::hint::black_box(acc);
+    n
+}
+
+fn wide_at(level: SimdLevel, inp: &Inputs) -> usize {
+    simd_at!(level, fn(inp: &Inputs) -> usize { wide(inp) }(inp))
+}
+
+#[test]
+#[ignore = "benchmark: run with --ignored --nocapture"]
+fn bsdf_lanes_throughput() {
+    let inp = inputs();
+    let levels = SimdLevel::available();
+    let reference = scalar(&inp);
+    for l in &levels {
+        assert_eq!(wide_at(*l, &inp), reference, "{l:?}");
+    }
+    let rounds = 20;
+    let mut secs = vec![0.0f64; 1 + levels.len()];
+    for _ in 0..rounds {
+        let t = Instant::now();
+        std::hint::black_box(scalar(&inp));
+        secs[0] += t.elapsed().as_secs_f64();
+        for (k, l) in levels.iter().enumerate() {
+            let t = Instant::now();
+            std::hint::black_box(wide_at(*l, &inp));
+            secs[k + 1] += t.elapsed().as_secs_f64();
+        }
+    }
+    let calls = (rounds * N * 6) as f64;
+    println!("| variant | M BSDF calls/s | over scalar |\n|---|---:|---:|");
+    println!("| scalar | {:.1} | 1.00 |", calls / secs[0] / 1e6);
+    for (k, l) in levels.iter().enumerate() {
+        println!(
+            "| 8 lanes, {l:?} | {:.1} | {:.2} |",
+            calls / secs[k + 1] / 1e6,
+            secs[0] / secs[k + 1]
+        );
+    }
+}
