@@ -161,6 +161,8 @@ impl Mask8 {
     }
 }
 
+// Lane by lane, by index: `array::map` goes through closures that LLVM
+// does not always inline (measured: calls in the AVX2 copy), from_fn does.
 macro_rules! lanewise {
     ($f:expr; $($a:expr),+) => {
         std::array::from_fn(|i| $f($($a.0[i]),+))
@@ -187,7 +189,7 @@ impl Neg for F32x8 {
     type Output = Self;
     #[inline(always)]
     fn neg(self) -> Self {
-        Self(self.0.map(|a| -a))
+        Self(lanewise!(|a: f32| -a; self))
     }
 }
 
@@ -209,7 +211,7 @@ impl Not for Mask8 {
     type Output = Self;
     #[inline(always)]
     fn not(self) -> Self {
-        Self(self.0.map(|a| !a))
+        Self(lanewise!(|a: u32| !a; self))
     }
 }
 
@@ -277,11 +279,11 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        Self(self.0.map(f32::sqrt))
+        Self(lanewise!(f32::sqrt; self))
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        Self(self.0.map(f32::abs))
+        Self(lanewise!(f32::abs; self))
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
@@ -293,12 +295,15 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn clamp(self, lo: f32, hi: f32) -> Self {
-        Self(self.0.map(|a| a.clamp(lo, hi)))
+        Self(lanewise!(|a: f32| a.clamp(lo, hi); self))
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
-        let sc = self.0.map(sin_cos_poly);
-        (Self(sc.map(|p| p.0)), Self(sc.map(|p| p.1)))
+        let sc: [(f32, f32); 8] = lanewise!(sin_cos_poly; self);
+        (
+            Self(std::array::from_fn(|i| sc[i].0)),
+            Self(std::array::from_fn(|i| sc[i].1)),
+        )
     }
     #[inline(always)]
     fn any(m: Mask8) -> bool {
@@ -307,6 +312,109 @@ impl Lane for F32x8 {
     #[inline(always)]
     fn lane(self, i: usize) -> f32 {
         self.0[i]
+    }
+}
+
+/// The integer arithmetic of the hash-based samplers (`sampling::pcg4d`,
+/// the Owen-scrambled Sobol pairs) over `u32` or eight lanes of it,
+/// wrapping as the scalar code's `wrapping_*` calls do.
+pub trait ULane: Copy + std::fmt::Debug {
+    /// The float lanes of the same width.
+    type F: Lane;
+    fn splat(v: u32) -> Self;
+    fn add(self, o: Self) -> Self;
+    fn mul(self, o: Self) -> Self;
+    fn xor(self, o: Self) -> Self;
+    fn and(self, o: Self) -> Self;
+    fn or(self, o: Self) -> Self;
+    fn shr(self, n: u32) -> Self;
+    fn reverse_bits(self) -> Self;
+    /// `f32::from_bits` per lane.
+    fn bits_to_f32(self) -> Self::F;
+}
+
+impl ULane for u32 {
+    type F = f32;
+    #[inline(always)]
+    fn splat(v: u32) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        self.wrapping_add(o)
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        self.wrapping_mul(o)
+    }
+    #[inline(always)]
+    fn xor(self, o: Self) -> Self {
+        self ^ o
+    }
+    #[inline(always)]
+    fn and(self, o: Self) -> Self {
+        self & o
+    }
+    #[inline(always)]
+    fn or(self, o: Self) -> Self {
+        self | o
+    }
+    #[inline(always)]
+    fn shr(self, n: u32) -> Self {
+        self >> n
+    }
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        u32::reverse_bits(self)
+    }
+    #[inline(always)]
+    fn bits_to_f32(self) -> f32 {
+        f32::from_bits(self)
+    }
+}
+
+/// Eight `u32` lanes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(C, align(32))]
+pub struct U32x8(pub [u32; 8]);
+
+impl ULane for U32x8 {
+    type F = F32x8;
+    #[inline(always)]
+    fn splat(v: u32) -> Self {
+        Self([v; 8])
+    }
+    #[inline(always)]
+    fn add(self, o: Self) -> Self {
+        Self(lanewise!(u32::wrapping_add; self, o))
+    }
+    #[inline(always)]
+    fn mul(self, o: Self) -> Self {
+        Self(lanewise!(u32::wrapping_mul; self, o))
+    }
+    #[inline(always)]
+    fn xor(self, o: Self) -> Self {
+        Self(lanewise!(|a: u32, b: u32| a ^ b; self, o))
+    }
+    #[inline(always)]
+    fn and(self, o: Self) -> Self {
+        Self(lanewise!(|a: u32, b: u32| a & b; self, o))
+    }
+    #[inline(always)]
+    fn or(self, o: Self) -> Self {
+        Self(lanewise!(|a: u32, b: u32| a | b; self, o))
+    }
+    #[inline(always)]
+    fn shr(self, n: u32) -> Self {
+        Self(lanewise!(|a: u32| a >> n; self))
+    }
+    #[inline(always)]
+    fn reverse_bits(self) -> Self {
+        Self(lanewise!(u32::reverse_bits; self))
+    }
+    #[inline(always)]
+    fn bits_to_f32(self) -> F32x8 {
+        F32x8(lanewise!(f32::from_bits; self))
     }
 }
 
@@ -433,9 +541,9 @@ impl From<Vec2> for V2<f32> {
 impl From<[Vec3; 8]> for V3<F32x8> {
     fn from(v: [Vec3; 8]) -> Self {
         Self::new(
-            F32x8(v.map(|a| a.x)),
-            F32x8(v.map(|a| a.y)),
-            F32x8(v.map(|a| a.z)),
+            F32x8(std::array::from_fn(|i| v[i].x)),
+            F32x8(std::array::from_fn(|i| v[i].y)),
+            F32x8(std::array::from_fn(|i| v[i].z)),
         )
     }
 }
@@ -443,8 +551,8 @@ impl From<[Vec3; 8]> for V3<F32x8> {
 impl From<[Vec2; 8]> for V2<F32x8> {
     fn from(v: [Vec2; 8]) -> Self {
         Self {
-            x: F32x8(v.map(|a| a.x)),
-            y: F32x8(v.map(|a| a.y)),
+            x: F32x8(std::array::from_fn(|i| v[i].x)),
+            y: F32x8(std::array::from_fn(|i| v[i].y)),
         }
     }
 }

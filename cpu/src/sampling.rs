@@ -15,17 +15,31 @@ use crate::film::Mis;
 /// and maps to a handful of GLSL integer instructions.
 #[inline]
 pub fn pcg4d(v: [u32; 4]) -> [u32; 4] {
-    let mut v = v.map(|x| x.wrapping_mul(1_664_525).wrapping_add(1_013_904_223));
-    v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[3]));
-    v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
-    v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
-    v[3] = v[3].wrapping_add(v[1].wrapping_mul(v[2]));
-    v = v.map(|x| x ^ (x >> 16));
-    v[0] = v[0].wrapping_add(v[1].wrapping_mul(v[3]));
-    v[1] = v[1].wrapping_add(v[2].wrapping_mul(v[0]));
-    v[2] = v[2].wrapping_add(v[0].wrapping_mul(v[1]));
-    v[3] = v[3].wrapping_add(v[1].wrapping_mul(v[2]));
-    v
+    lanes::pcg4d(v)
+}
+
+/// [`pcg4d`] over any [`crate::lanes::ULane`] type (one source with the
+/// scalar form).
+pub mod lanes {
+    use crate::lanes::ULane;
+
+    #[inline(always)]
+    pub fn pcg4d<U: ULane>(v: [U; 4]) -> [U; 4] {
+        let (m, c) = (U::splat(1_664_525), U::splat(1_013_904_223));
+        let lcg = |x: U| x.mul(m).add(c);
+        let mut v = [lcg(v[0]), lcg(v[1]), lcg(v[2]), lcg(v[3])];
+        v[0] = v[0].add(v[1].mul(v[3]));
+        v[1] = v[1].add(v[2].mul(v[0]));
+        v[2] = v[2].add(v[0].mul(v[1]));
+        v[3] = v[3].add(v[1].mul(v[2]));
+        let mix = |x: U| x.xor(x.shr(16));
+        v = [mix(v[0]), mix(v[1]), mix(v[2]), mix(v[3])];
+        v[0] = v[0].add(v[1].mul(v[3]));
+        v[1] = v[1].add(v[2].mul(v[0]));
+        v[2] = v[2].add(v[0].mul(v[1]));
+        v[3] = v[3].add(v[1].mul(v[2]));
+        v
+    }
 }
 
 /// Fold the 64-bit user seed into the 32-bit key the generator (and the GPU

@@ -33,7 +33,7 @@
 
 use glam::Vec2;
 
-use crate::sampling::{Rng, pcg4d};
+use crate::sampling::Rng;
 
 // The pair seeds' salt, the sequence length and the pairs per bounce.
 pub use crate::abi::{PAIRS_PER_BOUNCE, SOBOL_BLOCK_BITS, SOBOL_SALT};
@@ -42,7 +42,7 @@ pub use crate::abi::{PAIRS_PER_BOUNCE, SOBOL_BLOCK_BITS, SOBOL_SALT};
 /// `key` (`sampling::seed_key`).
 #[inline]
 pub fn pair_seed(key: u32, pixel: u32, sample: u32, pair: u32) -> u32 {
-    pcg4d([pixel, pair, sample >> SOBOL_BLOCK_BITS, key ^ SOBOL_SALT])[0]
+    lanes::pair_seed(key, pixel, sample, pair)
 }
 
 /// Sobol dimension 1 (before scrambling) of the index bits `b`, bit k of
@@ -54,12 +54,7 @@ pub fn pair_seed(key: u32, pixel: u32, sample: u32, pair: u32) -> u32 {
 /// sixteen masked XORs or a table. `sobol_dim1` in GLSL.
 #[inline]
 pub fn sobol_dim1(b: u32) -> u32 {
-    let mut v = b & 0xffff;
-    v ^= (v >> 1) & 0x5555;
-    v ^= (v >> 2) & 0x3333;
-    v ^= (v >> 4) & 0x0f0f;
-    v ^= (v >> 8) & 0x00ff;
-    v
+    lanes::sobol_dim1(b)
 }
 
 /// `(sobol_burley::sample(i, 0, seed), sobol_burley::sample(i, 1, seed))`,
@@ -69,24 +64,15 @@ pub fn sobol_dim1(b: u32) -> u32 {
 /// through [`sobol_dim1`], dimension 1.
 #[inline]
 pub fn sobol_pair(i: u32, seed: u32) -> Vec2 {
-    use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
-    let idx = owen_scramble_rev(i.reverse_bits(), hash(seed ^ 0x79c6_8e4a));
-    // The top 16 bits: the crate's 2^16-sample tables.
-    let bits = idx.reverse_bits() & 0xffff;
-    let s = seed.wrapping_mul(0x9c8f_2d3b);
-    let x = owen_scramble_rev(bits, hash(s ^ 0x912f_69ba));
-    let y = owen_scramble_rev(sobol_dim1(bits), hash(s ^ 0x174f_18ab));
-    Vec2::new(
-        u32_to_f32_norm(x.reverse_bits()),
-        u32_to_f32_norm(y.reverse_bits()),
-    )
+    let p = lanes::sobol_pair(i, seed);
+    Vec2::new(p.x, p.y)
 }
 
 /// Both coordinates of pair `pair` (dimensions 2 pair and 2 pair + 1).
 #[inline]
 pub fn sobol_2d(key: u32, pixel: u32, sample: u32, pair: u32) -> Vec2 {
-    let seed = pair_seed(key, pixel, sample, pair);
-    sobol_pair(sample & ((1 << SOBOL_BLOCK_BITS) - 1), seed)
+    let p = lanes::sobol_2d(key, pixel, sample, pair);
+    Vec2::new(p.x, p.y)
 }
 
 /// Dimension `dim` of sample `sample` in `pixel`: a value in [0, 1), a
@@ -110,7 +96,22 @@ pub struct BounceSamples {
 /// The first pair of bounce `bounce` (pair 0 is the pixel position).
 #[inline]
 pub fn bounce_pair(bounce: u32) -> u32 {
-    1 + PAIRS_PER_BOUNCE * bounce
+    lanes::bounce_pair(bounce)
+}
+
+/// Bounce `bounce`'s Sobol numbers for one path: [`lanes::bounce`] on one
+/// lane.
+#[inline]
+pub fn sobol_bounce(key: u32, pixel: u32, sample: u32, bounce: u32) -> BounceSamples {
+    let b = lanes::bounce(key, pixel, sample, bounce);
+    BounceSamples {
+        light_cat: b.light_cat,
+        light_idx: b.light_idx,
+        light: Vec2::new(b.light.x, b.light.y),
+        bsdf_lobe: b.bsdf_lobe,
+        bsdf: Vec2::new(b.bsdf.x, b.bsdf.y),
+        rr: b.rr,
+    }
 }
 
 /// One path's random numbers, from either sampler; the GLSL twin is
@@ -182,21 +183,112 @@ impl PathSampler {
                 sample,
                 bounce,
             } => {
-                let p = bounce_pair(*bounce);
                 *bounce += 1;
-                let light = sobol_2d(*key, *pixel, *sample, p);
-                let bsdf = sobol_2d(*key, *pixel, *sample, p + 1);
-                let cat_idx = sobol_2d(*key, *pixel, *sample, p + 2);
-                let lobe_rr = sobol_2d(*key, *pixel, *sample, p + 3);
-                BounceSamples {
-                    light_cat: cat_idx.x,
-                    light_idx: cat_idx.y,
-                    light,
-                    bsdf_lobe: lobe_rr.x,
-                    bsdf,
-                    rr: lobe_rr.y,
-                }
+                sobol_bounce(*key, *pixel, *sample, *bounce - 1)
             }
+        }
+    }
+}
+
+/// The sampler over any [`ULane`] type: one source for the scalar path
+/// (`u32` lanes, what [`PathSampler`] and the GLSL twin give) and eight
+/// paths side by side ([`crate::lanes::U32x8`], each lane its own pixel,
+/// sample and bounce). `hash`, `owen_scramble_rev` and `u32_to_f32_norm`
+/// are `sobol_burley::parts`' formulas (the unit test below pins
+/// [`sobol_pair`] to the crate's `sample`).
+pub mod lanes {
+    use super::{PAIRS_PER_BOUNCE, SOBOL_BLOCK_BITS, SOBOL_SALT};
+    use crate::lanes::{Lane, ULane, V2};
+    use crate::sampling::lanes::pcg4d;
+
+    #[inline(always)]
+    fn hash<U: ULane>(n: U) -> U {
+        let n = n.xor(U::splat(0xe6fe_3beb));
+        let n = n.xor(n.shr(16)).mul(U::splat(0x7feb_352d));
+        let n = n.xor(n.shr(15)).mul(U::splat(0x846c_a68b));
+        n.xor(n.shr(16))
+    }
+
+    #[inline(always)]
+    fn owen_scramble_rev<U: ULane>(n: U, scramble: U) -> U {
+        let n = n.xor(n.mul(U::splat(0x3d20_adea)));
+        let n = n.add(scramble);
+        let n = n.mul(scramble.shr(16).or(U::splat(1)));
+        let n = n.xor(n.mul(U::splat(0x0552_6c56)));
+        n.xor(n.mul(U::splat(0x53a2_2864)))
+    }
+
+    #[inline(always)]
+    fn u32_to_f32_norm<U: ULane>(n: U) -> U::F {
+        n.shr(9).or(U::splat(0x3f80_0000)).bits_to_f32() - U::F::one()
+    }
+
+    #[inline(always)]
+    pub fn sobol_dim1<U: ULane>(b: U) -> U {
+        let v = b.and(U::splat(0xffff));
+        let v = v.xor(v.shr(1).and(U::splat(0x5555)));
+        let v = v.xor(v.shr(2).and(U::splat(0x3333)));
+        let v = v.xor(v.shr(4).and(U::splat(0x0f0f)));
+        v.xor(v.shr(8).and(U::splat(0x00ff)))
+    }
+
+    #[inline(always)]
+    pub fn sobol_pair<U: ULane>(i: U, seed: U) -> V2<U::F> {
+        let idx = owen_scramble_rev(i.reverse_bits(), hash(seed.xor(U::splat(0x79c6_8e4a))));
+        // The top 16 bits: the crate's 2^16-sample tables.
+        let bits = idx.reverse_bits().and(U::splat(0xffff));
+        let s = seed.mul(U::splat(0x9c8f_2d3b));
+        let x = owen_scramble_rev(bits, hash(s.xor(U::splat(0x912f_69ba))));
+        let y = owen_scramble_rev(sobol_dim1(bits), hash(s.xor(U::splat(0x174f_18ab))));
+        V2 {
+            x: u32_to_f32_norm(x.reverse_bits()),
+            y: u32_to_f32_norm(y.reverse_bits()),
+        }
+    }
+
+    #[inline(always)]
+    pub fn pair_seed<U: ULane>(key: U, pixel: U, sample: U, pair: U) -> U {
+        let block = sample.shr(SOBOL_BLOCK_BITS);
+        pcg4d([pixel, pair, block, key.xor(U::splat(SOBOL_SALT))])[0]
+    }
+
+    #[inline(always)]
+    pub fn sobol_2d<U: ULane>(key: U, pixel: U, sample: U, pair: U) -> V2<U::F> {
+        let i = sample.and(U::splat((1 << SOBOL_BLOCK_BITS) - 1));
+        sobol_pair(i, pair_seed(key, pixel, sample, pair))
+    }
+
+    /// [`super::BounceSamples`] per lane.
+    #[derive(Clone, Copy, Debug)]
+    pub struct BounceLanes<F> {
+        pub light_cat: F,
+        pub light_idx: F,
+        pub light: V2<F>,
+        pub bsdf_lobe: F,
+        pub bsdf: V2<F>,
+        pub rr: F,
+    }
+
+    #[inline(always)]
+    pub fn bounce_pair<U: ULane>(bounce: U) -> U {
+        U::splat(1).add(U::splat(PAIRS_PER_BOUNCE).mul(bounce))
+    }
+
+    /// Bounce `bounce`'s numbers (see the module notes).
+    #[inline(always)]
+    pub fn bounce<U: ULane>(key: U, pixel: U, sample: U, bounce: U) -> BounceLanes<U::F> {
+        let p = bounce_pair(bounce);
+        let light = sobol_2d(key, pixel, sample, p);
+        let bsdf = sobol_2d(key, pixel, sample, p.add(U::splat(1)));
+        let cat_idx = sobol_2d(key, pixel, sample, p.add(U::splat(2)));
+        let lobe_rr = sobol_2d(key, pixel, sample, p.add(U::splat(3)));
+        BounceLanes {
+            light_cat: cat_idx.x,
+            light_idx: cat_idx.y,
+            light,
+            bsdf_lobe: lobe_rr.x,
+            bsdf,
+            rr: lobe_rr.y,
         }
     }
 }

@@ -5,15 +5,19 @@
 //! within the polynomial sine's error where it samples an angle. Batches
 //! mix ordinary inputs with the ones the branches exist for (directions on
 //! the horizon or below it, the disk's centre, NaN), and lanes that a
-//! caller has masked off hold garbage that must not reach the others.
+//! caller has masked off hold garbage that must not reach the others. The
+//! sampler's lanes are eight paths (pixel, sample, bounce each their own)
+//! and must give the scalar sampler's streams bit for bit.
 
 use glam::{Vec2, Vec3};
+use glint_cpu::SamplerKind;
 use glint_cpu::bsdf::conductor::{self, RoughConductor};
 use glint_cpu::bsdf::microfacet::{self, MIN_ALPHA};
 use glint_cpu::bsdf::{BsdfSample, LaneSample};
 use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse, fresnel, warp};
-use glint_cpu::lanes::{F32x8, Lane, Mask8, SimdLevel, V2, V3};
+use glint_cpu::lanes::{F32x8, Lane, Mask8, SimdLevel, U32x8, ULane, V2, V3};
 use glint_cpu::simd_at;
+use glint_cpu::sobol::{self, PathSampler};
 
 /// xorshift32: the tests' own numbers.
 struct Rand(u32);
@@ -552,4 +556,92 @@ fn wide_sine_is_libm_within_its_bound() {
         assert!(worst <= 2e-7, "{level:?}: {worst:e}");
     }
     assert_eq!(1.25f32.sin_cos(), Lane::sin_cos(1.25f32));
+}
+
+/// One sampler tuple per lane: (seed key, pixel, sample, bounce).
+type St = (u32, u32, u32, u32);
+
+#[inline(always)]
+fn u32x8(l: [St; 8], f: impl Fn(St) -> u32) -> U32x8 {
+    U32x8(l.map(f))
+}
+
+/// The sampler's numbers for eight paths at once (each lane its own pixel,
+/// sample index, with blocks past 2^16, and bounce) are the scalar
+/// sampler's bits: the pixel pair, a bounce's eight numbers, and `pcg4d`.
+#[test]
+fn sampler_lanes_are_the_scalar_streams_bit_for_bit() {
+    let mut r = Rand(2024);
+    let mut next = move || {
+        r.f();
+        r.0
+    };
+    let inputs: Vec<[St; 8]> = (0..BATCHES)
+        .map(|_| {
+            std::array::from_fn(|_| {
+                let sample = if next() % 4 == 0 {
+                    next()
+                } else {
+                    next() % 4096
+                };
+                (next(), next() % (1 << 20), sample, next() % 12)
+            })
+        })
+        .collect();
+    let at = |b: usize, i: usize| inputs[b][i];
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [St; 8]) -> [[f32; 8]; 8] {
+                let (k, p, s, b) = (u32x8(l, |x| x.0), u32x8(l, |x| x.1), u32x8(l, |x| x.2), u32x8(l, |x| x.3));
+                let n = sobol::lanes::bounce(k, p, s, b);
+                let v = [n.light_cat, n.light_idx, n.light.x, n.light.y, n.bsdf_lobe, n.bsdf.x, n.bsdf.y, n.rr];
+                std::array::from_fn(|i| v.map(|x| x.0[i]))
+            }(l))
+        },
+        |(k, p, s, b)| {
+            let mut ps = PathSampler::new(SamplerKind::Sobol, k, p, s);
+            for _ in 0..b {
+                ps.bounce();
+            }
+            let n = ps.bounce();
+            [
+                n.light_cat,
+                n.light_idx,
+                n.light.x,
+                n.light.y,
+                n.bsdf_lobe,
+                n.bsdf.x,
+                n.bsdf.y,
+                n.rr,
+            ]
+        },
+        |a, b| a.iter().zip(b).all(|(x, y)| same(*x, *y)),
+        "sobol bounce",
+    );
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [St; 8]) -> [Vec2; 8] {
+                let (k, p, s) = (u32x8(l, |x| x.0), u32x8(l, |x| x.1), u32x8(l, |x| x.2));
+                let px = sobol::lanes::sobol_2d(k, p, s, U32x8::splat(0));
+                std::array::from_fn(|i| Vec2::new(px.x.0[i], px.y.0[i]))
+            }(l))
+        },
+        |(k, p, s, _)| PathSampler::new(SamplerKind::Sobol, k, p, s).pixel_2d(),
+        |a, b| same(a.x, b.x) && same(a.y, b.y),
+        "sobol pixel pair",
+    );
+    each_level(
+        at,
+        |lv, l| {
+            simd_at!(lv, fn(l: [St; 8]) -> [[u32; 4]; 8] {
+                let h = glint_cpu::sampling::lanes::pcg4d([u32x8(l, |x| x.0), u32x8(l, |x| x.1), u32x8(l, |x| x.2), u32x8(l, |x| x.3)]);
+                std::array::from_fn(|i| h.map(|v| v.0[i]))
+            }(l))
+        },
+        |(k, p, s, b)| glint_cpu::sampling::pcg4d([k, p, s, b]),
+        |a, b| a == b,
+        "pcg4d",
+    );
 }

@@ -7,15 +7,17 @@
 //! call per lane, then the lane-generic ones on [`F32x8`] at each SIMD
 //! level this CPU has, interleaved round by round so a change of load falls
 //! on all alike.
-//! Speeds are printed, never asserted; what is asserted is that every
-//! variant sums to the same valid-sample count.
+//! The sampler: a bounce's eight Sobol numbers for 2^16 paths, one call
+//! per path against eight paths per call. Speeds are printed, never
+//! asserted; what is asserted is that every variant gives the same
+//! valid-sample count (BSDFs) or the same bits (sampler).
 
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
 use glint_cpu::bsdf::conductor::{self, RoughConductor};
 use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse};
-use glint_cpu::lanes::{F32x8, Lane, SimdLevel, V2, V3};
+use glint_cpu::lanes::{F32x8, Lane, SimdLevel, U32x8, ULane, V2, V3};
 use glint_cpu::simd_at;
 
 const N: usize = 1 << 16;
@@ -139,6 +141,75 @@ fn wide_at(level: SimdLevel, inp: &Inputs) -> usize {
     simd_at!(level, fn(inp: &Inputs) -> usize { wide(inp) }(inp))
 }
 
+/// A bounce's eight Sobol numbers for N paths (pixel i, sample i / 7,
+/// bounce i % 5), scalar: the sum of their bits.
+fn sobol_scalar(key: u32) -> u32 {
+    let mut acc = 0u32;
+    for i in 0..N as u32 {
+        let b = glint_cpu::sobol::sobol_bounce(key, i, i / 7, i % 5);
+        acc = acc.wrapping_add(
+            b.light.x.to_bits() ^ b.bsdf.y.to_bits() ^ b.rr.to_bits() ^ b.light_cat.to_bits(),
+        );
+    }
+    acc
+}
+
+#[inline(always)]
+fn sobol_wide(key: u32) -> u32 {
+    let mut acc = 0u32;
+    for i in (0..N as u32).step_by(8) {
+        let pixel = U32x8(std::array::from_fn(|k| i + k as u32));
+        let sample = U32x8(pixel.0.map(|p| p / 7));
+        let bounce = U32x8(pixel.0.map(|p| p % 5));
+        let b = glint_cpu::sobol::lanes::bounce(U32x8::splat(key), pixel, sample, bounce);
+        for k in 0..8 {
+            acc = acc.wrapping_add(
+                b.light.x.0[k].to_bits()
+                    ^ b.bsdf.y.0[k].to_bits()
+                    ^ b.rr.0[k].to_bits()
+                    ^ b.light_cat.0[k].to_bits(),
+            );
+        }
+    }
+    acc
+}
+
+fn sobol_at(level: SimdLevel, key: u32) -> u32 {
+    simd_at!(level, fn(key: u32) -> u32 { sobol_wide(key) }(key))
+}
+
+#[test]
+#[ignore = "benchmark: run with --ignored --nocapture"]
+fn sampler_lanes_throughput() {
+    let levels = SimdLevel::available();
+    let reference = sobol_scalar(7);
+    for l in &levels {
+        assert_eq!(sobol_at(*l, 7), reference, "{l:?}");
+    }
+    let rounds = 20;
+    let mut secs = vec![0.0f64; 1 + levels.len()];
+    for _ in 0..rounds {
+        let t = Instant::now();
+        std::hint::black_box(sobol_scalar(std::hint::black_box(7)));
+        secs[0] += t.elapsed().as_secs_f64();
+        for (k, l) in levels.iter().enumerate() {
+            let t = Instant::now();
+            std::hint::black_box(sobol_at(*l, std::hint::black_box(7)));
+            secs[k + 1] += t.elapsed().as_secs_f64();
+        }
+    }
+    let bounces = (rounds * N) as f64;
+    println!("| variant | M Sobol bounces/s (8 numbers each) | over scalar |\n|---|---:|---:|");
+    println!("| scalar | {:.1} | 1.00 |", bounces / secs[0] / 1e6);
+    for (k, l) in levels.iter().enumerate() {
+        println!(
+            "| 8 lanes, {l:?} | {:.1} | {:.2} |",
+            bounces / secs[k + 1] / 1e6,
+            secs[0] / secs[k + 1]
+        );
+    }
+}
+
 #[test]
 #[ignore = "benchmark: run with --ignored --nocapture"]
 fn bsdf_lanes_throughput() {
@@ -152,11 +223,11 @@ fn bsdf_lanes_throughput() {
     let mut secs = vec![0.0f64; 1 + levels.len()];
     for _ in 0..rounds {
         let t = Instant::now();
-        std::hint::black_box(scalar(&inp));
+        std::hint::black_box(scalar(std::hint::black_box(&inp)));
         secs[0] += t.elapsed().as_secs_f64();
         for (k, l) in levels.iter().enumerate() {
             let t = Instant::now();
-            std::hint::black_box(wide_at(*l, &inp));
+            std::hint::black_box(wide_at(*l, std::hint::black_box(&inp)));
             secs[k + 1] += t.elapsed().as_secs_f64();
         }
     }
