@@ -577,6 +577,17 @@ impl SimdLevel {
         Self::Sse2
     }
 
+    /// How many single-path calls eight lanes cost, rounded up: the least
+    /// number of live lanes for which wide code pays (the Sobol bounce
+    /// measured 5.3x per lane on AVX2, 1.5x on SSE2, which has no 32-bit
+    /// lane multiply; `cpu/tests/lanes_throughput.rs`).
+    pub fn break_even(self) -> u8 {
+        match self {
+            Self::Avx2 => 2,
+            Self::Sse2 => 6,
+        }
+    }
+
     /// Every level this CPU runs, baseline first (the tests run each).
     pub fn available() -> Vec<Self> {
         let mut v = vec![Self::Sse2];
@@ -604,15 +615,17 @@ macro_rules! simd_at {
         unsafe fn avx2($($arg: $ty),*) -> $ret {
             body($($arg),*)
         }
+        // The arguments first, outside the unsafe block.
+        $(let $arg: $ty = $val;)*
         match $level {
             #[cfg(target_arch = "x86_64")]
             $crate::lanes::SimdLevel::Avx2
                 if $crate::lanes::SimdLevel::detect() == $crate::lanes::SimdLevel::Avx2 =>
             {
                 // SAFETY: the CPU has AVX2 (checked just above).
-                unsafe { avx2($($val),*) }
+                unsafe { avx2($($arg),*) }
             }
-            _ => body($($val),*),
+            _ => body($($arg),*),
         }
     }};
 }

@@ -33,7 +33,9 @@
 
 use glam::Vec2;
 
+use crate::lanes::{F32x8, SimdLevel, U32x8, ULane, V2};
 use crate::sampling::Rng;
+use crate::simd_at;
 
 // The pair seeds' salt, the sequence length and the pairs per bounce.
 pub use crate::abi::{PAIRS_PER_BOUNCE, SOBOL_BLOCK_BITS, SOBOL_SALT};
@@ -114,10 +116,202 @@ pub fn sobol_bounce(key: u32, pixel: u32, sample: u32, bounce: u32) -> BounceSam
     }
 }
 
+/// The Sobol numbers of eight consecutive samples of one pixel, computed
+/// eight paths per instruction ([`lanes`] on [`U32x8`] lanes, at the SIMD
+/// level the render detected): the pixel positions at once, each bounce's
+/// eight numbers when the first of the eight paths reaches it. The render
+/// loop traces the pixel's samples one after the other, so the paths after
+/// the first find theirs computed. The same bits as [`PathSampler::new`]'s.
+///
+/// Deep bounces are reached by few of the eight paths, and eight lanes
+/// cost what [`SimdLevel`]'s break-even count of single paths does: a
+/// bounce is drawn wide only while the previous batch of the pixel's
+/// samples used it in at least that many paths, else path by path.
+#[derive(Clone, Debug)]
+pub struct SampleBatch {
+    level: SimdLevel,
+    key: u32,
+    pixel: u32,
+    first: u32,
+    pixel_2d: [Vec2; 8],
+    /// Bounces 0 .. len drawn wide.
+    bounces: Vec<[BounceSamples; 8]>,
+    /// Paths of this batch, and of the previous one, that drew each bounce.
+    uses: Vec<u8>,
+    prev_uses: Vec<u8>,
+    /// The pixel's pair keys, pair by pair, for the block of 2^16 samples
+    /// `block` (when the batch lies in one block).
+    keys: Vec<lanes::PairKeys<u32>>,
+    block: Option<u32>,
+}
+
+impl SampleBatch {
+    pub fn new(level: SimdLevel) -> Self {
+        Self {
+            level,
+            key: 0,
+            pixel: 0,
+            first: 0,
+            pixel_2d: [Vec2::ZERO; 8],
+            bounces: Vec::new(),
+            uses: Vec::new(),
+            prev_uses: Vec::new(),
+            keys: Vec::new(),
+            block: None,
+        }
+    }
+
+    /// Start the batch of samples `first .. first + 8` of `pixel`.
+    pub fn reset(&mut self, key: u32, pixel: u32, first: u32) {
+        let block = first >> SOBOL_BLOCK_BITS;
+        let one_block = first.wrapping_add(7) >> SOBOL_BLOCK_BITS == block;
+        if (self.key, self.pixel) == (key, pixel) {
+            std::mem::swap(&mut self.uses, &mut self.prev_uses);
+        } else {
+            self.prev_uses.clear();
+        }
+        if (self.key, self.pixel) != (key, pixel) || self.block != Some(block) || !one_block {
+            self.keys.clear();
+        }
+        self.block = one_block.then_some(block);
+        self.uses.clear();
+        (self.key, self.pixel, self.first) = (key, pixel, first);
+        self.bounces.clear();
+        let p = match self.block {
+            Some(_) => {
+                let k = self.pair_keys(0);
+                simd_at!(self.level, fn(first: u32, k: lanes::PairKeys<u32>) -> V2<F32x8> {
+                    let i = batch_samples(first).and(U32x8::splat((1 << SOBOL_BLOCK_BITS) - 1));
+                    lanes::PairKeys::<U32x8>::splat(k).sample(i)
+                }(first, k))
+            }
+            None => simd_at!(self.level, fn(key: u32, pixel: u32, first: u32) -> V2<F32x8> {
+                lanes::sobol_2d(U32x8::splat(key), U32x8::splat(pixel), batch_samples(first), U32x8::splat(0))
+            }(key, pixel, first)),
+        };
+        self.pixel_2d = std::array::from_fn(|i| Vec2::new(p.x.0[i], p.y.0[i]));
+    }
+
+    /// The sampler of sample `sample` (in the batch) of the pixel.
+    pub fn sampler(&mut self, sample: u32) -> PathSampler<'_> {
+        let lane = sample.wrapping_sub(self.first) as usize;
+        debug_assert!(
+            lane < 8,
+            "sample {sample} outside the batch at {}",
+            self.first
+        );
+        PathSampler::Batched {
+            batch: self,
+            lane,
+            bounce: 0,
+        }
+    }
+
+    fn bounce(&mut self, lane: usize, bounce: u32) -> BounceSamples {
+        let b = bounce as usize;
+        if self.uses.len() <= b {
+            self.uses.resize(b + 1, 0);
+        }
+        self.uses[b] += 1;
+        let wide = |k: usize| {
+            self.prev_uses
+                .get(k)
+                .is_none_or(|&n| n >= self.level.break_even())
+        };
+        if self.bounces.len() < b || (self.bounces.len() == b && !wide(b)) {
+            let sample = self.first.wrapping_add(lane as u32);
+            if self.block.is_none() {
+                return sobol_bounce(self.key, self.pixel, sample, bounce);
+            }
+            // One path, from the pixel's keys.
+            let (p, i) = (bounce_pair(bounce), sample & ((1 << SOBOL_BLOCK_BITS) - 1));
+            let mut pair = |j: u32| {
+                let v = self.pair_keys(p + j).sample(i);
+                Vec2::new(v.x, v.y)
+            };
+            let (light, bsdf, cat_idx, lobe_rr) = (pair(0), pair(1), pair(2), pair(3));
+            return BounceSamples {
+                light_cat: cat_idx.x,
+                light_idx: cat_idx.y,
+                light,
+                bsdf_lobe: lobe_rr.x,
+                bsdf,
+                rr: lobe_rr.y,
+            };
+        }
+        if self.bounces.len() == b {
+            let (key, pixel, first) = (self.key, self.pixel, self.first);
+            let n = match self.block {
+                Some(_) => {
+                    let p = bounce_pair(bounce);
+                    let k = [
+                        self.pair_keys(p),
+                        self.pair_keys(p + 1),
+                        self.pair_keys(p + 2),
+                        self.pair_keys(p + 3),
+                    ];
+                    // No array::map in here: its closure would not be
+                    // inlined into the AVX2 copy.
+                    simd_at!(self.level, fn(first: u32, k: [lanes::PairKeys<u32>; 4]) -> [BounceSamples; 8] {
+                        let i = batch_samples(first).and(U32x8::splat((1 << SOBOL_BLOCK_BITS) - 1));
+                        let pair = |j: usize| lanes::PairKeys::<U32x8>::splat(k[j]).sample(i);
+                        let (light, bsdf, cat_idx, lobe_rr) = (pair(0), pair(1), pair(2), pair(3));
+                        unpack(lanes::BounceLanes {
+                            light_cat: cat_idx.x,
+                            light_idx: cat_idx.y,
+                            light,
+                            bsdf_lobe: lobe_rr.x,
+                            bsdf,
+                            rr: lobe_rr.y,
+                        })
+                    }(first, k))
+                }
+                // The batch straddles two blocks of 2^16 (their seeds differ).
+                None => {
+                    simd_at!(self.level, fn(key: u32, pixel: u32, first: u32, b: u32) -> [BounceSamples; 8] {
+                    unpack(lanes::bounce(U32x8::splat(key), U32x8::splat(pixel), batch_samples(first), U32x8::splat(b)))
+                }(key, pixel, first, bounce))
+                }
+            };
+            self.bounces.push(n);
+        }
+        self.bounces[b][lane]
+    }
+
+    /// The pixel's keys of pair `pair` in the batch's block.
+    fn pair_keys(&mut self, pair: u32) -> lanes::PairKeys<u32> {
+        while self.keys.len() <= pair as usize {
+            let p = self.keys.len() as u32;
+            let seed = pair_seed(self.key, self.pixel, self.first, p);
+            self.keys.push(lanes::PairKeys::new(seed));
+        }
+        self.keys[pair as usize]
+    }
+}
+
+/// Eight lanes' bounce numbers, path by path.
+#[inline(always)]
+fn unpack(n: lanes::BounceLanes<F32x8>) -> [BounceSamples; 8] {
+    std::array::from_fn(|i| BounceSamples {
+        light_cat: n.light_cat.0[i],
+        light_idx: n.light_idx.0[i],
+        light: Vec2::new(n.light.x.0[i], n.light.y.0[i]),
+        bsdf_lobe: n.bsdf_lobe.0[i],
+        bsdf: Vec2::new(n.bsdf.x.0[i], n.bsdf.y.0[i]),
+        rr: n.rr.0[i],
+    })
+}
+
+/// The sample indices `first .. first + 8` as lanes.
+#[inline(always)]
+fn batch_samples(first: u32) -> U32x8 {
+    U32x8(std::array::from_fn(|i| first.wrapping_add(i as u32)))
+}
+
 /// One path's random numbers, from either sampler; the GLSL twin is
 /// `Sampler` in `shaders/integrator/sobol.glsl`.
-#[derive(Clone, Debug)]
-pub enum PathSampler {
+#[derive(Debug)]
+pub enum PathSampler<'a> {
     /// The counter-based stream, drawn in the integrator's order (pixel 2D,
     /// then per bounce: category, index, light 2D, lobe, BSDF 2D,
     /// roulette), as before samplers existed.
@@ -129,9 +323,16 @@ pub enum PathSampler {
         sample: u32,
         bounce: u32,
     },
+    /// Sobol pairs from a [`SampleBatch`] (lane `lane` of it): the same
+    /// numbers.
+    Batched {
+        batch: &'a mut SampleBatch,
+        lane: usize,
+        bounce: u32,
+    },
 }
 
-impl PathSampler {
+impl PathSampler<'static> {
     pub fn new(kind: crate::film::SamplerKind, key: u32, pixel: u32, sample: u32) -> Self {
         match kind {
             crate::film::SamplerKind::Independent => {
@@ -145,7 +346,9 @@ impl PathSampler {
             },
         }
     }
+}
 
+impl PathSampler<'_> {
     /// The position in the pixel (first call only).
     #[inline]
     pub fn pixel_2d(&mut self) -> Vec2 {
@@ -154,6 +357,7 @@ impl PathSampler {
             Self::Sobol {
                 key, pixel, sample, ..
             } => sobol_2d(*key, *pixel, *sample, 0),
+            Self::Batched { batch, lane, .. } => batch.pixel_2d[*lane],
         }
     }
 
@@ -185,6 +389,14 @@ impl PathSampler {
             } => {
                 *bounce += 1;
                 sobol_bounce(*key, *pixel, *sample, *bounce - 1)
+            }
+            Self::Batched {
+                batch,
+                lane,
+                bounce,
+            } => {
+                *bounce += 1;
+                batch.bounce(*lane, *bounce - 1)
             }
         }
     }
@@ -234,15 +446,53 @@ pub mod lanes {
 
     #[inline(always)]
     pub fn sobol_pair<U: ULane>(i: U, seed: U) -> V2<U::F> {
-        let idx = owen_scramble_rev(i.reverse_bits(), hash(seed.xor(U::splat(0x79c6_8e4a))));
-        // The top 16 bits: the crate's 2^16-sample tables.
-        let bits = idx.reverse_bits().and(U::splat(0xffff));
-        let s = seed.mul(U::splat(0x9c8f_2d3b));
-        let x = owen_scramble_rev(bits, hash(s.xor(U::splat(0x912f_69ba))));
-        let y = owen_scramble_rev(sobol_dim1(bits), hash(s.xor(U::splat(0x174f_18ab))));
-        V2 {
-            x: u32_to_f32_norm(x.reverse_bits()),
-            y: u32_to_f32_norm(y.reverse_bits()),
+        PairKeys::new(seed).sample(i)
+    }
+
+    /// The part of a pair's scrambling that its seed alone fixes: the
+    /// index shuffle's and the two coordinates' scramble keys. A pixel's
+    /// samples within one block of 2^16 share every pair's seed, so a
+    /// batch of its samples computes these once.
+    #[derive(Clone, Copy, Debug)]
+    pub struct PairKeys<U> {
+        shuffle: U,
+        x: U,
+        y: U,
+    }
+
+    impl<U: ULane> PairKeys<U> {
+        #[inline(always)]
+        pub fn new(seed: U) -> Self {
+            let s = seed.mul(U::splat(0x9c8f_2d3b));
+            Self {
+                shuffle: hash(seed.xor(U::splat(0x79c6_8e4a))),
+                x: hash(s.xor(U::splat(0x912f_69ba))),
+                y: hash(s.xor(U::splat(0x174f_18ab))),
+            }
+        }
+
+        /// Keys of one lane type splat across another's lanes.
+        #[inline(always)]
+        pub fn splat<V: ULane>(k: PairKeys<u32>) -> PairKeys<V> {
+            PairKeys {
+                shuffle: V::splat(k.shuffle),
+                x: V::splat(k.x),
+                y: V::splat(k.y),
+            }
+        }
+
+        /// Point `i` of the pair's sequence.
+        #[inline(always)]
+        pub fn sample(&self, i: U) -> V2<U::F> {
+            let idx = owen_scramble_rev(i.reverse_bits(), self.shuffle);
+            // The top 16 bits: the crate's 2^16-sample tables.
+            let bits = idx.reverse_bits().and(U::splat(0xffff));
+            let x = owen_scramble_rev(bits, self.x);
+            let y = owen_scramble_rev(sobol_dim1(bits), self.y);
+            V2 {
+                x: u32_to_f32_norm(x.reverse_bits()),
+                y: u32_to_f32_norm(y.reverse_bits()),
+            }
         }
     }
 

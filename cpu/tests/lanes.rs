@@ -645,3 +645,77 @@ fn sampler_lanes_are_the_scalar_streams_bit_for_bit() {
         "pcg4d",
     );
 }
+
+/// A pixel's samples drawn in batches of eight ([`sobol::SampleBatch`]:
+/// wide bounces while the previous batch used them in enough paths, one
+/// path at a time past that, generic lanes where a batch straddles two
+/// blocks of 2^16 samples) are `PathSampler::new`'s numbers bit for bit,
+/// at every SIMD level, however deep each path goes.
+#[test]
+fn batched_samples_are_the_scalar_sampler_s() {
+    let mut r = Rand(11);
+    let starts = [0u32, 8, 65_528, 65_532, 131_070, 4_000_000_000];
+    for level in SimdLevel::available() {
+        let mut batch = sobol::SampleBatch::new(level);
+        for (pi, pixel) in [0u32, 1, 977, 1 << 20].into_iter().enumerate() {
+            let key = 0x5eed + pi as u32;
+            for &start in &starts {
+                // Three batches in a row, the count of live paths varying.
+                for k in 0..3u32 {
+                    let first = start.wrapping_add(8 * k);
+                    batch.reset(key, pixel, first);
+                    let live = if k == 1 { 3 } else { 8 };
+                    for lane in 0..live {
+                        let s = first.wrapping_add(lane);
+                        let depth = (r.f() * r.f() * 12.0) as u32;
+                        let mut a = batch.sampler(s);
+                        let mut b = PathSampler::new(SamplerKind::Sobol, key, pixel, s);
+                        assert_eq!(
+                            a.pixel_2d(),
+                            b.pixel_2d(),
+                            "{level:?} pixel {pixel} sample {s}"
+                        );
+                        for d in 0..depth {
+                            assert_eq!(
+                                a.bounce(),
+                                b.bounce(),
+                                "{level:?} pixel {pixel} sample {s} bounce {d}"
+                            );
+                        }
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// A render through the batched sampler is the one-path-at-a-time
+/// render (`PathTracer::sample`, each sample's own sampler) bit for bit,
+/// at every SIMD level: the wide sampler changes the speed, not the image.
+#[test]
+fn batched_render_is_the_unbatched_render_bit_for_bit() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
+    for name in ["cornell.gltf", "materials.gltf"] {
+        let scene = glint_cpu::loader::load(&root.join(name)).unwrap();
+        let opts = glint_cpu::RenderOptions {
+            spp: 21,
+            ..glint_cpu::RenderOptions::new(24, 16)
+        };
+        for level in SimdLevel::available() {
+            let mut pt = glint_cpu::PathTracer::new(&scene, &opts).unwrap();
+            pt.simd = level;
+            let (film, _) = pt.render(opts.spp, &|_, _| {});
+            for y in 0..16 {
+                for x in 0..24 {
+                    let mut rays = 0;
+                    let sum = (0..opts.spp).fold(Vec3::ZERO, |acc, s| {
+                        let l = pt.sample(x, y, s, &mut rays);
+                        acc + if l.is_finite() { l } else { Vec3::ZERO }
+                    });
+                    let got = film.sum[film.index(x, y)];
+                    assert_eq!(got, sum, "{name} at {level:?}, pixel ({x}, {y})");
+                }
+            }
+        }
+    }
+}

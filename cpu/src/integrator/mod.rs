@@ -68,11 +68,12 @@ use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
 use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind, add_sample};
 use crate::frame::Frame;
+use crate::lanes::SimdLevel;
 use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::schedule::{Pacing, PassPlan, Schedule};
-use crate::sobol::PathSampler;
+use crate::sobol::{PathSampler, SampleBatch};
 use crate::texture::{MaterialTextures, clearcoat_normal, normal_mapped, textured_bsdf};
 
 // Russian roulette and the ray offsets, shared with the kernel.
@@ -287,6 +288,9 @@ pub struct PathTracer<'a> {
     /// Whether traversal runs the alpha test (`Scene::textures.has_masks()`,
     /// asked once here, not per ray).
     pub masks: bool,
+    /// The instructions the wide sampler runs on ([`SampleBatch`]):
+    /// `SimdLevel::detect()`, settable so tests can compare the levels.
+    pub simd: SimdLevel,
 }
 
 /// The MIS weight of an emitter a BSDF-sampled ray found: 1 unless the
@@ -370,6 +374,7 @@ impl<'a> PathTracer<'a> {
             batch: opts.batch(),
             plan: PassPlan::of(opts),
             masks: scene.textures.has_masks(),
+            simd: SimdLevel::detect(),
         })
     }
 
@@ -524,9 +529,19 @@ impl<'a> PathTracer<'a> {
     /// One radiance sample for pixel (x, y), sample index `s`; `rays`
     /// counts camera, continuation and shadow rays.
     pub fn sample(&self, x: u32, y: u32, s: u32, rays: &mut u64) -> Vec3 {
-        let scene = self.scene;
         let pixel = y * self.camera.width + x;
-        let mut rng = PathSampler::new(self.sampler, self.key, pixel, s);
+        self.trace(
+            x,
+            y,
+            PathSampler::new(self.sampler, self.key, pixel, s),
+            rays,
+        )
+    }
+
+    /// [`PathTracer::sample`] with its random numbers from `rng` (the
+    /// sample's own, from whichever source).
+    pub fn trace(&self, x: u32, y: u32, mut rng: PathSampler, rays: &mut u64) -> Vec3 {
+        let scene = self.scene;
         let mut ray = self.camera.ray(x, y, rng.pixel_2d());
 
         let (mut radiance, mut throughput) = (Vec3::ZERO, Vec3::ONE);
@@ -696,6 +711,7 @@ impl<'a> PathTracer<'a> {
             .map(|ti| {
                 let (x0, y0) = ((ti % tiles_x) * TILE, (ti / tiles_x) * TILE);
                 let mut rays = 0u64;
+                let mut batch = SampleBatch::new(self.simd);
                 let mut px = Vec::with_capacity((TILE * TILE) as usize);
                 for y in y0..(y0 + TILE).min(h) {
                     for x in x0..(x0 + TILE).min(w) {
@@ -709,8 +725,18 @@ impl<'a> PathTracer<'a> {
                         } else {
                             count
                         };
+                        let pixel = y * w + x;
                         for s in first..first + n {
-                            let mut l = self.sample(x, y, s, &mut rays);
+                            let mut l = match self.sampler {
+                                // Sobol: eight samples' numbers per instruction.
+                                SamplerKind::Sobol => {
+                                    if (s - first) % 8 == 0 {
+                                        batch.reset(self.key, pixel, s);
+                                    }
+                                    self.trace(x, y, batch.sampler(s), &mut rays)
+                                }
+                                SamplerKind::Independent => self.sample(x, y, s, &mut rays),
+                            };
                             // A NaN or infinity (a degenerate pdf somewhere)
                             // would poison the pixel for good: drop it.
                             if !l.is_finite() {
