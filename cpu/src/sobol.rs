@@ -105,14 +105,20 @@ pub fn bounce_pair(bounce: u32) -> u32 {
 /// lane.
 #[inline]
 pub fn sobol_bounce(key: u32, pixel: u32, sample: u32, bounce: u32) -> BounceSamples {
-    let b = lanes::bounce(key, pixel, sample, bounce);
-    BounceSamples {
-        light_cat: b.light_cat,
-        light_idx: b.light_idx,
-        light: Vec2::new(b.light.x, b.light.y),
-        bsdf_lobe: b.bsdf_lobe,
-        bsdf: Vec2::new(b.bsdf.x, b.bsdf.y),
-        rr: b.rr,
+    lanes::bounce(key, pixel, sample, bounce).into()
+}
+
+impl From<lanes::BounceLanes<f32>> for BounceSamples {
+    #[inline(always)]
+    fn from(b: lanes::BounceLanes<f32>) -> Self {
+        Self {
+            light_cat: b.light_cat,
+            light_idx: b.light_idx,
+            light: Vec2::new(b.light.x, b.light.y),
+            bsdf_lobe: b.bsdf_lobe,
+            bsdf: Vec2::new(b.bsdf.x, b.bsdf.y),
+            rr: b.rr,
+        }
     }
 }
 
@@ -224,46 +230,18 @@ impl SampleBatch {
                 return sobol_bounce(self.key, self.pixel, sample, bounce);
             }
             // One path, from the pixel's keys.
-            let (p, i) = (bounce_pair(bounce), sample & ((1 << SOBOL_BLOCK_BITS) - 1));
-            let mut pair = |j: u32| {
-                let v = self.pair_keys(p + j).sample(i);
-                Vec2::new(v.x, v.y)
-            };
-            let (light, bsdf, cat_idx, lobe_rr) = (pair(0), pair(1), pair(2), pair(3));
-            return BounceSamples {
-                light_cat: cat_idx.x,
-                light_idx: cat_idx.y,
-                light,
-                bsdf_lobe: lobe_rr.x,
-                bsdf,
-                rr: lobe_rr.y,
-            };
+            let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
+            return lanes::bounce_keyed(self.bounce_keys(bounce), i).into();
         }
         if self.bounces.len() == b {
             let (key, pixel, first) = (self.key, self.pixel, self.first);
             let n = match self.block {
                 Some(_) => {
-                    let p = bounce_pair(bounce);
-                    let k = [
-                        self.pair_keys(p),
-                        self.pair_keys(p + 1),
-                        self.pair_keys(p + 2),
-                        self.pair_keys(p + 3),
-                    ];
-                    // No array::map in here: its closure would not be
-                    // inlined into the AVX2 copy.
+                    let k = self.bounce_keys(bounce);
                     simd_at!(self.level, fn(first: u32, k: [lanes::PairKeys<u32>; 4]) -> [BounceSamples; 8] {
                         let i = batch_samples(first).and(U32x8::splat((1 << SOBOL_BLOCK_BITS) - 1));
-                        let pair = |j: usize| lanes::PairKeys::<U32x8>::splat(k[j]).sample(i);
-                        let (light, bsdf, cat_idx, lobe_rr) = (pair(0), pair(1), pair(2), pair(3));
-                        unpack(lanes::BounceLanes {
-                            light_cat: cat_idx.x,
-                            light_idx: cat_idx.y,
-                            light,
-                            bsdf_lobe: lobe_rr.x,
-                            bsdf,
-                            rr: lobe_rr.y,
-                        })
+                        let splat = |j: usize| lanes::PairKeys::<U32x8>::splat(k[j]);
+                        unpack(lanes::bounce_keyed([splat(0), splat(1), splat(2), splat(3)], i))
                     }(first, k))
                 }
                 // The batch straddles two blocks of 2^16 (their seeds differ).
@@ -276,6 +254,17 @@ impl SampleBatch {
             self.bounces.push(n);
         }
         self.bounces[b][lane]
+    }
+
+    /// The pixel's keys of bounce `bounce`'s four pairs.
+    fn bounce_keys(&mut self, bounce: u32) -> [lanes::PairKeys<u32>; 4] {
+        let p = bounce_pair(bounce);
+        [
+            self.pair_keys(p),
+            self.pair_keys(p + 1),
+            self.pair_keys(p + 2),
+            self.pair_keys(p + 3),
+        ]
     }
 
     /// The pixel's keys of pair `pair` in the batch's block.
@@ -528,10 +517,18 @@ pub mod lanes {
     #[inline(always)]
     pub fn bounce<U: ULane>(key: U, pixel: U, sample: U, bounce: U) -> BounceLanes<U::F> {
         let p = bounce_pair(bounce);
-        let light = sobol_2d(key, pixel, sample, p);
-        let bsdf = sobol_2d(key, pixel, sample, p.add(U::splat(1)));
-        let cat_idx = sobol_2d(key, pixel, sample, p.add(U::splat(2)));
-        let lobe_rr = sobol_2d(key, pixel, sample, p.add(U::splat(3)));
+        let keys = |j: u32| PairKeys::new(pair_seed(key, pixel, sample, p.add(U::splat(j))));
+        let i = sample.and(U::splat((1 << SOBOL_BLOCK_BITS) - 1));
+        bounce_keyed([keys(0), keys(1), keys(2), keys(3)], i)
+    }
+
+    /// A bounce's numbers from its four pairs' keys, at sequence index `i`:
+    /// the pairs (light 2D), (BSDF 2D), (light category, light index),
+    /// (BSDF lobe, roulette).
+    #[inline(always)]
+    pub fn bounce_keyed<U: ULane>(k: [PairKeys<U>; 4], i: U) -> BounceLanes<U::F> {
+        let (light, bsdf) = (k[0].sample(i), k[1].sample(i));
+        let (cat_idx, lobe_rr) = (k[2].sample(i), k[3].sample(i));
         BounceLanes {
             light_cat: cat_idx.x,
             light_idx: cat_idx.y,
