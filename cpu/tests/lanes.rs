@@ -189,68 +189,61 @@ fn microfacet_terms_are_the_scalar_bits_in_every_lane() {
         })
         .collect();
     let at = |b: usize, i: usize| inputs[b][i];
-    each_level(
-        at,
-        |lv, l| {
-            simd_at!(lv, fn(l: [Mf; 8]) -> [f32; 8] {
-                let (_, wm, ax, ay) = split(l);
-                lanes1(m::ggx_d(wm.normalize(), ax, ay))
-            }(l))
-        },
-        |(_, wm, ax, ay)| microfacet::ggx_d(wm.normalize(), ax, ay),
-        |a, b| same(*a, *b),
+    // One exact term: `$wide` on the lanes and `$scalar` on each lane's
+    // (w, v, ax, ay), `sep` the Smith form, must give the same bits.
+    macro_rules! term {
+        ($name:literal, $sep:expr, |$w:ident, $v:ident, $ax:ident, $ay:ident, $s:ident| $wide:expr, $scalar:expr) => {
+            each_level(
+                at,
+                |lv, l| {
+                    simd_at!(lv, fn(l: [Mf; 8], $s: bool) -> [f32; 8] {
+                        let ($w, $v, $ax, $ay) = split(l);
+                        let _ = (&$w, &$v, $s);
+                        lanes1($wide)
+                    }(l, $sep))
+                },
+                |($w, $v, $ax, $ay)| {
+                    let ($s, _) = ($sep, (&$w, &$v));
+                    let _ = $s;
+                    $scalar
+                },
+                |a, b| same(*a, *b),
+                $name,
+            )
+        };
+    }
+    term!(
         "ggx_d",
+        false,
+        |w, v, ax, ay, s| m::ggx_d(v.normalize(), ax, ay),
+        microfacet::ggx_d(v.normalize(), ax, ay)
     );
-    each_level(
-        at,
-        |lv, l| {
-            simd_at!(lv, fn(l: [Mf; 8]) -> [f32; 8] {
-                let (w, _, ax, ay) = split(l);
-                lanes1(m::ggx_g1(w, ax, ay))
-            }(l))
-        },
-        |(w, _, ax, ay)| microfacet::ggx_g1(w, ax, ay),
-        |a, b| same(*a, *b),
+    term!(
         "ggx_g1",
+        false,
+        |w, v, ax, ay, s| m::ggx_g1(w, ax, ay),
+        microfacet::ggx_g1(w, ax, ay)
+    );
+    term!(
+        "ggx_pdf_visible",
+        false,
+        |w, v, ax, ay, s| m::ggx_pdf_visible(w, v, ax, ay),
+        microfacet::ggx_pdf_visible(w, v, ax, ay)
     );
     for sep in [false, true] {
-        each_level(
-            at,
-            |lv, l| {
-                simd_at!(lv, fn(l: [Mf; 8], sep: bool) -> [f32; 8] {
-                    let (wo, wi, ax, ay) = split(l);
-                    lanes1(m::ggx_g2(wo, wi, ax, ay, sep))
-                }(l, sep))
-            },
-            |(wo, wi, ax, ay)| microfacet::ggx_g2(wo, wi, ax, ay, sep),
-            |a, b| same(*a, *b),
+        term!(
             "ggx_g2",
+            sep,
+            |w, v, ax, ay, s| m::ggx_g2(w, v, ax, ay, s),
+            microfacet::ggx_g2(w, v, ax, ay, s)
         );
-        each_level(
-            at,
-            |lv, l| {
-                simd_at!(lv, fn(l: [Mf; 8], sep: bool) -> [f32; 8] {
-                    let (wo, wi, ax, ay) = split(l);
-                    lanes1(m::ggx_visibility(wo, wi, ax, ay, sep))
-                }(l, sep))
-            },
-            |(wo, wi, ax, ay)| microfacet::ggx_visibility(wo, wi, ax, ay, sep),
-            |a, b| same(*a, *b),
+        term!(
             "ggx_visibility",
+            sep,
+            |w, v, ax, ay, s| m::ggx_visibility(w, v, ax, ay, s),
+            microfacet::ggx_visibility(w, v, ax, ay, s)
         );
     }
-    each_level(
-        at,
-        |lv, l| {
-            simd_at!(lv, fn(l: [Mf; 8]) -> [f32; 8] {
-                let (w, wm, ax, ay) = split(l);
-                lanes1(m::ggx_pdf_visible(w, wm, ax, ay))
-            }(l))
-        },
-        |(w, wm, ax, ay)| microfacet::ggx_pdf_visible(w, wm, ax, ay),
-        |a, b| same(*a, *b),
-        "ggx_pdf_visible",
-    );
     // u from the alphas' fractions: the sample's own numbers per lane.
     each_level(
         at,
