@@ -684,11 +684,19 @@ fn batched_samples_are_the_scalar_sampler_s() {
 
 /// A render through the batched sampler is the one-path-at-a-time
 /// render (`PathTracer::sample`, each sample's own sampler) bit for bit,
-/// at every SIMD level: the wide sampler changes the speed, not the image.
+/// at every SIMD level, on every bundled scene: the wide sampler changes
+/// the speed, not the image.
 #[test]
 fn batched_render_is_the_unbatched_render_bit_for_bit() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
-    for name in ["cornell.gltf", "materials.gltf"] {
+    let mut names: Vec<_> = std::fs::read_dir(&root)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .filter(|n| n.ends_with(".gltf") || n.ends_with(".glb"))
+        .collect();
+    names.sort();
+    assert!(names.len() >= 9, "the bundled scenes: {names:?}");
+    for name in &names {
         let scene = glint_cpu::loader::load(&root.join(name)).unwrap();
         let opts = glint_cpu::RenderOptions {
             spp: 21,
