@@ -51,6 +51,7 @@ pub trait Lane:
     fn lt(self, o: Self) -> Self::Mask;
     fn le(self, o: Self) -> Self::Mask;
     fn gt(self, o: Self) -> Self::Mask;
+    fn ge(self, o: Self) -> Self::Mask;
     fn eq(self, o: Self) -> Self::Mask;
     /// `t` in the lanes where `m` holds, else `f`.
     fn select(m: Self::Mask, t: Self, f: Self) -> Self;
@@ -68,6 +69,11 @@ pub trait Lane:
     fn any(m: Self::Mask) -> bool;
     /// Lane `i` (i < LANES).
     fn lane(self, i: usize) -> f32;
+    /// `t` in the lanes where `m` holds, else `f`, for masks.
+    #[inline(always)]
+    fn select_mask(m: Self::Mask, t: Self::Mask, f: Self::Mask) -> Self::Mask {
+        (m & t) | (!m & f)
+    }
     #[inline(always)]
     fn zero() -> Self {
         Self::splat(0.0)
@@ -96,6 +102,10 @@ impl Lane for f32 {
     #[inline(always)]
     fn gt(self, o: Self) -> bool {
         self > o
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> bool {
+        self >= o
     }
     #[inline(always)]
     fn eq(self, o: Self) -> bool {
@@ -266,6 +276,10 @@ impl Lane for F32x8 {
     #[inline(always)]
     fn gt(self, o: Self) -> Mask8 {
         Mask8(lanewise!(|a: f32, b: f32| mask_of(a > b); self, o))
+    }
+    #[inline(always)]
+    fn ge(self, o: Self) -> Mask8 {
+        Mask8(lanewise!(|a: f32, b: f32| mask_of(a >= b); self, o))
     }
     #[inline(always)]
     fn eq(self, o: Self) -> Mask8 {

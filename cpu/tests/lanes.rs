@@ -12,8 +12,9 @@
 use glam::{Vec2, Vec3};
 use glint_cpu::SamplerKind;
 use glint_cpu::bsdf::conductor::{self, RoughConductor};
+use glint_cpu::bsdf::dielectric::RoughDielectric;
 use glint_cpu::bsdf::microfacet::{self, MIN_ALPHA};
-use glint_cpu::bsdf::{BsdfSample, LaneSample};
+use glint_cpu::bsdf::{BsdfSample, LaneSample, SMOOTH_ALPHA_THRESHOLD};
 use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse, fresnel, warp};
 use glint_cpu::lanes::{F32x8, Lane, Mask8, SimdLevel, U32x8, ULane, V2, V3};
 use glint_cpu::simd_at;
@@ -35,8 +36,10 @@ impl Rand {
         let phi = std::f32::consts::TAU * self.f();
         Vec3::new(r * phi.cos(), r * phi.sin(), z)
     }
+    /// A GGX alpha of the rough models (above the smooth threshold: a
+    /// material below it is the smooth model, decided per material).
     fn alpha(&mut self) -> f32 {
-        MIN_ALPHA + self.f() * self.f()
+        (2.0 * SMOOTH_ALPHA_THRESHOLD).max(MIN_ALPHA) + self.f() * self.f()
     }
 }
 
@@ -141,8 +144,8 @@ fn samples(s: LaneSample<F32x8>) -> [Option<BsdfSample>; 8] {
             wi: s.wi.lane(i),
             weight: s.weight.lane(i),
             pdf: s.pdf.0[i],
-            delta: false,
-            eta: 1.0,
+            delta: s.delta,
+            eta: s.eta.0[i],
         })
     })
 }
@@ -154,7 +157,9 @@ fn samples_agree(w: &Option<BsdfSample>, s: &Option<BsdfSample>, tol: f32) -> bo
     match (w, s) {
         (None, None) => true,
         (Some(a), Some(b)) => {
-            close3(a.wi, b.wi, tol)
+            a.delta == b.delta
+                && close(a.eta, b.eta, tol)
+                && close3(a.wi, b.wi, tol)
                 && close3(a.weight, b.weight, 1e3 * tol)
                 && close(a.pdf, b.pdf, 1e3 * tol)
         }
@@ -718,5 +723,145 @@ fn batched_render_is_the_unbatched_render_bit_for_bit() {
                 }
             }
         }
+    }
+}
+
+/// A dielectric test's lanes: eta, alphas, wo, wi, uc, u.
+type Dl = (f32, f32, f32, Vec3, Vec3, f32, Vec2);
+
+#[inline(always)]
+fn dl_lanes(l: [Dl; 8], separable: bool) -> RoughDielectric<F32x8> {
+    RoughDielectric {
+        eta: F32x8(l.map(|x| x.0)),
+        ax: F32x8(l.map(|x| x.1)),
+        ay: F32x8(l.map(|x| x.2)),
+        separable,
+    }
+}
+
+fn dl_roughness(x: &Dl, separable: bool) -> Roughness {
+    Roughness {
+        alpha_u: x.1,
+        alpha_v: x.2,
+        shadowing: if separable {
+            Shadowing::Separable
+        } else {
+            Shadowing::Correlated
+        },
+        multiscatter: false,
+    }
+}
+
+/// The dielectric (rough: eval, pdf, sample; smooth: sample) and its
+/// Fresnel term and refraction, lane by lane against the scalar forms,
+/// from both sides of the interface, with eta below and above 1 (total
+/// internal reflection included).
+#[test]
+fn dielectric_lanes_are_the_scalar_bsdf() {
+    use glint_cpu::bsdf::dielectric::{self, lanes as dl};
+    for sep in [false, true] {
+        let mut r = Rand(404 + sep as u32);
+        let inputs: Vec<[Dl; 8]> = (0..BATCHES)
+            .map(|b| {
+                std::array::from_fn(|i| {
+                    let k = special(b, i);
+                    let eta = if r.f() < 0.3 {
+                        0.5 + 0.45 * r.f()
+                    } else {
+                        1.05 + 1.5 * r.f()
+                    };
+                    let wo = dir_for(&mut r, k);
+                    // wi near the refraction of wo half the time (a
+                    // transmission lobe to evaluate), anywhere otherwise.
+                    let jitter = r.dir();
+                    let wi = match fresnel::refract_dir(wo, Vec3::Z, eta) {
+                        Some((t, _)) if r.f() < 0.5 => (t + 0.2 * jitter).normalize(),
+                        _ => r.dir(),
+                    };
+                    (eta, r.alpha(), r.alpha(), wo, wi, r.f(), u_for(&mut r, k))
+                })
+            })
+            .collect();
+        let at = |b: usize, i: usize| inputs[b][i];
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Dl; 8], sep: bool) -> [f32; 8] {
+                    lanes1(dl::rough_eval(&dl_lanes(l, sep), v3x8(l.map(|x| x.3)), v3x8(l.map(|x| x.4))))
+                }(l, sep))
+            },
+            |x| dielectric::dielectric_eval(x.0, &dl_roughness(&x, sep), x.3, x.4).x,
+            |a, b| same(*a, *b),
+            "dielectric_eval",
+        );
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Dl; 8], sep: bool) -> [f32; 8] {
+                    lanes1(dl::rough_pdf(&dl_lanes(l, sep), v3x8(l.map(|x| x.3)), v3x8(l.map(|x| x.4))))
+                }(l, sep))
+            },
+            |x| dielectric::dielectric_pdf(x.0, &dl_roughness(&x, sep), x.3, x.4),
+            |a, b| same(*a, *b),
+            "dielectric_pdf",
+        );
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Dl; 8], sep: bool) -> [Option<BsdfSample>; 8] {
+                    let s = dl::rough_sample(&dl_lanes(l, sep), v3x8(l.map(|x| x.3)), F32x8(l.map(|x| x.5)), l.map(|x| x.6).into());
+                    samples(s)
+                }(l, sep))
+            },
+            |x| dielectric::dielectric_sample(x.0, &dl_roughness(&x, sep), x.3, x.5, x.6),
+            |a, b| samples_agree(a, b, SIN_TOL),
+            "dielectric_sample",
+        );
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Dl; 8]) -> [Option<BsdfSample>; 8] {
+                    samples(dl::smooth_sample(F32x8(l.map(|x| x.0)), v3x8(l.map(|x| x.3)), F32x8(l.map(|x| x.5))))
+                }(l))
+            },
+            |x| dielectric::dielectric_sample(x.0, &Roughness::SMOOTH, x.3, x.5, x.6),
+            |a, b| match (a, b) {
+                (Some(a), Some(b)) => {
+                    same3(a.wi, b.wi)
+                        && same3(a.weight, b.weight)
+                        && same(a.pdf, b.pdf)
+                        && same(a.eta, b.eta)
+                        && a.delta
+                        && b.delta
+                }
+                (a, b) => a.is_none() && b.is_none(),
+            },
+            "dielectric smooth sample",
+        );
+        each_level(
+            at,
+            |lv, l| {
+                simd_at!(lv, fn(l: [Dl; 8]) -> [(f32, Option<(Vec3, f32)>); 8] {
+                    let (eta, wo, wi) = (F32x8(l.map(|x| x.0)), v3x8(l.map(|x| x.3)), v3x8(l.map(|x| x.4)));
+                    let f = fresnel::lanes::fresnel_dielectric(wo.z, eta);
+                    let (ok, wt, e) = fresnel::lanes::refract_dir(wo, wi.normalize(), eta);
+                    std::array::from_fn(|i| (f.0[i], ok.test(i).then(|| (wt.lane(i), e.0[i]))))
+                }(l))
+            },
+            |x| {
+                (
+                    fresnel::fresnel_dielectric(x.3.z, x.0),
+                    fresnel::refract_dir(x.3, x.4.normalize(), x.0),
+                )
+            },
+            |a, b| {
+                same(a.0, b.0)
+                    && match (a.1, b.1) {
+                        (Some((w, e)), Some((v, f))) => same3(w, v) && same(e, f),
+                        (x, y) => x.is_none() && y.is_none(),
+                    }
+            },
+            "fresnel_dielectric and refract_dir",
+        );
     }
 }

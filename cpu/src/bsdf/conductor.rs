@@ -210,6 +210,8 @@ pub mod lanes {
             wi: V3::new(wi.x, wi.y, L::select(flip, -wi.z, wi.z)),
             weight,
             pdf,
+            eta: L::one(),
+            delta: false,
         }
     }
 }

@@ -7,10 +7,6 @@
 use glam::{Vec2, Vec3};
 
 use super::conductor::rough_alphas;
-use super::fresnel::{fresnel_dielectric, refract_dir};
-use super::microfacet::{
-    ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
-};
 use super::multiscatter::dielectric_ms_albedo;
 use super::{BsdfSample, ETA_SMOOTH_THRESHOLD, Roughness, Shadowing};
 
@@ -27,32 +23,8 @@ pub fn dielectric_is_smooth(eta: f32, r: &Roughness) -> bool {
 /// direction sees the back of the microfacet (Walter's condition
 /// chi+(v . m / v . n)).
 pub fn dielectric_half_vector(eta: f32, wo: Vec3, wi: Vec3) -> Option<(Vec3, f32, bool)> {
-    let co = wo.z;
-    let ci = wi.z;
-    if co == 0.0 || ci == 0.0 {
-        return None;
-    }
-    let is_reflection = co * ci > 0.0;
-    let etap = if is_reflection {
-        1.0
-    } else if co > 0.0 {
-        eta
-    } else {
-        1.0 / eta
-    };
-    let h = wi * etap + wo;
-    let len2 = h.length_squared();
-    if !(len2 > 1e-12) {
-        return None;
-    }
-    let mut wm = h / len2.sqrt();
-    if wm.z < 0.0 {
-        wm = -wm;
-    }
-    if wm.dot(wi) * ci <= 0.0 || wm.dot(wo) * co <= 0.0 {
-        return None;
-    }
-    Some((wm, etap, is_reflection))
+    let h = lanes::half_vector(eta, wo.into(), wi.into());
+    h.valid.then(|| (h.wm.into(), h.etap, h.reflection))
 }
 
 /// `multiscatter`: 1 / E(mu_o) of the single-scattering lobe seen from wo's
@@ -72,55 +44,18 @@ pub fn dielectric_eval(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
     if dielectric_is_smooth(eta, r) {
         return Vec3::ZERO;
     }
-    let Some((wm, etap, is_reflection)) = dielectric_half_vector(eta, wo, wi) else {
-        return Vec3::ZERO;
-    };
-    let (ax, ay) = rough_alphas(r);
-    let separable = r.shadowing == Shadowing::Separable;
-    let d = ggx_d(wm, ax, ay);
-    let v = ggx_visibility(wo, wi, ax, ay, separable);
-    let f = fresnel_dielectric(wo.dot(wm), eta);
-    let scale = dielectric_ms_scale(eta, r, wo);
-    if is_reflection {
-        // Walter 2007 eq. 20 with V = G / (4 |co| |ci|).
-        return Vec3::splat(d * f * v * scale);
-    }
-    // Walter 2007 eq. 21 (G / (|ci| |co|) = 4 V), in pbrt-v4's form with
-    // the denominator (wi.wm + wo.wm / etap)^2, then the radiance scaling.
-    let dot_i = wi.dot(wm);
-    let dot_o = wo.dot(wm);
-    let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
-    if !(denom > 0.0) {
+    let f = lanes::rough_eval(&RoughDielectric::of(eta, r), wo.into(), wi.into());
+    if f == 0.0 {
         return Vec3::ZERO;
     }
-    let ft = d * (1.0 - f) * 4.0 * v * (dot_i * dot_o).abs() / denom;
-    Vec3::splat(ft / (etap * etap) * scale)
+    Vec3::splat(f * dielectric_ms_scale(eta, r, wo))
 }
 
 pub fn dielectric_pdf(eta: f32, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
     if dielectric_is_smooth(eta, r) {
         return 0.0;
     }
-    let Some((wm, etap, is_reflection)) = dielectric_half_vector(eta, wo, wi) else {
-        return 0.0;
-    };
-    let (ax, ay) = rough_alphas(r);
-    let dot_o = wo.dot(wm);
-    let dot_i = wi.dot(wm);
-    let pr = fresnel_dielectric(dot_o, eta);
-    let pt = 1.0 - pr;
-    let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
-    if is_reflection {
-        // Walter 2007 eq. 14.
-        pdf_wm / (4.0 * dot_o.abs()) * pr
-    } else {
-        // Walter 2007 eq. 17: dwm/dwi = |wi.wm| / (wi.wm + wo.wm / etap)^2.
-        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
-        if !(denom > 0.0) {
-            return 0.0;
-        }
-        pdf_wm * (dot_i.abs() / denom) * pt
-    }
+    lanes::rough_pdf(&RoughDielectric::of(eta, r), wo.into(), wi.into())
 }
 
 pub fn dielectric_sample(
@@ -130,82 +65,204 @@ pub fn dielectric_sample(
     uc: f32,
     u: Vec2,
 ) -> Option<BsdfSample> {
-    if wo.z == 0.0 {
-        return None;
-    }
     if dielectric_is_smooth(eta, r) {
-        // Choose reflection with probability F: the weights F / pr = 1 and
-        // (1 - F) / pt / etap^2 = 1 / etap^2.
-        let pr = fresnel_dielectric(wo.z, eta);
-        if uc < pr {
-            return Some(BsdfSample {
-                wi: Vec3::new(-wo.x, -wo.y, wo.z),
-                weight: Vec3::ONE,
-                pdf: pr,
-                delta: true,
-                eta: 1.0,
-            });
-        }
-        let (wi, etap) = refract_dir(wo, Vec3::Z, eta)?;
-        if wi.z == 0.0 {
-            return None;
-        }
-        return Some(BsdfSample {
-            wi,
-            weight: Vec3::splat(1.0 / (etap * etap)),
-            pdf: 1.0 - pr,
-            delta: true,
-            eta: etap,
-        });
+        return lanes::smooth_sample(eta, wo.into(), uc).single();
     }
-    let (ax, ay) = rough_alphas(r);
-    let wm = ggx_sample_visible(wo, ax, ay, u);
-    let dot_o = wo.dot(wm);
-    // Choose R or T by the Fresnel term of the sampled microfacet.
-    let pr = fresnel_dielectric(dot_o, eta);
-    let pdf_wm = ggx_pdf_visible(wo, wm, ax, ay);
-    let g1 = ggx_g1(wo, ax, ay);
-    if !(g1 > 0.0) {
-        return None;
+    let mut s =
+        lanes::rough_sample(&RoughDielectric::of(eta, r), wo.into(), uc, u.into()).single()?;
+    if r.multiscatter {
+        s.weight *= dielectric_ms_scale(eta, r, wo);
     }
-    let separable = r.shadowing == Shadowing::Separable;
-    // As for conductors, pdf and weight come from the sampled normal
-    // (well conditioned); the weights are f |cos_i| / pdf simplified:
-    // reflection F G2 / (G1 pr) = G2 / G1, transmission
-    // (1 - F) G2 / (G1 pt eta_rel^2) = G2 / (G1 eta_rel^2).
-    let (wi, pdf, weight, eta_rel) = if uc < pr {
-        let wi = reflect_dir(wo, wm);
-        if wi.z * wo.z <= 0.0 {
-            return None;
+    Some(s)
+}
+
+/// A rough dielectric's parameters, one per lane (without the
+/// multiple-scattering scale, which stays scalar).
+#[derive(Clone, Copy, Debug)]
+pub struct RoughDielectric<L> {
+    /// n_inside / n_outside.
+    pub eta: L,
+    /// The clamped alphas ([`rough_alphas`]).
+    pub ax: L,
+    pub ay: L,
+    /// The same in every lane.
+    pub separable: bool,
+}
+
+impl RoughDielectric<f32> {
+    pub fn of(eta: f32, r: &Roughness) -> Self {
+        let (ax, ay) = rough_alphas(r);
+        Self {
+            eta,
+            ax,
+            ay,
+            separable: r.shadowing == Shadowing::Separable,
         }
-        let pdf = pdf_wm / (4.0 * dot_o.abs()) * pr;
-        (wi, pdf, ggx_g2(wo, wi, ax, ay, separable) / g1, 1.0)
-    } else {
-        let (wi, etap) = refract_dir(wo, wm, eta)?;
-        if wi.z * wo.z >= 0.0 {
-            return None;
-        }
-        let dot_i = wi.dot(wm);
-        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
-        if !(denom > 0.0) {
-            return None;
-        }
-        let pdf = pdf_wm * (dot_i.abs() / denom) * (1.0 - pr);
-        let w = ggx_g2(wo, wi, ax, ay, separable) / g1 / (etap * etap);
-        (wi, pdf, w, etap)
+    }
+}
+
+/// The dielectric over any [`crate::lanes::Lane`] type: one source with
+/// the scalar forms above (each early return a select).
+pub mod lanes {
+    use super::RoughDielectric;
+    use crate::bsdf::LaneSample;
+    use crate::bsdf::fresnel::lanes::{fresnel_dielectric, refract_dir};
+    use crate::bsdf::microfacet::lanes::{
+        ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
     };
-    if !(pdf > 0.0) || !pdf.is_finite() {
-        return None;
+    use crate::lanes::{Lane, V2, V3};
+
+    /// Walter 2007 eq. 16's generalised half vector ([`super::dielectric_half_vector`]).
+    #[derive(Clone, Copy, Debug)]
+    pub struct HalfVector<L: Lane> {
+        pub valid: L::Mask,
+        pub wm: V3<L>,
+        pub etap: L,
+        pub reflection: L::Mask,
     }
-    // Keep the support consistent with eval/pdf: where rounding makes the
-    // half vector rebuilt from (wo, wi) fail its back-facing test (grazing,
-    // near-specular), eval would return 0 for this direction.
-    dielectric_half_vector(eta, wo, wi)?;
-    Some(BsdfSample {
-        wi,
-        weight: Vec3::splat(weight * dielectric_ms_scale(eta, r, wo)),
-        pdf,
-        delta: false,
-        eta: eta_rel,
-    })
+
+    #[inline(always)]
+    pub fn half_vector<L: Lane>(eta: L, wo: V3<L>, wi: V3<L>) -> HalfVector<L> {
+        let (co, ci) = (wo.z, wi.z);
+        let reflection = (co * ci).gt(L::zero());
+        let etap = L::select(
+            reflection,
+            L::one(),
+            L::select(co.gt(L::zero()), eta, L::one() / eta),
+        );
+        let h = wi.scale(etap) + wo;
+        let len2 = h.length_squared();
+        let wm = h / len2.sqrt();
+        let wm = V3::select(wm.z.lt(L::zero()), -wm, wm);
+        let valid = !(co.eq(L::zero()) | ci.eq(L::zero()))
+            & len2.gt(L::splat(1e-12))
+            & !((wm.dot(wi) * ci).le(L::zero()) | (wm.dot(wo) * co).le(L::zero()));
+        HalfVector {
+            valid,
+            wm,
+            etap,
+            reflection,
+        }
+    }
+
+    /// f(wo, wi) (one value for the three channels), without the
+    /// multiple-scattering scale.
+    #[inline(always)]
+    pub fn rough_eval<L: Lane>(c: &RoughDielectric<L>, wo: V3<L>, wi: V3<L>) -> L {
+        let h = half_vector(c.eta, wo, wi);
+        let d = ggx_d(h.wm, c.ax, c.ay);
+        let v = ggx_visibility(wo, wi, c.ax, c.ay, c.separable);
+        let f = fresnel_dielectric(wo.dot(h.wm), c.eta);
+        // Walter 2007 eq. 20 with V = G / (4 |co| |ci|).
+        let fr = d * f * v;
+        // Walter 2007 eq. 21 (G / (|ci| |co|) = 4 V), in pbrt-v4's form with
+        // the denominator (wi.wm + wo.wm / etap)^2, then the radiance scaling.
+        let (dot_i, dot_o) = (wi.dot(h.wm), wo.dot(h.wm));
+        let denom = (dot_i + dot_o / h.etap) * (dot_i + dot_o / h.etap);
+        let ft = d * (L::one() - f) * L::splat(4.0) * v * (dot_i * dot_o).abs() / denom;
+        let ft = L::select(denom.gt(L::zero()), ft / (h.etap * h.etap), L::zero());
+        L::select(h.valid, L::select(h.reflection, fr, ft), L::zero())
+    }
+
+    /// The density of [`rough_sample`].
+    #[inline(always)]
+    pub fn rough_pdf<L: Lane>(c: &RoughDielectric<L>, wo: V3<L>, wi: V3<L>) -> L {
+        let h = half_vector(c.eta, wo, wi);
+        let (dot_o, dot_i) = (wo.dot(h.wm), wi.dot(h.wm));
+        let pr = fresnel_dielectric(dot_o, c.eta);
+        let pt = L::one() - pr;
+        let pdf_wm = ggx_pdf_visible(wo, h.wm, c.ax, c.ay);
+        // Walter 2007 eq. 14.
+        let reflect = pdf_wm / (L::splat(4.0) * dot_o.abs()) * pr;
+        // Walter 2007 eq. 17: dwm/dwi = |wi.wm| / (wi.wm + wo.wm / etap)^2.
+        let denom = (dot_i + dot_o / h.etap) * (dot_i + dot_o / h.etap);
+        let transmit = L::select(
+            denom.gt(L::zero()),
+            pdf_wm * (dot_i.abs() / denom) * pt,
+            L::zero(),
+        );
+        L::select(
+            h.valid,
+            L::select(h.reflection, reflect, transmit),
+            L::zero(),
+        )
+    }
+
+    /// The smooth interface: reflection with probability F (weight 1),
+    /// else refraction (weight 1 / eta_rel^2).
+    #[inline(always)]
+    pub fn smooth_sample<L: Lane>(eta: L, wo: V3<L>, uc: L) -> LaneSample<L> {
+        let pr = fresnel_dielectric(wo.z, eta);
+        let reflect = uc.lt(pr);
+        let (refracts, wt, etap) = refract_dir(wo, V3::new(L::zero(), L::zero(), L::one()), eta);
+        let mirror = V3::new(-wo.x, -wo.y, wo.z);
+        let t_weight = L::one() / (etap * etap);
+        let valid = !wo.z.eq(L::zero()) & (reflect | (refracts & !wt.z.eq(L::zero())));
+        LaneSample {
+            valid,
+            wi: V3::select(reflect, mirror, wt),
+            weight: V3::select(
+                reflect,
+                V3::new(L::one(), L::one(), L::one()),
+                V3::new(t_weight, t_weight, t_weight),
+            ),
+            pdf: L::select(reflect, pr, L::one() - pr),
+            eta: L::select(reflect, L::one(), etap),
+            delta: true,
+        }
+    }
+
+    /// A visible-normal sample, reflection or refraction by the sampled
+    /// microfacet's Fresnel term. As for conductors, pdf and weight come
+    /// from the sampled normal (well conditioned); the weights are
+    /// f |cos_i| / pdf simplified: reflection F G2 / (G1 pr) = G2 / G1,
+    /// transmission (1 - F) G2 / (G1 pt eta_rel^2) = G2 / (G1 eta_rel^2).
+    /// Without the multiple-scattering scale.
+    #[inline(always)]
+    pub fn rough_sample<L: Lane>(
+        c: &RoughDielectric<L>,
+        wo: V3<L>,
+        uc: L,
+        u: V2<L>,
+    ) -> LaneSample<L> {
+        let wm = ggx_sample_visible(wo, c.ax, c.ay, u);
+        let dot_o = wo.dot(wm);
+        // Choose R or T by the Fresnel term of the sampled microfacet.
+        let pr = fresnel_dielectric(dot_o, c.eta);
+        let pdf_wm = ggx_pdf_visible(wo, wm, c.ax, c.ay);
+        let g1 = ggx_g1(wo, c.ax, c.ay);
+        let reflect = uc.lt(pr);
+        // Reflection.
+        let wr = reflect_dir(wo, wm);
+        let r_ok = !(wr.z * wo.z).le(L::zero());
+        let r_pdf = pdf_wm / (L::splat(4.0) * dot_o.abs()) * pr;
+        // Transmission.
+        let (refracts, wt, etap) = refract_dir(wo, wm, c.eta);
+        let dot_i = wt.dot(wm);
+        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        let t_ok = refracts & !(wt.z * wo.z).ge(L::zero()) & denom.gt(L::zero());
+        let t_pdf = pdf_wm * (dot_i.abs() / denom) * (L::one() - pr);
+        let wi = V3::select(reflect, wr, wt);
+        let pdf = L::select(reflect, r_pdf, t_pdf);
+        let g2 = ggx_g2(wo, wi, c.ax, c.ay, c.separable);
+        let w = L::select(reflect, g2 / g1, g2 / g1 / (etap * etap));
+        // Keep the support consistent with eval/pdf: where rounding makes
+        // the half vector rebuilt from (wo, wi) fail its back-facing test
+        // (grazing, near-specular), eval would return 0 for this direction.
+        let rebuilt = half_vector(c.eta, wo, wi).valid;
+        let valid = !wo.z.eq(L::zero())
+            & g1.gt(L::zero())
+            & L::select_mask(reflect, r_ok, t_ok)
+            & pdf.gt(L::zero())
+            & pdf.lt(L::splat(f32::INFINITY))
+            & rebuilt;
+        LaneSample {
+            valid,
+            wi,
+            weight: V3::new(w, w, w),
+            pdf,
+            eta: L::select(reflect, L::one(), etap),
+            delta: false,
+        }
+    }
 }

@@ -51,6 +51,8 @@ pub mod lanes {
             // f |cos| / pdf = (rho / pi) |cos| / (|cos| / pi).
             weight: rho,
             pdf: wi.z.abs() * L::splat(FRAC_1_PI),
+            eta: L::one(),
+            delta: false,
         }
     }
 }

@@ -15,31 +15,12 @@ use glam::Vec3;
 /// is then 1 / eta (pbrt-v4's `FrDielectric`, Pharr et al. 4th ed. eq. 9.5).
 /// Beyond the critical angle both are 1 (total internal reflection).
 pub fn fresnel_dielectric_polarized(cos_i: f32, eta: f32) -> (f32, f32) {
-    let mut cos_i = cos_i.clamp(-1.0, 1.0);
-    let mut eta = eta;
-    if cos_i < 0.0 {
-        eta = 1.0 / eta;
-        cos_i = -cos_i;
-    }
-    // Snell: sin_t = sin_i / eta.
-    let sin2_i = (1.0 - cos_i * cos_i).max(0.0);
-    let sin2_t = sin2_i / (eta * eta);
-    if sin2_t >= 1.0 {
-        return (1.0, 1.0);
-    }
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    // Amplitude coefficients (Born & Wolf 1.5.2, eqs. 21a/21b). The
-    // denominators vanish only when cos_i = cos_t = 0, which needs
-    // sin2_t = 1 and was caught above.
-    let r_s = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    let r_p = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    (r_s * r_s, r_p * r_p)
+    lanes::fresnel_dielectric_polarized(cos_i, eta)
 }
 
 /// Unpolarised dielectric Fresnel reflectance: the mean of R_s and R_p.
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let (rs, rp) = fresnel_dielectric_polarized(cos_i, eta);
-    0.5 * (rs + rp)
+    lanes::fresnel_dielectric(cos_i, eta)
 }
 
 /// Unpolarised Fresnel reflectance of a conductor with complex relative IOR
@@ -57,10 +38,56 @@ pub fn fresnel_conductor_channel(cos_i: f32, eta: f32, k: f32) -> f32 {
     lanes::fresnel_conductor_channel(cos_i, eta, k)
 }
 
-/// The conductor's Fresnel term over any [`crate::lanes::Lane`] type (one
-/// source with the scalar form above; its early return is a select).
+/// The Fresnel terms and refraction over any [`crate::lanes::Lane`] type
+/// (one source with the scalar forms above; each early return is a
+/// select).
 pub mod lanes {
     use crate::lanes::{Lane, V3};
+
+    #[inline(always)]
+    pub fn fresnel_dielectric_polarized<L: Lane>(cos_i: L, eta: L) -> (L, L) {
+        let cos_i = cos_i.clamp(-1.0, 1.0);
+        let inside = cos_i.lt(L::zero());
+        let eta = L::select(inside, L::one() / eta, eta);
+        let cos_i = L::select(inside, -cos_i, cos_i);
+        // Snell: sin_t = sin_i / eta.
+        let sin2_i = (L::one() - cos_i * cos_i).max(L::zero());
+        let sin2_t = sin2_i / (eta * eta);
+        let tir = sin2_t.ge(L::one());
+        let cos_t = (L::one() - sin2_t).max(L::zero()).sqrt();
+        // Amplitude coefficients (Born & Wolf 1.5.2, eqs. 21a/21b). The
+        // denominators vanish only when cos_i = cos_t = 0, which needs
+        // sin2_t = 1, total internal reflection.
+        let r_s = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+        let r_p = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+        (
+            L::select(tir, L::one(), r_s * r_s),
+            L::select(tir, L::one(), r_p * r_p),
+        )
+    }
+
+    #[inline(always)]
+    pub fn fresnel_dielectric<L: Lane>(cos_i: L, eta: L) -> L {
+        let (rs, rp) = fresnel_dielectric_polarized(cos_i, eta);
+        L::splat(0.5) * (rs + rp)
+    }
+
+    /// `w` refracted through the interface of normal `n` (either side):
+    /// where the refraction exists (not total internal reflection), the
+    /// transmitted direction and the relative IOR crossed.
+    #[inline(always)]
+    pub fn refract_dir<L: Lane>(w: V3<L>, n: V3<L>, eta: L) -> (L::Mask, V3<L>, L) {
+        let cos_i = n.dot(w);
+        let inside = cos_i.lt(L::zero());
+        let eta = L::select(inside, L::one() / eta, eta);
+        let cos_i = L::select(inside, -cos_i, cos_i);
+        let n = V3::select(inside, -n, n);
+        let sin2_i = (L::one() - cos_i * cos_i).max(L::zero());
+        let sin2_t = sin2_i / (eta * eta);
+        let cos_t = (L::one() - sin2_t).max(L::zero()).sqrt();
+        let wt = (-w) / eta + n.scale(cos_i / eta - cos_t);
+        (!sin2_t.ge(L::one()), wt, eta)
+    }
 
     #[inline(always)]
     pub fn fresnel_conductor_channel<L: Lane>(cos_i: L, eta: L, k: L) -> L {
@@ -111,22 +138,8 @@ pub fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
 /// the relative IOR eta_t / eta_i actually crossed, or `None` under total
 /// internal reflection. pbrt-v4's `Refract` with n = (0, 0, 1) or -n.
 pub fn refract_dir(w: Vec3, n: Vec3, eta: f32) -> Option<(Vec3, f32)> {
-    let mut cos_i = n.dot(w);
-    let mut eta = eta;
-    let mut n = n;
-    if cos_i < 0.0 {
-        eta = 1.0 / eta;
-        cos_i = -cos_i;
-        n = -n;
-    }
-    let sin2_i = (1.0 - cos_i * cos_i).max(0.0);
-    let sin2_t = sin2_i / (eta * eta);
-    if sin2_t >= 1.0 {
-        return None;
-    }
-    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-    let wt = -w / eta + (cos_i / eta - cos_t) * n;
-    Some((wt, eta))
+    let (ok, wt, eta) = lanes::refract_dir(w.into(), n.into(), eta);
+    ok.then(|| (wt.into(), eta))
 }
 
 #[cfg(test)]

@@ -161,26 +161,29 @@ pub struct BsdfSample {
     pub eta: f32,
 }
 
-/// A non-delta reflection sample of the lane-generic BSDFs
-/// (`bsdf::*::lanes`): a [`BsdfSample`] per lane where `valid` holds.
+/// A sample of the lane-generic BSDFs (`bsdf::*::lanes`): a
+/// [`BsdfSample`] per lane where `valid` holds; `delta` is the same in
+/// every lane (a smooth or a rough model).
 #[derive(Clone, Copy, Debug)]
 pub struct LaneSample<L: Lane> {
     pub valid: L::Mask,
     pub wi: V3<L>,
     pub weight: V3<L>,
     pub pdf: L,
+    pub eta: L,
+    pub delta: bool,
 }
 
 impl LaneSample<f32> {
-    /// The one lane's sample (reflection: not a delta, eta 1).
+    /// The one lane's sample.
     #[inline(always)]
     pub fn single(self) -> Option<BsdfSample> {
         self.valid.then(|| BsdfSample {
             wi: self.wi.into(),
             weight: self.weight.into(),
             pdf: self.pdf,
-            delta: false,
-            eta: 1.0,
+            delta: self.delta,
+            eta: self.eta,
         })
     }
 }
