@@ -51,6 +51,26 @@ enum Api {
     Pipeline,
 }
 
+impl Api {
+    /// The traversal that renders through this API.
+    fn traversal(self) -> Traversal {
+        match self {
+            Api::Query => Traversal::RayQuery,
+            Api::Pipeline => Traversal::Pipeline,
+        }
+    }
+}
+
+/// The image comparisons' render: 32x24, 16 spp in variance batches of 4.
+fn small_options(seed: u64) -> RenderOptions {
+    RenderOptions {
+        spp: 16,
+        seed,
+        variance_batch: 4,
+        ..RenderOptions::new(32, 24)
+    }
+}
+
 /// A ray tracing context under validation and the APIs it has, or `None`
 /// (skip) where the device has neither.
 fn rt_context() -> Option<(Context, Option<std::sync::Arc<ValidationLog>>, Vec<Api>)> {
@@ -594,16 +614,8 @@ fn hardware_traversal_traces_the_cpu_paths_in_every_bundled_scene() {
     let runs = apis.iter().flat_map(|&a| names.iter().map(move |n| (a, n)));
     for (api, name) in runs {
         let scene = load(name);
-        let opts = RenderOptions {
-            spp: 16,
-            seed: 11,
-            variance_batch: 4,
-            ..RenderOptions::new(32, 24)
-        };
-        let traversal = match api {
-            Api::Query => Traversal::RayQuery,
-            Api::Pipeline => Traversal::Pipeline,
-        };
+        let opts = small_options(11);
+        let traversal = api.traversal();
         let kernel = (KernelChoice::Generic, traversal);
         let cache = ash::vk::PipelineCache::null();
         let r = render_with(&ctx, &scene, &opts, kernel, cache, &|_, _| {}).unwrap();
@@ -644,16 +656,8 @@ fn images(names: &[&str]) {
         .flat_map(|n| apis.iter().flat_map(move |a| [(n, a, 1), (n, a, 5)]));
     for (&name, &api, parts) in runs {
         let scene = load(name);
-        let opts = RenderOptions {
-            spp: 16,
-            seed: 3,
-            variance_batch: 4,
-            ..RenderOptions::new(32, 24)
-        };
-        let traversal = match api {
-            Api::Query => Traversal::RayQuery,
-            Api::Pipeline => Traversal::Pipeline,
-        };
+        let opts = small_options(3);
+        let traversal = api.traversal();
         let hw = gpu_film_parts(&ctx, &scene, &opts, traversal, parts);
         let sw = gpu_film(&ctx, &scene, &opts, Traversal::Software);
         let near = |a: glam::Vec3, b: glam::Vec3| {

@@ -65,8 +65,6 @@ pub trait Lane:
     fn clamp(self, lo: f32, hi: f32) -> Self;
     /// `(sin, cos)`: libm's for `f32`, a polynomial for wide lanes.
     fn sin_cos(self) -> (Self, Self);
-    /// Whether any lane of `m` holds.
-    fn any(m: Self::Mask) -> bool;
     /// Lane `i` (i < LANES).
     fn lane(self, i: usize) -> f32;
     /// `t` in the lanes where `m` holds, else `f`, for masks.
@@ -138,10 +136,6 @@ impl Lane for f32 {
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
         f32::sin_cos(self)
-    }
-    #[inline(always)]
-    fn any(m: bool) -> bool {
-        m
     }
     #[inline(always)]
     fn lane(self, _: usize) -> f32 {
@@ -318,10 +312,6 @@ impl Lane for F32x8 {
             Self(std::array::from_fn(|i| sc[i].0)),
             Self(std::array::from_fn(|i| sc[i].1)),
         )
-    }
-    #[inline(always)]
-    fn any(m: Mask8) -> bool {
-        m.0.iter().fold(0, |a, b| a | b) != 0
     }
     #[inline(always)]
     fn lane(self, i: usize) -> f32 {

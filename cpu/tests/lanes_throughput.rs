@@ -179,7 +179,7 @@ fn sobol_at(level: SimdLevel, key: u32) -> u32 {
 }
 
 #[test]
-#[ignore = "benchmark: run with --ignored --nocapture"]
+#[ignore = "benchmark: cargo test --release -p glint-cpu --test lanes_throughput -- --ignored --nocapture --test-threads 1"]
 fn sampler_lanes_throughput() {
     let levels = SimdLevel::available();
     let reference = sobol_scalar(7);
@@ -211,7 +211,7 @@ fn sampler_lanes_throughput() {
 }
 
 #[test]
-#[ignore = "benchmark: run with --ignored --nocapture"]
+#[ignore = "benchmark: cargo test --release -p glint-cpu --test lanes_throughput -- --ignored --nocapture --test-threads 1"]
 fn bsdf_lanes_throughput() {
     let inp = inputs();
     let levels = SimdLevel::available();
