@@ -101,10 +101,10 @@ fn chi2_of(bsdf: &Bsdf, tilt: Tilt, wo_g: Vec3, seed: u64) -> Result<Chi2Report,
         .collect();
     chi2_test(
         &|uc, u| {
-            fold.sample(bsdf, wo, uc, u)
+            fold.sample(&bsdf.at(wo), uc, u)
                 .map(|s| (tilt.to_geometric(s.wi), s.delta))
         },
-        &|w| fold.eval_pdf(bsdf, wo, tilt.to_shading(w)).1 as f64,
+        &|w| fold.eval_pdf(&bsdf.at(wo), tilt.to_shading(w)).1 as f64,
         &deltas,
         SAMPLES,
         seed,
@@ -176,7 +176,7 @@ fn folding_keeps_the_bsdfs_own_albedo() {
         });
         let (folded, se_f) = mean_se(n, |i| {
             let (uc, u2) = u(i, 2);
-            fold.sample(&bsdf, wo, uc, u2)
+            fold.sample(&bsdf.at(wo), uc, u2)
                 .map_or(Vec3::ZERO, |s| s.weight)
         });
         let uniform = |i: usize| {
@@ -185,8 +185,7 @@ fn folding_keeps_the_bsdfs_own_albedo() {
             let r = (1.0 - z * z).max(0.0).sqrt();
             let phi = 2.0 * std::f32::consts::PI * u2.y;
             fold.eval_pdf(
-                &bsdf,
-                wo,
+                &bsdf.at(wo),
                 tilt.to_shading(Vec3::new(r * phi.cos(), r * phi.sin(), z)),
             )
         };

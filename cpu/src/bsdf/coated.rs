@@ -304,8 +304,10 @@ pub fn coat_albedo_reference(mu: f32, alpha: f32, eta: f32, n: usize) -> f64 {
 
 /// What eval, pdf and sample share for one wo (above the surface): the
 /// tables' alpha, E(mu_o) and E_avg scaled by s, and the coat's sampling
-/// probability.
-struct CoatAtWo {
+/// probability. [`coat_at_wo`] makes it; the `*_at` functions take it, so
+/// that a path vertex looks its tables up once ([`super::BsdfAt`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CoatAtWo {
     alpha: f32,
     smooth: bool,
     eo: Vec3,
@@ -314,6 +316,11 @@ struct CoatAtWo {
     /// 1 - p_coat, computed without the cancellation (at grazing angles
     /// the coat takes nearly everything and 1 - p_coat would lose digits).
     p_base: f32,
+}
+
+/// The coat at `wo` (either side: the model is two-sided).
+pub fn coat_at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3) -> CoatAtWo {
+    at_wo(base, coat, r, wo.z.abs())
 }
 
 fn at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> CoatAtWo {
@@ -364,26 +371,32 @@ fn coat_lobe(coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3, wm: Vec3) -> 
     coat.specular * (f * ggx_d(wm, ax, ay) * ggx_visibility(wo, wi, ax, ay, false))
 }
 
-fn opaque_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
+/// The opaque part's f, `w` being [`coat_at_wo`] of `wo`.
+fn opaque_eval(
+    base: Vec3,
+    coat: &CoatParams,
+    r: &Roughness,
+    w: &CoatAtWo,
+    wo: Vec3,
+    wi: Vec3,
+) -> Vec3 {
     let (wo, wi) = two_sided(wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
     }
-    let w = at_wo(base, coat, r, wo.z);
-    let mut f = base_term(base, coat, &w, wi.z);
+    let mut f = base_term(base, coat, w, wi.z);
     if !w.smooth {
         f += coat_lobe(coat, r, wo, wi, (wo + wi).normalize());
     }
     f
 }
 
-fn opaque_pdf(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
+fn opaque_pdf(r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
     let (wo, wi) = two_sided(wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return 0.0;
     }
-    let w = at_wo(base, coat, r, wo.z);
-    w.p_base * wi.z * FRAC_1_PI + w.p_coat * coat_pdf_rough(r, &w, wo, wi)
+    w.p_base * wi.z * FRAC_1_PI + w.p_coat * coat_pdf_rough(r, w, wo, wi)
 }
 
 /// The coat lobe's solid-angle density (0 for the smooth coat's delta).
@@ -405,6 +418,7 @@ fn opaque_sample(
     base: Vec3,
     coat: &CoatParams,
     r: &Roughness,
+    w: &CoatAtWo,
     wo: Vec3,
     uc: f32,
     u: Vec2,
@@ -414,7 +428,6 @@ fn opaque_sample(
     }
     let flip = wo.z < 0.0;
     let wo = Vec3::new(wo.x, wo.y, wo.z.abs());
-    let w = at_wo(base, coat, r, wo.z);
     let (mut wi, f, pdf);
     if uc < w.p_coat {
         if w.smooth {
@@ -440,14 +453,14 @@ fn opaque_sample(
         // wo + wi is ill-conditioned for near-specular grazing pairs).
         let pdf_c = ggx_pdf_visible(wo, wm, ax, ay) / (4.0 * dot);
         pdf = w.p_coat * pdf_c + w.p_base * wi.z * FRAC_1_PI;
-        f = coat_lobe(coat, r, wo, wi, wm) + base_term(base, coat, &w, wi.z);
+        f = coat_lobe(coat, r, wo, wi, wm) + base_term(base, coat, w, wi.z);
     } else {
         wi = square_to_cosine_hemisphere(u);
         if wi.z <= 0.0 {
             return None;
         }
-        pdf = w.p_coat * coat_pdf_rough(r, &w, wo, wi) + w.p_base * wi.z * FRAC_1_PI;
-        let mut fv = base_term(base, coat, &w, wi.z);
+        pdf = w.p_coat * coat_pdf_rough(r, w, wo, wi) + w.p_base * wi.z * FRAC_1_PI;
+        let mut fv = base_term(base, coat, w, wi.z);
         if !w.smooth {
             fv += coat_lobe(coat, r, wo, wi, (wo + wi).normalize());
         }
@@ -472,19 +485,11 @@ fn opaque_sample(
 /// The non-metal: the opaque coat over the base with probability 1 - t,
 /// the thin-walled transmission with t (`CoatParams::transmission`).
 pub fn coated_eval(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> Vec3 {
-    let t = coat.transmission;
-    if t <= 0.0 {
-        return opaque_eval(base, coat, r, wo, wi);
-    }
-    (1.0 - t) * opaque_eval(base, coat, r, wo, wi) + t * thinwall_eval(base, coat, r, wo, wi)
+    coated_eval_at(base, coat, r, &coat_at_wo(base, coat, r, wo), wo, wi)
 }
 
 pub fn coated_pdf(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3) -> f32 {
-    let t = coat.transmission;
-    if t <= 0.0 {
-        return opaque_pdf(base, coat, r, wo, wi);
-    }
-    (1.0 - t) * opaque_pdf(base, coat, r, wo, wi) + t * thinwall_pdf(coat, r, wo, wi)
+    coated_pdf_at(coat, r, &coat_at_wo(base, coat, r, wo), wo, wi)
 }
 
 /// `uc` first picks transmission (uc < t), then, rescaled, the lobe within.
@@ -496,16 +501,54 @@ pub fn coated_sample(
     uc: f32,
     u: Vec2,
 ) -> Option<BsdfSample> {
+    coated_sample_at(base, coat, r, &coat_at_wo(base, coat, r, wo), wo, uc, u)
+}
+
+/// [`coated_eval`] with the coat at wo already looked up (`w`).
+pub fn coated_eval_at(
+    base: Vec3,
+    coat: &CoatParams,
+    r: &Roughness,
+    w: &CoatAtWo,
+    wo: Vec3,
+    wi: Vec3,
+) -> Vec3 {
     let t = coat.transmission;
     if t <= 0.0 {
-        return opaque_sample(base, coat, r, wo, uc, u);
+        return opaque_eval(base, coat, r, w, wo, wi);
+    }
+    (1.0 - t) * opaque_eval(base, coat, r, w, wo, wi) + t * thinwall_eval(base, coat, r, wo, wi)
+}
+
+/// [`coated_pdf`] with the coat at wo already looked up (`w`).
+pub fn coated_pdf_at(coat: &CoatParams, r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
+    let t = coat.transmission;
+    if t <= 0.0 {
+        return opaque_pdf(r, w, wo, wi);
+    }
+    (1.0 - t) * opaque_pdf(r, w, wo, wi) + t * thinwall_pdf(coat, r, wo, wi)
+}
+
+/// [`coated_sample`] with the coat at wo already looked up (`w`).
+pub fn coated_sample_at(
+    base: Vec3,
+    coat: &CoatParams,
+    r: &Roughness,
+    w: &CoatAtWo,
+    wo: Vec3,
+    uc: f32,
+    u: Vec2,
+) -> Option<BsdfSample> {
+    let t = coat.transmission;
+    if t <= 0.0 {
+        return opaque_sample(base, coat, r, w, wo, uc, u);
     }
     let thin = uc < t;
     let s = if thin {
         thinwall_sample(base, coat, r, wo, (uc / t).min(ONE_MINUS_EPS), u)?
     } else {
         let uc = ((uc - t) / (1.0 - t)).clamp(0.0, ONE_MINUS_EPS);
-        opaque_sample(base, coat, r, wo, uc, u)?
+        opaque_sample(base, coat, r, w, wo, uc, u)?
     };
     if s.delta {
         // A delta lobe of one part: its throughput, its probability scaled.
@@ -520,8 +563,8 @@ pub fn coated_sample(
     let f_s = s.weight * (s.pdf / s.wi.z.abs());
     let (pdf, f) = if thin {
         (
-            t * s.pdf + (1.0 - t) * opaque_pdf(base, coat, r, wo, s.wi),
-            t * f_s + (1.0 - t) * opaque_eval(base, coat, r, wo, s.wi),
+            t * s.pdf + (1.0 - t) * opaque_pdf(r, w, wo, s.wi),
+            t * f_s + (1.0 - t) * opaque_eval(base, coat, r, w, wo, s.wi),
         )
     } else {
         (

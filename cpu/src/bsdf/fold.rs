@@ -29,7 +29,7 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Bsdf, BsdfSample};
+use super::{BsdfAt, BsdfSample};
 
 /// The geometric normal in the shading frame, on wo's side.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -59,24 +59,24 @@ impl Fold {
 
     /// f_fold(wo, wi) |cos_s wi| and pdf_fold(wi) for `wi` above the
     /// geometric surface; zero below it.
-    pub fn eval_pdf(&self, bsdf: &Bsdf, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+    pub fn eval_pdf(&self, bsdf: &BsdfAt, wi: Vec3) -> (Vec3, f32) {
         if !self.above(wi) {
             return (Vec3::ZERO, 0.0);
         }
         let m = self.mirror(wi);
-        let f = bsdf.eval(wo, wi) * wi.z.abs() + bsdf.eval(wo, m) * m.z.abs();
-        (f, bsdf.pdf(wo, wi) + bsdf.pdf(wo, m))
+        let f = bsdf.eval(wi) * wi.z.abs() + bsdf.eval(m) * m.z.abs();
+        (f, bsdf.pdf(wi) + bsdf.pdf(m))
     }
 
     /// The BSDF's sample, folded ([`Fold::reweigh`], its mirror image
     /// evaluated here).
-    pub fn sample(&self, bsdf: &Bsdf, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
-        let bs = bsdf.sample(wo, uc, u)?;
+    pub fn sample(&self, bsdf: &BsdfAt, uc: f32, u: Vec2) -> Option<BsdfSample> {
+        let bs = bsdf.sample(uc, u)?;
         if bs.delta {
             return self.reweigh(bs, Vec3::ZERO, 0.0);
         }
         let r = self.mirror(bs.wi);
-        self.reweigh(bs, bsdf.eval(wo, r) * r.z.abs(), bsdf.pdf(wo, r))
+        self.reweigh(bs, bsdf.eval(r) * r.z.abs(), bsdf.pdf(r))
     }
 
     /// A BSDF sample folded: mirrored above the surface where it falls

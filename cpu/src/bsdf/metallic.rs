@@ -6,7 +6,9 @@
 
 use glam::{Vec2, Vec3};
 
-use super::coated::{CoatParams, coated_eval, coated_pdf, coated_sample};
+use super::coated::{
+    CoatAtWo, CoatParams, coat_at_wo, coated_eval_at, coated_pdf_at, coated_sample_at,
+};
 use super::conductor::{conductor_eval, conductor_pdf, conductor_sample};
 use super::{BsdfSample, ConductorParams};
 
@@ -20,7 +22,8 @@ pub fn metallic_eval(
     wo: Vec3,
     wi: Vec3,
 ) -> Vec3 {
-    m * conductor_eval(c, wo, wi) + (1.0 - m) * coated_eval(base, coat, &c.roughness, wo, wi)
+    let w = coat_at_wo(base, coat, &c.roughness, wo);
+    metallic_eval_at(m, base, c, coat, &w, wo, wi)
 }
 
 pub fn metallic_pdf(
@@ -31,7 +34,33 @@ pub fn metallic_pdf(
     wo: Vec3,
     wi: Vec3,
 ) -> f32 {
-    m * conductor_pdf(c, wo, wi) + (1.0 - m) * coated_pdf(base, coat, &c.roughness, wo, wi)
+    let w = coat_at_wo(base, coat, &c.roughness, wo);
+    metallic_pdf_at(m, c, coat, &w, wo, wi)
+}
+
+/// [`metallic_eval`] with the non-metal's coat at wo already looked up.
+pub fn metallic_eval_at(
+    m: f32,
+    base: Vec3,
+    c: &ConductorParams,
+    coat: &CoatParams,
+    w: &CoatAtWo,
+    wo: Vec3,
+    wi: Vec3,
+) -> Vec3 {
+    m * conductor_eval(c, wo, wi) + (1.0 - m) * coated_eval_at(base, coat, &c.roughness, w, wo, wi)
+}
+
+/// [`metallic_pdf`] with the non-metal's coat at wo already looked up.
+pub fn metallic_pdf_at(
+    m: f32,
+    c: &ConductorParams,
+    coat: &CoatParams,
+    w: &CoatAtWo,
+    wo: Vec3,
+    wi: Vec3,
+) -> f32 {
+    m * conductor_pdf(c, wo, wi) + (1.0 - m) * coated_pdf_at(coat, &c.roughness, w, wo, wi)
 }
 
 /// `uc` first picks the metal (uc < m), then, rescaled to [0, 1), the
@@ -41,6 +70,22 @@ pub fn metallic_sample(
     base: Vec3,
     c: &ConductorParams,
     coat: &CoatParams,
+    wo: Vec3,
+    uc: f32,
+    u: Vec2,
+) -> Option<BsdfSample> {
+    let w = coat_at_wo(base, coat, &c.roughness, wo);
+    metallic_sample_at(m, base, c, coat, &w, wo, uc, u)
+}
+
+/// [`metallic_sample`] with the non-metal's coat at wo already looked up.
+#[allow(clippy::too_many_arguments)]
+pub fn metallic_sample_at(
+    m: f32,
+    base: Vec3,
+    c: &ConductorParams,
+    coat: &CoatParams,
+    w: &CoatAtWo,
     wo: Vec3,
     uc: f32,
     u: Vec2,
@@ -59,11 +104,11 @@ pub fn metallic_sample(
         wi = s.wi;
         pdf_c = s.pdf;
         f_c = s.weight * (s.pdf / wi.z.abs());
-        pdf_n = coated_pdf(base, coat, &c.roughness, wo, wi);
-        f_n = coated_eval(base, coat, &c.roughness, wo, wi);
+        pdf_n = coated_pdf_at(coat, &c.roughness, w, wo, wi);
+        f_n = coated_eval_at(base, coat, &c.roughness, w, wo, wi);
     } else {
         let uc = ((uc - m) / (1.0 - m)).clamp(0.0, ONE_MINUS_EPS);
-        let s = coated_sample(base, coat, &c.roughness, wo, uc, u)?;
+        let s = coated_sample_at(base, coat, &c.roughness, w, wo, uc, u)?;
         if s.delta {
             // The smooth coat's mirror, (1 - m) s F delta / |cos|, picked
             // with probability (1 - m) P: the coat's own throughput.

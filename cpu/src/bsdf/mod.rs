@@ -33,11 +33,17 @@ pub mod thin;
 pub mod thinwall;
 pub mod warp;
 
-use coated::{CoatParams, coated_eval, coated_pdf, coated_sample};
+use coated::{
+    CoatAtWo, CoatParams, coat_at_wo, coated_eval, coated_eval_at, coated_pdf, coated_pdf_at,
+    coated_sample, coated_sample_at,
+};
 use conductor::{conductor_eval, conductor_pdf, conductor_sample};
 use dielectric::{dielectric_eval, dielectric_is_smooth, dielectric_pdf, dielectric_sample};
 use diffuse::{diffuse_eval, diffuse_pdf, diffuse_sample};
-use metallic::{metallic_eval, metallic_pdf, metallic_sample};
+use metallic::{
+    metallic_eval, metallic_eval_at, metallic_pdf, metallic_pdf_at, metallic_sample,
+    metallic_sample_at,
+};
 use plastic::{PlasticParams, plastic_eval, plastic_pdf, plastic_sample};
 use roughplastic::{RoughPlasticParams, roughplastic_eval, roughplastic_pdf, roughplastic_sample};
 use thin::thin_sample;
@@ -354,6 +360,125 @@ impl Bsdf {
             Bsdf::Dielectric { .. } | Bsdf::ThinDielectric { .. } => true,
             Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } => coat.transmission > 0.0,
             _ => false,
+        }
+    }
+}
+
+/// A BSDF seen from one outgoing direction `wo`: what its eval, pdf and
+/// sample share at `wo` (the coat's albedo table lookups) found once. A
+/// path vertex asks its BSDF all three with the same wo; the answers are
+/// [`Bsdf::eval`]'s, [`Bsdf::pdf`]'s and [`Bsdf::sample`]'s bit for bit.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfAt<'a> {
+    bsdf: &'a Bsdf,
+    wo: Vec3,
+    /// The coat at wo, for the glTF models without a clear coat (a clear
+    /// coat's layering evaluates the model under it at other directions).
+    coat: Option<CoatAtWo>,
+}
+
+impl Bsdf {
+    /// This BSDF seen from `wo`.
+    #[inline]
+    pub fn at(&self, wo: Vec3) -> BsdfAt<'_> {
+        let coat = match self {
+            Bsdf::Coated {
+                base,
+                coat,
+                roughness,
+            } if coat.clearcoat <= 0.0 => Some(coat_at_wo(*base, coat, roughness, wo)),
+            Bsdf::Metallic {
+                base,
+                conductor,
+                coat,
+                ..
+            } if coat.clearcoat <= 0.0 => Some(coat_at_wo(*base, coat, &conductor.roughness, wo)),
+            _ => None,
+        };
+        BsdfAt {
+            bsdf: self,
+            wo,
+            coat,
+        }
+    }
+}
+
+impl<'a> BsdfAt<'a> {
+    /// The BSDF.
+    pub fn bsdf(&self) -> &'a Bsdf {
+        self.bsdf
+    }
+
+    /// [`Bsdf::eval`] at (wo, wi).
+    pub fn eval(&self, wi: Vec3) -> Vec3 {
+        let wo = self.wo;
+        match (self.bsdf, &self.coat) {
+            (
+                Bsdf::Coated {
+                    base,
+                    coat,
+                    roughness,
+                },
+                Some(w),
+            ) => coated_eval_at(*base, coat, roughness, w, wo, wi),
+            (
+                Bsdf::Metallic {
+                    metallic,
+                    base,
+                    conductor,
+                    coat,
+                },
+                Some(w),
+            ) => metallic_eval_at(*metallic, *base, conductor, coat, w, wo, wi),
+            (bsdf, _) => bsdf.eval(wo, wi),
+        }
+    }
+
+    /// [`Bsdf::pdf`] at (wo, wi).
+    pub fn pdf(&self, wi: Vec3) -> f32 {
+        let wo = self.wo;
+        match (self.bsdf, &self.coat) {
+            (
+                Bsdf::Coated {
+                    coat, roughness, ..
+                },
+                Some(w),
+            ) => coated_pdf_at(coat, roughness, w, wo, wi),
+            (
+                Bsdf::Metallic {
+                    metallic,
+                    conductor,
+                    coat,
+                    ..
+                },
+                Some(w),
+            ) => metallic_pdf_at(*metallic, conductor, coat, w, wo, wi),
+            (bsdf, _) => bsdf.pdf(wo, wi),
+        }
+    }
+
+    /// [`Bsdf::sample`] at wo.
+    pub fn sample(&self, uc: f32, u: Vec2) -> Option<BsdfSample> {
+        let wo = self.wo;
+        match (self.bsdf, &self.coat) {
+            (
+                Bsdf::Coated {
+                    base,
+                    coat,
+                    roughness,
+                },
+                Some(w),
+            ) => coated_sample_at(*base, coat, roughness, w, wo, uc, u),
+            (
+                Bsdf::Metallic {
+                    metallic,
+                    base,
+                    conductor,
+                    coat,
+                },
+                Some(w),
+            ) => metallic_sample_at(*metallic, *base, conductor, coat, w, wo, uc, u),
+            (bsdf, _) => bsdf.sample(wo, uc, u),
         }
     }
 }

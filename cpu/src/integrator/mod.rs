@@ -62,8 +62,8 @@ use rayon::prelude::*;
 
 pub use gpu::{GpuParams, GpuSceneData, gpu_scene_data};
 
-use crate::bsdf::Bsdf;
 use crate::bsdf::fold::Fold;
+use crate::bsdf::{Bsdf, BsdfAt};
 use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
 use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind, add_sample};
@@ -314,17 +314,16 @@ fn emitter_weight(
 /// the light-leak rule (folded, wi must leave on wo's side of the
 /// geometric surface, which it does up to rounding at the horizon).
 fn next_direction(
-    bsdf: &Bsdf,
+    bsdf: &BsdfAt,
     sf: &SurfaceFrame,
     wo: Vec3,
-    wo_local: Vec3,
     fold: Option<Fold>,
     uc: f32,
     u: glam::Vec2,
 ) -> Option<(crate::bsdf::BsdfSample, Vec3)> {
     let bs = match fold {
-        Some(fd) => fd.sample(bsdf, wo_local, uc, u),
-        None => bsdf.sample(wo_local, uc, u),
+        Some(fd) => fd.sample(bsdf, uc, u),
+        None => bsdf.sample(uc, u),
     }?;
     let wi = sf.frame.to_world(bs.wi).normalize();
     let leaks = match fold {
@@ -491,8 +490,7 @@ impl<'a> PathTracer<'a> {
         p: Vec3,
         p_err: Vec3,
         sf: &SurfaceFrame,
-        bsdf: &Bsdf,
-        wo_local: Vec3,
+        bsdf: &BsdfAt,
         fold: Option<Fold>,
         rays: &mut u64,
     ) -> Vec3 {
@@ -501,11 +499,11 @@ impl<'a> PathTracer<'a> {
         // shadow ray is clear, except where the fold has both).
         let (f, folded_pdf) = match fold {
             Some(fd) => {
-                let (f, pdf) = fd.eval_pdf(bsdf, wo_local, wi_local);
+                let (f, pdf) = fd.eval_pdf(bsdf, wi_local);
                 (f, Some(pdf))
             }
             None if (ls.wi.dot(sf.ng) > 0.0) == (wi_local.z > 0.0) => {
-                (bsdf.eval(wo_local, wi_local) * wi_local.z.abs(), None)
+                (bsdf.eval(wi_local) * wi_local.z.abs(), None)
             }
             None => (Vec3::ZERO, None),
         };
@@ -520,7 +518,7 @@ impl<'a> PathTracer<'a> {
         let w = if ls.delta {
             1.0
         } else {
-            let pdf = folded_pdf.unwrap_or_else(|| bsdf.pdf(wo_local, wi_local));
+            let pdf = folded_pdf.unwrap_or_else(|| bsdf.pdf(wi_local));
             mis_light(self.mis, ls.pdf, pdf)
         };
         f * ls.weight * w
@@ -592,6 +590,7 @@ impl<'a> PathTracer<'a> {
 
             let (sf, bsdf) = self.shade(tri.material, hit.tri, hit.u, hit.v, wo);
             let wo_local = sf.frame.to_local(wo);
+            let at = bsdf.at(wo_local);
             let fold = sf.fold_for(wo_local);
             let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
 
@@ -602,14 +601,11 @@ impl<'a> PathTracer<'a> {
                     self.lights
                         .sample(scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
             {
-                radiance +=
-                    throughput * self.direct_light(&ls, p, p_err, &sf, &bsdf, wo_local, fold, rays);
+                radiance += throughput * self.direct_light(&ls, p, p_err, &sf, &at, fold, rays);
             }
 
             // BSDF sampling: the next ray.
-            let Some((bs, wi)) =
-                next_direction(&bsdf, &sf, wo, wo_local, fold, u.bsdf_lobe, u.bsdf)
-            else {
+            let Some((bs, wi)) = next_direction(&at, &sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
                 break;
             };
             throughput *= bs.weight;
