@@ -333,6 +333,50 @@ fn next_direction(
     (!leaks).then_some((bs, wi))
 }
 
+/// A path between its bounces: what it has gathered, what it carries,
+/// its ray, and what MIS needs of the vertex it left.
+#[derive(Clone, Copy, Debug)]
+struct PathState {
+    ray: Ray,
+    radiance: Vec3,
+    throughput: Vec3,
+    /// The relative IORs crossed (Russian roulette undoes their scaling).
+    eta: f32,
+    /// Whether an emitter the current ray finds could also have been found
+    /// by light sampling at the previous vertex, prev_p (it sampled lights
+    /// and its BSDF sample was not a delta): only then is it MIS-weighted.
+    prev_mis: bool,
+    prev_bsdf_pdf: f32,
+    prev_bg_normal: Vec3,
+    prev_p: Vec3,
+}
+
+impl PathState {
+    fn new(ray: Ray) -> Self {
+        Self {
+            ray,
+            radiance: Vec3::ZERO,
+            throughput: Vec3::ONE,
+            eta: 1.0,
+            prev_mis: false,
+            prev_bsdf_pdf: 0.0,
+            prev_bg_normal: Vec3::ZERO,
+            prev_p: Vec3::ZERO,
+        }
+    }
+}
+
+/// Where a path's ray arrived: the hit, its material, the point (error
+/// bound `p_err`) and the direction back along the ray.
+#[derive(Clone, Copy, Debug)]
+struct Arrival {
+    hit: crate::bvh::Hit,
+    material: u32,
+    p: Vec3,
+    p_err: Vec3,
+    wo: Vec3,
+}
+
 /// The interpolated shading frame at a hit, with the geometric normal.
 struct SurfaceFrame {
     ng: Vec3,
@@ -539,100 +583,128 @@ impl<'a> PathTracer<'a> {
     /// [`PathTracer::sample`] with its random numbers from `rng` (the
     /// sample's own, from whichever source).
     pub fn trace(&self, x: u32, y: u32, mut rng: PathSampler, rays: &mut u64) -> Vec3 {
-        let scene = self.scene;
-        let mut ray = self.camera.ray(x, y, rng.pixel_2d());
-
-        let (mut radiance, mut throughput) = (Vec3::ZERO, Vec3::ONE);
-        let mut eta = 1.0f32;
+        let mut path = PathState::new(self.camera.ray(x, y, rng.pixel_2d()));
         let mut depth = 0u32;
-        // Whether an emitter the current ray finds could also have been
-        // found by light sampling at the previous vertex, prev_p (it sampled
-        // lights and its BSDF sample was not a delta): only then is it
-        // MIS-weighted.
-        let (mut prev_mis, mut prev_bsdf_pdf) = (false, 0.0f32);
-        let (mut prev_bg_normal, mut prev_p) = (Vec3::ZERO, Vec3::ZERO);
-
-        loop {
-            *rays += 1;
-            let Some(hit) = scene.intersect_with(&ray, self.masks) else {
-                if self.lights.probs.background > 0.0 {
-                    let w = emitter_weight(self.mis, prev_mis, prev_bsdf_pdf, || {
-                        self.lights.background_pdf(prev_bg_normal, ray.d)
-                    });
-                    radiance += throughput * w * self.lights.background_radiance(ray.d);
-                }
-                break;
-            };
-            let tri = &scene.triangles[hit.tri as usize];
-            absorb(scene, tri, &ray, hit.t, &mut throughput);
-            let [p0, p1, p2] = tri.vertices();
-            // Interpolated from the vertices: its error is bounded by
-            // hit_error (see the module notes on ray offsets).
-            let p = (1.0 - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
-            let p_err = hit_error(p0, p1, p2);
-            let wo = -ray.d;
-
-            if tri.light != NO_LIGHT
-                && let Some(le) = emitted(scene, hit.tri, hit.u, hit.v, wo)
-            {
-                let w = emitter_weight(self.mis, prev_mis, prev_bsdf_pdf, || {
-                    self.lights.area_pdf(scene, hit.tri, prev_p, ray.d, hit.t)
-                });
-                radiance += throughput * w * le;
-            }
-
+        while let Some(at) = self.arrive(&mut path, rays) {
             if depth.saturating_add(1) >= self.max_depth {
                 break;
             }
-
             // The fixed per-bounce budget of random numbers.
             let u = rng.bounce();
-
-            let (sf, bsdf) = self.shade(tri.material, hit.tri, hit.u, hit.v, wo);
-            let wo_local = sf.frame.to_local(wo);
-            let at = bsdf.at(wo_local);
-            let fold = sf.fold_for(wo_local);
-            let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
-
-            // Next-event estimation.
-            let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
-            if sample_lights
-                && let Some(ls) =
-                    self.lights
-                        .sample(scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
-            {
-                radiance += throughput * self.direct_light(&ls, p, p_err, &sf, &at, fold, rays);
-            }
-
-            // BSDF sampling: the next ray.
-            let Some((bs, wi)) = next_direction(&at, &sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
+            let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
+            if !self.scatter(&mut path, &at, &sf, &bsdf, &u, depth, rays) {
                 break;
-            };
-            throughput *= bs.weight;
-            eta *= bs.eta;
-            prev_mis = sample_lights && !bs.delta;
-            prev_bsdf_pdf = bs.pdf;
-            prev_bg_normal = bg_normal;
-            prev_p = p;
-            ray = Ray {
-                o: offset_origin(p, p_err, sf.ng, wi),
-                d: wi,
-                tmax: f32::MAX,
-            };
+            }
             depth += 1;
-
-            if depth >= RR_DEPTH {
-                let q = (throughput.max_element() * eta * eta).min(RR_MAX_PROB);
-                if !(u.rr < q) {
-                    break;
-                }
-                throughput /= q;
-            }
-            if !(throughput.max_element() > 0.0) {
-                break;
-            }
         }
-        radiance
+        path.radiance
+    }
+
+    /// Trace the path's ray: what it finds (the background or an emitter,
+    /// MIS-weighted, and the medium it crossed) added to the path, and the
+    /// hit it arrives at; None where it escaped.
+    #[inline(always)]
+    fn arrive(&self, path: &mut PathState, rays: &mut u64) -> Option<Arrival> {
+        let scene = self.scene;
+        let ray = &path.ray;
+        *rays += 1;
+        let Some(hit) = scene.intersect_with(ray, self.masks) else {
+            if self.lights.probs.background > 0.0 {
+                let w = emitter_weight(self.mis, path.prev_mis, path.prev_bsdf_pdf, || {
+                    self.lights.background_pdf(path.prev_bg_normal, ray.d)
+                });
+                path.radiance += path.throughput * w * self.lights.background_radiance(ray.d);
+            }
+            return None;
+        };
+        let tri = &scene.triangles[hit.tri as usize];
+        absorb(scene, tri, ray, hit.t, &mut path.throughput);
+        let [p0, p1, p2] = tri.vertices();
+        // Interpolated from the vertices: its error is bounded by
+        // hit_error (see the module notes on ray offsets).
+        let p = (1.0 - hit.u - hit.v) * p0 + hit.u * p1 + hit.v * p2;
+        let p_err = hit_error(p0, p1, p2);
+        let wo = -ray.d;
+
+        if tri.light != NO_LIGHT
+            && let Some(le) = emitted(scene, hit.tri, hit.u, hit.v, wo)
+        {
+            let w = emitter_weight(self.mis, path.prev_mis, path.prev_bsdf_pdf, || {
+                self.lights.area_pdf(scene, hit.tri, path.prev_p, ray.d, hit.t)
+            });
+            path.radiance += path.throughput * w * le;
+        }
+        Some(Arrival {
+            hit,
+            material: tri.material,
+            p,
+            p_err,
+            wo,
+        })
+    }
+
+    /// At the hit `at` (shading frame `sf`, BSDF `bsdf`), bounce `depth`:
+    /// next-event estimation, then the BSDF's sample as the path's next
+    /// ray and Russian roulette. False where the path ends.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn scatter(
+        &self,
+        path: &mut PathState,
+        at: &Arrival,
+        sf: &SurfaceFrame,
+        bsdf: &Bsdf,
+        u: &crate::sobol::BounceSamples,
+        depth: u32,
+        rays: &mut u64,
+    ) -> bool {
+        let (p, p_err, wo) = (at.p, at.p_err, at.wo);
+        let wo_local = sf.frame.to_local(wo);
+        let bsdf_at = bsdf.at(wo_local);
+        let fold = sf.fold_for(wo_local);
+        let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
+
+        // Next-event estimation.
+        let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
+        if sample_lights
+            && let Some(ls) =
+                self.lights
+                    .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
+        {
+            path.radiance += path.throughput
+                * self.direct_light(&ls, p, p_err, sf, &bsdf_at, fold, rays);
+        }
+
+        // BSDF sampling: the next ray.
+        let Some((bs, wi)) = next_direction(&bsdf_at, sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
+            return false;
+        };
+        path.throughput *= bs.weight;
+        path.eta *= bs.eta;
+        path.prev_mis = sample_lights && !bs.delta;
+        path.prev_bsdf_pdf = bs.pdf;
+        path.prev_bg_normal = bg_normal;
+        path.prev_p = p;
+        path.ray = Ray {
+            o: offset_origin(p, p_err, sf.ng, wi),
+            d: wi,
+            tmax: f32::MAX,
+        };
+        self.roulette(path, depth + 1, u.rr)
+    }
+
+    /// Russian roulette after `depth` bounces, with the bounce's number
+    /// `rr`; false where the path ends (or carries nothing).
+    #[inline(always)]
+    fn roulette(&self, path: &mut PathState, depth: u32, rr: f32) -> bool {
+        if depth >= RR_DEPTH {
+            let q = (path.throughput.max_element() * path.eta * path.eta).min(RR_MAX_PROB);
+            if !(rr < q) {
+                return false;
+            }
+            path.throughput /= q;
+        }
+        path.throughput.max_element() > 0.0
     }
 
     /// Render every pixel with sample indices from `sample_start`, `spp` of
