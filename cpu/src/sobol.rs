@@ -85,7 +85,7 @@ pub fn sobol_sample(key: u32, pixel: u32, sample: u32, dim: u32) -> f32 {
 }
 
 /// The numbers one bounce draws, whether it uses them or not.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct BounceSamples {
     pub light_cat: f32,
     pub light_idx: f32,
@@ -213,7 +213,14 @@ impl SampleBatch {
         }
     }
 
-    fn bounce(&mut self, lane: usize, bounce: u32) -> BounceSamples {
+    /// Lane `lane`'s position in the pixel ([`PathSampler::pixel_2d`]).
+    pub fn pixel_2d(&self, lane: usize) -> Vec2 {
+        self.pixel_2d[lane]
+    }
+
+    /// Lane `lane`'s numbers of bounce `bounce` ([`PathSampler::bounce`]):
+    /// each lane asks its bounces in order, as its [`PathSampler`] does.
+    pub fn bounce(&mut self, lane: usize, bounce: u32) -> BounceSamples {
         let b = bounce as usize;
         if self.uses.len() <= b {
             self.uses.resize(b + 1, 0);

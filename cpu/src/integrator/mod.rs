@@ -53,6 +53,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 mod gpu;
+mod wave;
 
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
@@ -377,7 +378,39 @@ struct Arrival {
     wo: Vec3,
 }
 
+/// A light sample's work before and after its shadow ray
+/// ([`PathTracer::next_event`]).
+#[derive(Clone, Copy, Debug)]
+struct NextEvent {
+    /// Where f |cos| > 0: the shadow ray.
+    shadow: Option<Ray>,
+    /// The shadow ray was traced and found nothing in the way.
+    clear: bool,
+    /// f |cos| (the fold's where it folds).
+    f: Vec3,
+    /// The light sample's Le / pdf, density (for MIS) and delta flag.
+    weight: Vec3,
+    light_pdf: f32,
+    delta: bool,
+    /// The fold's density, which it finds with f.
+    folded_pdf: Option<f32>,
+    wi_local: Vec3,
+}
+
+/// A path vertex between its light sample and its BSDF sample
+/// ([`PathTracer::begin`]).
+#[derive(Clone, Copy, Debug)]
+struct Vertex<'a> {
+    bsdf: BsdfAt<'a>,
+    fold: Option<Fold>,
+    bg_normal: Vec3,
+    sample_lights: bool,
+    /// The light sample, where one was drawn.
+    nee: Option<NextEvent>,
+}
+
 /// The interpolated shading frame at a hit, with the geometric normal.
+#[derive(Clone, Copy, Debug)]
 struct SurfaceFrame {
     ng: Vec3,
     ns: Vec3,
@@ -521,14 +554,16 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// Next-event estimation at a hit: the light sample `ls`'s
-    /// f |cos| Le / pdf, MIS-weighted, where the shadow ray from `p` (error
-    /// bound `p_err`) is clear. Directions on different sides of the
-    /// geometric and shading normals are discarded (the light-leak rule),
-    /// except that a folded BSDF (`fold`) takes every direction above the
-    /// geometric surface.
+    /// Next-event estimation at a hit up to its shadow ray: the light
+    /// sample `ls`'s f |cos| and, where that is not zero, the shadow ray
+    /// from `p` (error bound `p_err`) toward it ([`Self::test_shadow`]
+    /// traces it, [`Self::next_event_radiance`] weighs the sample).
+    /// Directions on different sides of the geometric and shading normals
+    /// are discarded (the light-leak rule), except that a folded BSDF
+    /// (`fold`) takes every direction above the geometric surface.
     #[allow(clippy::too_many_arguments)]
-    fn direct_light(
+    #[inline(always)]
+    fn next_event(
         &self,
         ls: &LightSample,
         p: Vec3,
@@ -537,7 +572,7 @@ impl<'a> PathTracer<'a> {
         bsdf: &BsdfAt,
         fold: Option<Fold>,
         rays: &mut u64,
-    ) -> Vec3 {
+    ) -> NextEvent {
         let wi_local = sf.frame.to_local(ls.wi);
         // f |cos| and the BSDF's density for MIS (deferred until the
         // shadow ray is clear, except where the fold has both).
@@ -551,21 +586,44 @@ impl<'a> PathTracer<'a> {
             }
             None => (Vec3::ZERO, None),
         };
-        if !(f.max_element() > 0.0) {
+        let shadow = (f.max_element() > 0.0).then(|| {
+            *rays += 1;
+            self.shadow_ray(p, p_err, sf.ng, ls)
+        });
+        NextEvent {
+            shadow,
+            clear: false,
+            f,
+            weight: ls.weight,
+            light_pdf: ls.pdf,
+            delta: ls.delta,
+            folded_pdf,
+            wi_local,
+        }
+    }
+
+    /// Trace a light sample's shadow ray.
+    #[inline(always)]
+    fn test_shadow(&self, ne: &mut NextEvent) {
+        if let Some(shadow) = &ne.shadow {
+            ne.clear = shadow.tmax > 0.0 && !self.scene.occluded_with(shadow, self.masks);
+        }
+    }
+
+    /// A traced light sample's f |cos| Le / pdf, MIS-weighted; zero where
+    /// its shadow ray was blocked.
+    #[inline(always)]
+    fn next_event_radiance(&self, ne: &NextEvent, bsdf: &BsdfAt) -> Vec3 {
+        if !ne.clear {
             return Vec3::ZERO;
         }
-        let shadow = self.shadow_ray(p, p_err, sf.ng, ls);
-        *rays += 1;
-        if !(shadow.tmax > 0.0) || self.scene.occluded_with(&shadow, self.masks) {
-            return Vec3::ZERO;
-        }
-        let w = if ls.delta {
+        let w = if ne.delta {
             1.0
         } else {
-            let pdf = folded_pdf.unwrap_or_else(|| bsdf.pdf(wi_local));
-            mis_light(self.mis, ls.pdf, pdf)
+            let pdf = ne.folded_pdf.unwrap_or_else(|| bsdf.pdf(ne.wi_local));
+            mis_light(self.mis, ne.light_pdf, pdf)
         };
-        f * ls.weight * w
+        ne.f * ne.weight * w
     }
 
     /// One radiance sample for pixel (x, y), sample index `s`; `rays`
@@ -592,7 +650,11 @@ impl<'a> PathTracer<'a> {
             // The fixed per-bounce budget of random numbers.
             let u = rng.bounce();
             let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
-            if !self.scatter(&mut path, &at, &sf, &bsdf, &u, depth, rays) {
+            let mut v = self.begin(&at, &sf, &bsdf, &u, rays);
+            if let Some(ne) = &mut v.nee {
+                self.test_shadow(ne);
+            }
+            if !self.scatter(&mut path, &at, &sf, &v, &u, depth) {
                 break;
             }
             depth += 1;
@@ -630,7 +692,8 @@ impl<'a> PathTracer<'a> {
             && let Some(le) = emitted(scene, hit.tri, hit.u, hit.v, wo)
         {
             let w = emitter_weight(self.mis, path.prev_mis, path.prev_bsdf_pdf, || {
-                self.lights.area_pdf(scene, hit.tri, path.prev_p, ray.d, hit.t)
+                self.lights
+                    .area_pdf(scene, hit.tri, path.prev_p, ray.d, hit.t)
             });
             path.radiance += path.throughput * w * le;
         }
@@ -643,50 +706,68 @@ impl<'a> PathTracer<'a> {
         })
     }
 
-    /// At the hit `at` (shading frame `sf`, BSDF `bsdf`), bounce `depth`:
-    /// next-event estimation, then the BSDF's sample as the path's next
-    /// ray and Russian roulette. False where the path ends.
-    #[allow(clippy::too_many_arguments)]
+    /// The vertex at the hit `at` (shading frame `sf`, BSDF `bsdf`) with
+    /// the bounce's numbers `u`: the BSDF seen from wo and, where it
+    /// samples lights, the light sample up to its shadow ray.
+    #[inline(always)]
+    fn begin<'b>(
+        &self,
+        at: &Arrival,
+        sf: &SurfaceFrame,
+        bsdf: &'b Bsdf,
+        u: &crate::sobol::BounceSamples,
+        rays: &mut u64,
+    ) -> Vertex<'b> {
+        let (p, wo) = (at.p, at.wo);
+        let wo_local = sf.frame.to_local(wo);
+        let bsdf_at = bsdf.at(wo_local);
+        let fold = sf.fold_for(wo_local);
+        let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
+        let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
+        let nee = if sample_lights {
+            self.lights
+                .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
+                .map(|ls| self.next_event(&ls, p, at.p_err, sf, &bsdf_at, fold, rays))
+        } else {
+            None
+        };
+        Vertex {
+            bsdf: bsdf_at,
+            fold,
+            bg_normal,
+            sample_lights,
+            nee,
+        }
+    }
+
+    /// The vertex `v` (its shadow ray traced) at bounce `depth`: its light
+    /// sample's radiance, then the BSDF's sample as the path's next ray and
+    /// Russian roulette. False where the path ends.
     #[inline(always)]
     fn scatter(
         &self,
         path: &mut PathState,
         at: &Arrival,
         sf: &SurfaceFrame,
-        bsdf: &Bsdf,
+        v: &Vertex,
         u: &crate::sobol::BounceSamples,
         depth: u32,
-        rays: &mut u64,
     ) -> bool {
-        let (p, p_err, wo) = (at.p, at.p_err, at.wo);
-        let wo_local = sf.frame.to_local(wo);
-        let bsdf_at = bsdf.at(wo_local);
-        let fold = sf.fold_for(wo_local);
-        let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
-
-        // Next-event estimation.
-        let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
-        if sample_lights
-            && let Some(ls) =
-                self.lights
-                    .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
-        {
-            path.radiance += path.throughput
-                * self.direct_light(&ls, p, p_err, sf, &bsdf_at, fold, rays);
+        if let Some(ne) = &v.nee {
+            path.radiance += path.throughput * self.next_event_radiance(ne, &v.bsdf);
         }
-
         // BSDF sampling: the next ray.
-        let Some((bs, wi)) = next_direction(&bsdf_at, sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
+        let Some((bs, wi)) = next_direction(&v.bsdf, sf, at.wo, v.fold, u.bsdf_lobe, u.bsdf) else {
             return false;
         };
         path.throughput *= bs.weight;
         path.eta *= bs.eta;
-        path.prev_mis = sample_lights && !bs.delta;
+        path.prev_mis = v.sample_lights && !bs.delta;
         path.prev_bsdf_pdf = bs.pdf;
-        path.prev_bg_normal = bg_normal;
-        path.prev_p = p;
+        path.prev_bg_normal = v.bg_normal;
+        path.prev_p = at.p;
         path.ray = Ray {
-            o: offset_origin(p, p_err, sf.ng, wi),
+            o: offset_origin(at.p, at.p_err, sf.ng, wi),
             d: wi,
             tmax: f32::MAX,
         };
@@ -794,14 +875,19 @@ impl<'a> PathTracer<'a> {
                             count
                         };
                         let pixel = y * w + x;
+                        let mut wave = [Vec3::ZERO; 8];
                         for s in first..first + n {
                             let mut l = match self.sampler {
-                                // Sobol: eight samples' numbers per instruction.
+                                // Sobol: eight samples side by side, their
+                                // numbers eight per instruction.
                                 SamplerKind::Sobol => {
-                                    if (s - first) % 8 == 0 {
+                                    let k = ((s - first) % 8) as usize;
+                                    if k == 0 {
                                         batch.reset(self.key, pixel, s);
+                                        let m = (first + n - s).min(8) as usize;
+                                        wave = self.trace_wave(x, y, &mut batch, m, &mut rays);
                                     }
-                                    self.trace(x, y, batch.sampler(s), &mut rays)
+                                    wave[k]
                                 }
                                 SamplerKind::Independent => self.sample(x, y, s, &mut rays),
                             };
