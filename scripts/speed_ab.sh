@@ -21,7 +21,7 @@ for scene in "$@"; do
       bin=$a
       [ "$side" = b ] && bin=$b
       "$bin" render "$scene" -o "$tmp/img.png" --backend cpu --width "$width" --spp "$spp" \
-        --stats "$tmp/stats.json" --quiet
+        --stats "$tmp/stats.json" --quiet 2>"$tmp/err" || { cat "$tmp/err" >&2; exit 1; }
       python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['samples_per_second'])" \
         "$tmp/stats.json" >> "$tmp/$side"
     done

@@ -691,8 +691,9 @@ fn batched_samples_are_the_scalar_sampler_s() {
 /// side, `PathTracer::trace_wave`) and the batched sampler is the
 /// one-path-at-a-time render (`PathTracer::sample`, each sample's own
 /// sampler) bit for bit, with the same rays, at every SIMD level, on every
-/// bundled scene, waves cut short included (21 spp: 8 + 8 + 5): the wave
-/// and the wide sampler change the speed, not the image.
+/// bundled scene, waves cut short included (21 spp: 8 + 8 + 5), with depth
+/// limits, a first sample off the batches' grid and no light sampling: the
+/// wave and the wide sampler change the speed, not the image.
 #[test]
 fn batched_render_is_the_unbatched_render_bit_for_bit() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
@@ -703,28 +704,50 @@ fn batched_render_is_the_unbatched_render_bit_for_bit() {
         .collect();
     names.sort();
     assert!(names.len() >= 9, "the bundled scenes: {names:?}");
+    let base = glint_cpu::RenderOptions {
+        spp: 21,
+        ..glint_cpu::RenderOptions::new(24, 16)
+    };
+    // The default, and waves that stop early (depth limits), start off the
+    // batch grid (sample_start) and draw no light samples.
+    let variants = [
+        base.clone(),
+        glint_cpu::RenderOptions {
+            spp: 11,
+            max_depth: 1,
+            sample_start: 5,
+            ..base.clone()
+        },
+        glint_cpu::RenderOptions {
+            spp: 9,
+            max_depth: 3,
+            seed: 7,
+            nee: false,
+            ..base.clone()
+        },
+    ];
     for name in &names {
         let scene = glint_cpu::loader::load(&root.join(name)).unwrap();
-        let opts = glint_cpu::RenderOptions {
-            spp: 21,
-            ..glint_cpu::RenderOptions::new(24, 16)
-        };
-        for level in SimdLevel::available() {
-            let mut pt = glint_cpu::PathTracer::new(&scene, &opts).unwrap();
+        for (opts, level) in variants
+            .iter()
+            .flat_map(|o| SimdLevel::available().into_iter().map(move |l| (o, l)))
+        {
+            let mut pt = glint_cpu::PathTracer::new(&scene, opts).unwrap();
             pt.simd = level;
             let (film, stats) = pt.render(opts.spp, &|_, _| {});
             let mut rays = 0;
             for y in 0..16 {
                 for x in 0..24 {
-                    let sum = (0..opts.spp).fold(Vec3::ZERO, |acc, s| {
+                    let first = opts.sample_start;
+                    let sum = (first..first + opts.spp).fold(Vec3::ZERO, |acc, s| {
                         let l = pt.sample(x, y, s, &mut rays);
                         acc + if l.is_finite() { l } else { Vec3::ZERO }
                     });
                     let got = film.sum[film.index(x, y)];
-                    assert_eq!(got, sum, "{name} at {level:?}, pixel ({x}, {y})");
+                    assert_eq!(got, sum, "{name} {opts:?} at {level:?}, pixel ({x}, {y})");
                 }
             }
-            assert_eq!(stats.rays, rays, "{name} at {level:?}");
+            assert_eq!(stats.rays, rays, "{name} {opts:?} at {level:?}");
         }
     }
 }
