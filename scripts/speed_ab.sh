@@ -4,10 +4,11 @@
 # samples/s of each over ROUNDS renders (the render's own --stats, one thread
 # unless RAYON_NUM_THREADS says otherwise) and the ratio B/A. For changes that
 # keep the image (check that with `cmp` on the EXRs); scripts/before_after.sh
-# also measures the error.
+# also measures the error. RENDER_ARGS (environment) adds arguments to every
+# render (say "--sampler independent").
 # Usage: scripts/speed_ab.sh ROUNDS SPP WIDTH BIN_A BIN_B SCENE...
 set -euo pipefail
-[ $# -ge 6 ] || { sed -n 2,8p "$0" >&2; exit 2; }
+[ $# -ge 6 ] || { sed -n 2,10p "$0" >&2; exit 2; }
 rounds=$1 spp=$2 width=$3 a=$4 b=$5
 shift 5
 export RAYON_NUM_THREADS=${RAYON_NUM_THREADS:-1}
@@ -21,7 +22,7 @@ for scene in "$@"; do
       bin=$a
       [ "$side" = b ] && bin=$b
       "$bin" render "$scene" -o "$tmp/img.png" --backend cpu --width "$width" --spp "$spp" \
-        --stats "$tmp/stats.json" --quiet 2>"$tmp/err" || { cat "$tmp/err" >&2; exit 1; }
+        --stats "$tmp/stats.json" --quiet ${RENDER_ARGS:-} 2>"$tmp/err" || { cat "$tmp/err" >&2; exit 1; }
       python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['samples_per_second'])" \
         "$tmp/stats.json" >> "$tmp/$side"
     done

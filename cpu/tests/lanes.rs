@@ -692,8 +692,9 @@ fn batched_samples_are_the_scalar_sampler_s() {
 /// one-path-at-a-time render (`PathTracer::sample`, each sample's own
 /// sampler) bit for bit, with the same rays, at every SIMD level, on every
 /// bundled scene, waves cut short included (21 spp: 8 + 8 + 5), with depth
-/// limits, a first sample off the batches' grid and no light sampling: the
-/// wave and the wide sampler change the speed, not the image.
+/// limits, a first sample off the batches' grid, no light sampling and the
+/// independent sampler: the wave and the wide sampler change the speed,
+/// not the image.
 #[test]
 fn batched_render_is_the_unbatched_render_bit_for_bit() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
@@ -723,6 +724,11 @@ fn batched_render_is_the_unbatched_render_bit_for_bit() {
             max_depth: 3,
             seed: 7,
             nee: false,
+            ..base.clone()
+        },
+        glint_cpu::RenderOptions {
+            spp: 10,
+            sampler: glint_cpu::film::SamplerKind::Independent,
             ..base.clone()
         },
     ];

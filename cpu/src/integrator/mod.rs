@@ -55,6 +55,8 @@
 mod gpu;
 mod wave;
 
+pub use wave::WaveSampler;
+
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::time::Instant;
 
@@ -877,20 +879,26 @@ impl<'a> PathTracer<'a> {
                         let pixel = y * w + x;
                         let mut wave = [Vec3::ZERO; 8];
                         for s in first..first + n {
-                            let mut l = match self.sampler {
-                                // Sobol: eight samples side by side, their
-                                // numbers eight per instruction.
-                                SamplerKind::Sobol => {
-                                    let k = ((s - first) % 8) as usize;
-                                    if k == 0 {
+                            // Eight samples side by side (for Sobol, their
+                            // numbers eight per instruction).
+                            let k = ((s - first) % 8) as usize;
+                            if k == 0 {
+                                let m = (first + n - s).min(8);
+                                let rng = match self.sampler {
+                                    SamplerKind::Sobol => {
                                         batch.reset(self.key, pixel, s);
-                                        let m = (first + n - s).min(8) as usize;
-                                        wave = self.trace_wave(x, y, &mut batch, m, &mut rays);
+                                        WaveSampler::Batch(&mut batch)
                                     }
-                                    wave[k]
-                                }
-                                SamplerKind::Independent => self.sample(x, y, s, &mut rays),
-                            };
+                                    SamplerKind::Independent => {
+                                        WaveSampler::Paths(std::array::from_fn(|j| {
+                                            let j = s.wrapping_add(j as u32);
+                                            PathSampler::new(self.sampler, self.key, pixel, j)
+                                        }))
+                                    }
+                                };
+                                wave = self.trace_wave(x, y, rng, m as usize, &mut rays);
+                            }
+                            let mut l = wave[k];
                             // A NaN or infinity (a degenerate pdf somewhere)
                             // would poison the pixel for good: drop it.
                             if !l.is_finite() {

@@ -1,5 +1,5 @@
-//! The wave: the eight samples of a pixel's [`SampleBatch`] traced side
-//! by side, bounce by bounce, so that each step of a bounce runs for
+//! The wave: eight samples of a pixel (a Sobol [`SampleBatch`]'s, or
+//! eight independent ones) traced side by side, bounce by bounce, so that each step of a bounce runs for
 //! every live path before the next step starts. Each path takes the
 //! steps [`PathTracer::trace`] takes with the same numbers, so a wave
 //! gives every path's radiance bit for bit as one path at a time does
@@ -8,7 +8,32 @@
 use glam::Vec3;
 
 use super::{Arrival, PathState, PathTracer};
-use crate::sobol::SampleBatch;
+use crate::sobol::{BounceSamples, PathSampler, SampleBatch};
+
+/// Where a wave's random numbers come from.
+pub enum WaveSampler<'a> {
+    /// The Sobol batch of the wave's samples ([`SampleBatch::reset`] to
+    /// them): eight samples' numbers per instruction.
+    Batch(&'a mut SampleBatch),
+    /// Each path its own sampler (the independent sampler).
+    Paths([PathSampler<'static>; 8]),
+}
+
+impl WaveSampler<'_> {
+    fn pixel_2d(&mut self, lane: usize) -> glam::Vec2 {
+        match self {
+            Self::Batch(batch) => batch.pixel_2d(lane),
+            Self::Paths(paths) => paths[lane].pixel_2d(),
+        }
+    }
+
+    fn bounce(&mut self, lane: usize, bounce: u32) -> BounceSamples {
+        match self {
+            Self::Batch(batch) => batch.bounce(lane, bounce),
+            Self::Paths(paths) => paths[lane].bounce(),
+        }
+    }
+}
 
 /// The lanes of `live` (bit k: lane k), lowest first.
 fn lanes_of(live: u8) -> impl Iterator<Item = usize> {
@@ -16,20 +41,20 @@ fn lanes_of(live: u8) -> impl Iterator<Item = usize> {
 }
 
 impl PathTracer<'_> {
-    /// The radiance of the batch's first `n` samples (n <= 8) of pixel
-    /// (x, y), the batch [`SampleBatch::reset`] to them; `rays` counts
-    /// every ray, as [`PathTracer::trace`] does.
+    /// The radiance of the first `n` (n <= 8) of the wave's samples of
+    /// pixel (x, y), their numbers from `rng`; `rays` counts every ray, as
+    /// [`PathTracer::trace`] does.
     pub fn trace_wave(
         &self,
         x: u32,
         y: u32,
-        batch: &mut SampleBatch,
+        mut rng: WaveSampler,
         n: usize,
         rays: &mut u64,
     ) -> [Vec3; 8] {
         debug_assert!(n <= 8);
         let mut paths: [PathState; 8] =
-            std::array::from_fn(|k| PathState::new(self.camera.ray(x, y, batch.pixel_2d(k))));
+            std::array::from_fn(|k| PathState::new(self.camera.ray(x, y, rng.pixel_2d(k))));
         let mut live = ((1u16 << n) - 1) as u8;
         let mut arrivals = [None::<Arrival>; 8];
         let mut depth = 0u32;
@@ -45,7 +70,7 @@ impl PathTracer<'_> {
             }
             for k in lanes_of(live) {
                 let Some(at) = &arrivals[k] else { continue };
-                let u = batch.bounce(k, depth);
+                let u = rng.bounce(k, depth);
                 let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
                 let mut v = self.begin(at, &sf, &bsdf, &u, rays);
                 if let Some(ne) = &mut v.nee {
