@@ -10,7 +10,9 @@ use glam::Vec3;
 use super::{Arrival, PathState, PathTracer};
 use crate::sobol::{BounceSamples, PathSampler, SampleBatch};
 
-/// Where a wave's random numbers come from.
+/// Where a wave's random numbers come from. (Made once per wave and moved
+/// into it: boxing the larger variant would allocate per wave.)
+#[allow(clippy::large_enum_variant)]
 pub enum WaveSampler<'a> {
     /// The Sobol batch of the wave's samples ([`SampleBatch::reset`] to
     /// them): eight samples' numbers per instruction.
