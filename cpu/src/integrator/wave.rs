@@ -1,9 +1,12 @@
 //! The wave: eight samples of a pixel (a Sobol [`SampleBatch`]'s, or
-//! eight independent ones) traced side by side, bounce by bounce, so that each step of a bounce runs for
-//! every live path before the next step starts. Each path takes the
-//! steps [`PathTracer::trace`] takes with the same numbers, so a wave
-//! gives every path's radiance bit for bit as one path at a time does
-//! (`cpu/tests/lanes.rs`).
+//! eight independent ones) traced side by side, bounce by bounce: the
+//! live paths' rays are traced one after another (alike rays, whose
+//! traversals take the same branches), then each path's hit is shaded,
+//! its light sample's shadow ray traced and its next ray drawn. Each path
+//! takes the steps [`PathTracer::trace`] takes with the same numbers, so a
+//! wave gives every path's radiance and rays bit for bit as one path at a
+//! time does (`cpu/tests/lanes.rs`). Keeping each path's shading in one
+//! go was measured faster than a loop per step (docs/benchmarks.md).
 
 use glam::Vec3;
 
