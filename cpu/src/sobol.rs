@@ -124,15 +124,14 @@ impl From<lanes::BounceLanes<f32>> for BounceSamples {
 
 /// The Sobol numbers of eight consecutive samples of one pixel, computed
 /// eight paths per instruction ([`lanes`] on [`U32x8`] lanes, at the SIMD
-/// level the render detected): the pixel positions at once, each bounce's
-/// eight numbers when the first of the eight paths reaches it. The render
-/// loop traces the pixel's samples one after the other, so the paths after
-/// the first find theirs computed. The same bits as [`PathSampler::new`]'s.
+/// level the render detected): the pixel positions at once, and each
+/// bounce's numbers for the paths of the wave that reach it
+/// ([`SampleBatch::bounces`]). The same bits as [`PathSampler::new`]'s.
 ///
 /// Deep bounces are reached by few of the eight paths, and eight lanes
 /// cost what [`SimdLevel`]'s break-even count of single paths does: a
-/// bounce is drawn wide only while the previous batch of the pixel's
-/// samples used it in at least that many paths, else path by path.
+/// bounce is drawn wide where at least that many paths need it, else path
+/// by path.
 #[derive(Clone, Debug)]
 pub struct SampleBatch {
     level: SimdLevel,
@@ -140,11 +139,6 @@ pub struct SampleBatch {
     pixel: u32,
     first: u32,
     pixel_2d: [Vec2; 8],
-    /// Bounces 0 .. len drawn wide.
-    bounces: Vec<[BounceSamples; 8]>,
-    /// Paths of this batch, and of the previous one, that drew each bounce.
-    uses: Vec<u8>,
-    prev_uses: Vec<u8>,
     /// The pixel's pair keys, pair by pair, for the block of 2^16 samples
     /// `block` (when the batch lies in one block).
     keys: Vec<lanes::PairKeys<u32>>,
@@ -159,9 +153,6 @@ impl SampleBatch {
             pixel: 0,
             first: 0,
             pixel_2d: [Vec2::ZERO; 8],
-            bounces: Vec::new(),
-            uses: Vec::new(),
-            prev_uses: Vec::new(),
             keys: Vec::new(),
             block: None,
         }
@@ -171,18 +162,11 @@ impl SampleBatch {
     pub fn reset(&mut self, key: u32, pixel: u32, first: u32) {
         let block = first >> SOBOL_BLOCK_BITS;
         let one_block = first.wrapping_add(7) >> SOBOL_BLOCK_BITS == block;
-        if (self.key, self.pixel) == (key, pixel) {
-            std::mem::swap(&mut self.uses, &mut self.prev_uses);
-        } else {
-            self.prev_uses.clear();
-        }
         if (self.key, self.pixel) != (key, pixel) || self.block != Some(block) || !one_block {
             self.keys.clear();
         }
         self.block = one_block.then_some(block);
-        self.uses.clear();
         (self.key, self.pixel, self.first) = (key, pixel, first);
-        self.bounces.clear();
         let p = match self.block {
             Some(_) => {
                 let k = self.pair_keys(0);
@@ -198,74 +182,51 @@ impl SampleBatch {
         self.pixel_2d = std::array::from_fn(|i| Vec2::new(p.x.0[i], p.y.0[i]));
     }
 
-    /// The sampler of sample `sample` (in the batch) of the pixel.
-    pub fn sampler(&mut self, sample: u32) -> PathSampler<'_> {
-        let lane = sample.wrapping_sub(self.first) as usize;
-        debug_assert!(
-            lane < 8,
-            "sample {sample} outside the batch at {}",
-            self.first
-        );
-        PathSampler::Batched {
-            batch: self,
-            lane,
-            bounce: 0,
-        }
-    }
-
     /// Lane `lane`'s position in the pixel ([`PathSampler::pixel_2d`]).
     pub fn pixel_2d(&self, lane: usize) -> Vec2 {
         self.pixel_2d[lane]
     }
 
-    /// Lane `lane`'s numbers of bounce `bounce` ([`PathSampler::bounce`]):
-    /// each lane asks its bounces in order, as its [`PathSampler`] does.
-    pub fn bounce(&mut self, lane: usize, bounce: u32) -> BounceSamples {
-        let b = bounce as usize;
-        if self.uses.len() <= b {
-            self.uses.resize(b + 1, 0);
-        }
-        self.uses[b] += 1;
-        let wide = |k: usize| {
-            self.prev_uses
-                .get(k)
-                .is_none_or(|&n| n >= self.level.break_even())
-        };
-        if self.bounces.len() < b || (self.bounces.len() == b && !wide(b)) {
-            let sample = self.first.wrapping_add(lane as u32);
-            if self.block.is_none() {
-                return sobol_bounce(self.key, self.pixel, sample, bounce);
-            }
-            // One path, from the pixel's keys.
-            let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
-            return lanes::bounce_keyed(self.bounce_keys(bounce), i).into();
-        }
-        if self.bounces.len() == b {
-            let (key, pixel, first) = (self.key, self.pixel, self.first);
-            let n = match self.block {
-                Some(_) => {
-                    let k = self.bounce_keys(bounce);
-                    simd_at!(self.level, fn(first: u32, k: [lanes::PairKeys<u32>; 4]) -> [BounceSamples; 8] {
-                        let i = batch_samples(first).and(U32x8::splat((1 << SOBOL_BLOCK_BITS) - 1));
-                        let k = [
-                            lanes::PairKeys::<U32x8>::splat(k[0]),
-                            lanes::PairKeys::<U32x8>::splat(k[1]),
-                            lanes::PairKeys::<U32x8>::splat(k[2]),
-                            lanes::PairKeys::<U32x8>::splat(k[3]),
-                        ];
-                        unpack(lanes::bounce_keyed(k, i))
-                    }(first, k))
+    /// Bounce `bounce`'s numbers ([`PathSampler::bounce`]) of the lanes in
+    /// `live` (bit k: lane k, sample `first + k`); the other lanes' are
+    /// zero.
+    pub fn bounces(&mut self, bounce: u32, live: u8) -> [BounceSamples; 8] {
+        if live.count_ones() < u32::from(self.level.break_even()) {
+            return std::array::from_fn(|lane| {
+                if live & (1 << lane) == 0 {
+                    return BounceSamples::default();
                 }
-                // The batch straddles two blocks of 2^16 (their seeds differ).
-                None => {
-                    simd_at!(self.level, fn(key: u32, pixel: u32, first: u32, b: u32) -> [BounceSamples; 8] {
+                let sample = self.first.wrapping_add(lane as u32);
+                if self.block.is_none() {
+                    return sobol_bounce(self.key, self.pixel, sample, bounce);
+                }
+                // One path, from the pixel's keys.
+                let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
+                lanes::bounce_keyed(self.bounce_keys(bounce), i).into()
+            });
+        }
+        let (key, pixel, first) = (self.key, self.pixel, self.first);
+        match self.block {
+            Some(_) => {
+                let k = self.bounce_keys(bounce);
+                simd_at!(self.level, fn(first: u32, k: [lanes::PairKeys<u32>; 4]) -> [BounceSamples; 8] {
+                    let i = batch_samples(first).and(U32x8::splat((1 << SOBOL_BLOCK_BITS) - 1));
+                    let k = [
+                        lanes::PairKeys::<U32x8>::splat(k[0]),
+                        lanes::PairKeys::<U32x8>::splat(k[1]),
+                        lanes::PairKeys::<U32x8>::splat(k[2]),
+                        lanes::PairKeys::<U32x8>::splat(k[3]),
+                    ];
+                    unpack(lanes::bounce_keyed(k, i))
+                }(first, k))
+            }
+            // The batch straddles two blocks of 2^16 (their seeds differ).
+            None => {
+                simd_at!(self.level, fn(key: u32, pixel: u32, first: u32, b: u32) -> [BounceSamples; 8] {
                     unpack(lanes::bounce(U32x8::splat(key), U32x8::splat(pixel), batch_samples(first), U32x8::splat(b)))
                 }(key, pixel, first, bounce))
-                }
-            };
-            self.bounces.push(n);
+            }
         }
-        self.bounces[b][lane]
     }
 
     /// The pixel's keys of bounce `bounce`'s four pairs.
@@ -312,7 +273,7 @@ fn batch_samples(first: u32) -> U32x8 {
 /// One path's random numbers, from either sampler; the GLSL twin is
 /// `Sampler` in `shaders/integrator/sobol.glsl`.
 #[derive(Debug)]
-pub enum PathSampler<'a> {
+pub enum PathSampler {
     /// The counter-based stream, drawn in the integrator's order (pixel 2D,
     /// then per bounce: category, index, light 2D, lobe, BSDF 2D,
     /// roulette), as before samplers existed.
@@ -324,16 +285,9 @@ pub enum PathSampler<'a> {
         sample: u32,
         bounce: u32,
     },
-    /// Sobol pairs from a [`SampleBatch`] (lane `lane` of it): the same
-    /// numbers.
-    Batched {
-        batch: &'a mut SampleBatch,
-        lane: usize,
-        bounce: u32,
-    },
 }
 
-impl PathSampler<'static> {
+impl PathSampler {
     pub fn new(kind: crate::film::SamplerKind, key: u32, pixel: u32, sample: u32) -> Self {
         match kind {
             crate::film::SamplerKind::Independent => {
@@ -347,9 +301,7 @@ impl PathSampler<'static> {
             },
         }
     }
-}
 
-impl PathSampler<'_> {
     /// The position in the pixel (first call only).
     #[inline]
     pub fn pixel_2d(&mut self) -> Vec2 {
@@ -358,7 +310,6 @@ impl PathSampler<'_> {
             Self::Sobol {
                 key, pixel, sample, ..
             } => sobol_2d(*key, *pixel, *sample, 0),
-            Self::Batched { batch, lane, .. } => batch.pixel_2d[*lane],
         }
     }
 
@@ -390,14 +341,6 @@ impl PathSampler<'_> {
             } => {
                 *bounce += 1;
                 sobol_bounce(*key, *pixel, *sample, *bounce - 1)
-            }
-            Self::Batched {
-                batch,
-                lane,
-                bounce,
-            } => {
-                *bounce += 1;
-                batch.bounce(*lane, *bounce - 1)
             }
         }
     }

@@ -645,10 +645,10 @@ fn sampler_lanes_are_the_scalar_streams_bit_for_bit() {
 }
 
 /// A pixel's samples drawn in batches of eight ([`sobol::SampleBatch`]:
-/// wide bounces while the previous batch used them in enough paths, one
-/// path at a time past that, generic lanes where a batch straddles two
-/// blocks of 2^16 samples) are `PathSampler::new`'s numbers bit for bit,
-/// at every SIMD level, however deep each path goes.
+/// each bounce wide where enough of the wave's paths reach it, one path at
+/// a time past that, generic lanes where a batch straddles two blocks of
+/// 2^16 samples) are `PathSampler::new`'s numbers bit for bit, at every
+/// SIMD level, however deep each path goes.
 #[test]
 fn batched_samples_are_the_scalar_sampler_s() {
     let mut r = Rand(11);
@@ -663,22 +663,34 @@ fn batched_samples_are_the_scalar_sampler_s() {
                     let first = start.wrapping_add(8 * k);
                     batch.reset(key, pixel, first);
                     let live = if k == 1 { 3 } else { 8 };
-                    for lane in 0..live {
-                        let s = first.wrapping_add(lane);
-                        let depth = (r.f() * r.f() * 12.0) as u32;
-                        let mut a = batch.sampler(s);
-                        let mut b = PathSampler::new(SamplerKind::Sobol, key, pixel, s);
+                    let depth: [u32; 8] = std::array::from_fn(|_| (r.f() * r.f() * 12.0) as u32);
+                    let mut paths: Vec<_> = (0..live)
+                        .map(|lane| {
+                            let s = first.wrapping_add(lane);
+                            PathSampler::new(SamplerKind::Sobol, key, pixel, s)
+                        })
+                        .collect();
+                    for (lane, b) in paths.iter_mut().enumerate() {
                         assert_eq!(
-                            a.pixel_2d(),
+                            batch.pixel_2d(lane),
                             b.pixel_2d(),
-                            "{level:?} pixel {pixel} sample {s}"
+                            "{level:?} pixel {pixel} lane {lane}"
                         );
-                        for d in 0..depth {
-                            assert_eq!(
-                                a.bounce(),
-                                b.bounce(),
-                                "{level:?} pixel {pixel} sample {s} bounce {d}"
-                            );
+                    }
+                    // Bounce by bounce, for the paths that reach it.
+                    for d in 0..12 {
+                        let mask = (0..live as usize)
+                            .filter(|&lane| depth[lane] > d)
+                            .fold(0u8, |m, lane| m | 1 << lane);
+                        let got = batch.bounces(d, mask);
+                        for (lane, b) in paths.iter_mut().enumerate() {
+                            if mask & (1 << lane) != 0 {
+                                assert_eq!(
+                                    got[lane],
+                                    b.bounce(),
+                                    "{level:?} pixel {pixel} lane {lane} bounce {d}"
+                                );
+                            }
                         }
                     }
                 }

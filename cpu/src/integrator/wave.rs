@@ -21,7 +21,7 @@ pub enum WaveSampler<'a> {
     /// them): eight samples' numbers per instruction.
     Batch(&'a mut SampleBatch),
     /// Each path its own sampler (the independent sampler).
-    Paths([PathSampler<'static>; 8]),
+    Paths([PathSampler; 8]),
 }
 
 impl WaveSampler<'_> {
@@ -32,10 +32,17 @@ impl WaveSampler<'_> {
         }
     }
 
-    fn bounce(&mut self, lane: usize, bounce: u32) -> BounceSamples {
+    /// Bounce `bounce`'s numbers of the lanes in `live` (bit k: lane k).
+    fn bounces(&mut self, bounce: u32, live: u8) -> [BounceSamples; 8] {
         match self {
-            Self::Batch(batch) => batch.bounce(lane, bounce),
-            Self::Paths(paths) => paths[lane].bounce(),
+            Self::Batch(batch) => batch.bounces(bounce, live),
+            Self::Paths(paths) => std::array::from_fn(|k| {
+                if live & (1 << k) != 0 {
+                    paths[k].bounce()
+                } else {
+                    BounceSamples::default()
+                }
+            }),
         }
     }
 }
@@ -73,9 +80,10 @@ impl PathTracer<'_> {
             if live == 0 || depth.saturating_add(1) >= self.max_depth {
                 break;
             }
+            let bounce = rng.bounces(depth, live);
             for k in lanes_of(live) {
                 let Some(at) = &arrivals[k] else { continue };
-                let u = rng.bounce(k, depth);
+                let u = bounce[k];
                 let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
                 let mut v = self.begin(at, &sf, &bsdf, &u, rays);
                 if let Some(ne) = &mut v.nee {
