@@ -651,17 +651,33 @@ impl<'a> PathTracer<'a> {
             }
             // The fixed per-bounce budget of random numbers.
             let u = rng.bounce();
-            let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
-            let mut v = self.begin(&at, &sf, &bsdf, &u, rays);
-            if let Some(ne) = &mut v.nee {
-                self.test_shadow(ne);
-            }
-            if !self.scatter(&mut path, &at, &sf, &v, &u, depth) {
+            if !self.vertex(&mut path, &at, &u, depth, rays) {
                 break;
             }
             depth += 1;
         }
         path.radiance
+    }
+
+    /// The path's vertex at the hit `at`, bounce `depth`, with the
+    /// bounce's numbers `u`: shade it, trace its light sample's shadow ray,
+    /// add the light sample and draw the next ray. False where the path
+    /// ends.
+    #[inline(always)]
+    fn vertex(
+        &self,
+        path: &mut PathState,
+        at: &Arrival,
+        u: &crate::sobol::BounceSamples,
+        depth: u32,
+        rays: &mut u64,
+    ) -> bool {
+        let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
+        let mut v = self.begin(at, &sf, &bsdf, u, rays);
+        if let Some(ne) = &mut v.nee {
+            self.test_shadow(ne);
+        }
+        self.scatter(path, at, &sf, &v, u, depth)
     }
 
     /// Trace the path's ray: what it finds (the background or an emitter,

@@ -83,13 +83,7 @@ impl PathTracer<'_> {
             let bounce = rng.bounces(depth, live);
             for k in lanes_of(live) {
                 let Some(at) = &arrivals[k] else { continue };
-                let u = bounce[k];
-                let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
-                let mut v = self.begin(at, &sf, &bsdf, &u, rays);
-                if let Some(ne) = &mut v.nee {
-                    self.test_shadow(ne);
-                }
-                if !self.scatter(&mut paths[k], at, &sf, &v, &u, depth) {
+                if !self.vertex(&mut paths[k], at, &bounce[k], depth, rays) {
                     live &= !(1 << k);
                 }
             }
