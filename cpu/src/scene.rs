@@ -436,6 +436,26 @@ impl Scene {
         }
     }
 
+    /// [`Scene::intersect_with`] of the rays in `live` (bit k: `rays[k]`),
+    /// in one packet traversal where they are alike
+    /// ([`crate::bvh::Bvh4::intersect_packet`]); alpha-masked scenes trace
+    /// them one at a time.
+    pub fn intersect_packet(
+        &self,
+        rays: &[crate::bvh::Ray; crate::bvh::PACKET],
+        live: u8,
+        masks: bool,
+    ) -> [Option<crate::bvh::Hit>; crate::bvh::PACKET] {
+        if masks {
+            return std::array::from_fn(|k| {
+                (live & (1 << k) != 0)
+                    .then(|| self.intersect_with(&rays[k], true))
+                    .flatten()
+            });
+        }
+        self.bvh.intersect_packet(&self.triangles, rays, live)
+    }
+
     /// [`Scene::occluded`] with `has_masks()` answered by the caller.
     pub fn occluded_with(&self, ray: &crate::bvh::Ray, masks: bool) -> bool {
         if masks {

@@ -19,6 +19,7 @@
 //! mismatch can be pinned to one of them.
 
 mod build;
+mod packet;
 mod traverse;
 mod wide;
 mod wide8;
@@ -28,6 +29,7 @@ use glam::Vec3;
 
 use crate::scene::Triangle;
 
+pub use packet::PACKET;
 pub use traverse::{PreparedRay, SLAB_PAD, intersect_aabb, intersect_triangle};
 pub use wide::{
     Bvh4Node, LEAF_BIT, MAX_WIDE_DEPTH, SLOT_EMPTY, WIDE_STACK_SIZE, WIDTH, is_leaf_ref, leaf_range,
@@ -143,6 +145,38 @@ impl Bvh4 {
     /// ([`Bvh::intersect`]) with the fastest box test this CPU has.
     pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
         self.intersect_with(Kernel::best(), tris, ray)
+    }
+
+    /// [`Bvh4::intersect`] of the rays in `live` (bit k: `rays[k]`; the
+    /// others give None): in one packet traversal (`packet.rs`) where the
+    /// CPU has AVX2 and the rays' directions agree in sign on every axis,
+    /// else one ray at a time. Each ray's closest distance is
+    /// [`Bvh4::intersect`]'s (an exact tie may pick the other triangle).
+    pub fn intersect_packet(
+        &self,
+        tris: &[Triangle],
+        rays: &[Ray; PACKET],
+        live: u8,
+    ) -> [Option<Hit>; PACKET] {
+        if let Some(hits) = self.intersect_packet_only(rays, live) {
+            return hits;
+        }
+        std::array::from_fn(|k| {
+            (live & (1 << k) != 0)
+                .then(|| self.intersect(tris, &rays[k]))
+                .flatten()
+        })
+    }
+
+    /// The packet traversal of [`Bvh4::intersect_packet`] alone: None
+    /// where it does not apply (no AVX2, or rays that differ in a
+    /// direction's sign or dominant axis, or have a zero component).
+    pub fn intersect_packet_only(
+        &self,
+        rays: &[Ray; PACKET],
+        live: u8,
+    ) -> Option<[Option<Hit>; PACKET]> {
+        packet::intersect_packet8(&self.nodes8, &self.blocks, rays, live)
     }
 
     /// Any hit in (0, ray.tmax).

@@ -197,7 +197,7 @@ const _: () = assert!(WIDE_STACK_SIZE <= STACK);
 /// order, so a tie stays behind the lower slot. For four slots it is
 /// `sort4`'s order of the hits (GLSL's), which a unit test pins.
 #[inline(always)]
-fn order_hits<const W: usize>(mask: u32, dist: &[f32; W]) -> ([u8; W], usize) {
+pub(super) fn order_hits<const W: usize>(mask: u32, dist: &[f32; W]) -> ([u8; W], usize) {
     let mut order = [0u8; W];
     let mut n = 0;
     let mut m = mask;
@@ -347,13 +347,12 @@ pub(super) fn intersect8(
     if nodes.is_empty() {
         return None;
     }
-    let r = PreparedRay::new(ray.o, ray.d);
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::intersect_avx2(nodes, blocks, &r, ray.tmax, present) };
+        return unsafe { x86::intersect_avx2(nodes, blocks, ray, present) };
     }
-    let _ = (blocks, r, present);
+    let _ = (blocks, present);
     unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
 }
 
@@ -368,13 +367,12 @@ pub(super) fn any_hit8(
     if nodes.is_empty() {
         return false;
     }
-    let r = PreparedRay::new(ray.o, ray.d);
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::occluded_avx2(nodes, blocks, &r, ray.tmax, present) };
+        return unsafe { x86::occluded_avx2(nodes, blocks, ray, present) };
     }
-    let _ = (blocks, r, present);
+    let _ = (blocks, present);
     unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
 }
 
@@ -468,17 +466,17 @@ pub(super) fn any_hit(nodes: &[Bvh4Node], tris: &[Triangle], ray: &Ray, kernel: 
 }
 
 #[cfg(target_arch = "x86_64")]
-mod x86 {
+pub(super) mod x86 {
     use std::arch::x86_64::*;
 
     use super::super::traverse::{PreparedRay, SLAB_PAD, refine_edge};
     use super::super::wide::Bvh4Node;
     use super::super::wide8::{Bvh8Node, LeafBlock};
-    use super::{Hit, Triangle, closest, occluded};
+    use super::{Hit, Ray, Triangle, closest, occluded};
 
     /// The ray's constants broadcast to all four lanes, for the box test
     /// and the triangle test.
-    pub(super) struct Ray4 {
+    pub(in crate::bvh) struct Ray4 {
         o: [__m128; 3],
         inv_d: [__m128; 3],
         zero_d: [bool; 3],
@@ -488,7 +486,7 @@ mod x86 {
     }
 
     #[inline(always)]
-    pub(super) fn ray4(r: &PreparedRay) -> Ray4 {
+    pub(in crate::bvh) fn ray4(r: &PreparedRay) -> Ray4 {
         // SAFETY (all intrinsics here): SSE2 is part of the x86_64 baseline.
         #[allow(unused_unsafe)]
         unsafe {
@@ -819,7 +817,7 @@ mod x86 {
     /// than the best so far and present: what the one-by-one scalar loop
     /// with the hook accepts.
     #[inline(always)]
-    fn block_closest(
+    pub(in crate::bvh) fn block_closest(
         r: &Ray4,
         block: &LeafBlock,
         best: &mut Hit,
@@ -1058,11 +1056,14 @@ mod x86 {
     pub(super) unsafe fn intersect_avx2(
         nodes: &[Bvh8Node],
         blocks: &[LeafBlock],
-        r: &PreparedRay,
-        tmax: f32,
+        ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
-        let (r4, r8) = (ray4(r), ray8(r));
+        // Prepared here, not by the caller: its fields then stay in
+        // registers (a prepared ray passed by reference was read back in
+        // pieces other than those written, a store-forwarding stall).
+        let (r, tmax) = (PreparedRay::new(ray.o, ray.d), ray.tmax);
+        let (r4, r8) = (ray4(&r), ray8(&r));
         closest(
             nodes,
             tmax,
@@ -1077,11 +1078,12 @@ mod x86 {
     pub(super) unsafe fn occluded_avx2(
         nodes: &[Bvh8Node],
         blocks: &[LeafBlock],
-        r: &PreparedRay,
-        tmax: f32,
+        ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        let (r4, r8) = (ray4(r), ray8(r));
+        // Prepared here: see `intersect_avx2`.
+        let (r, tmax) = (PreparedRay::new(ray.o, ray.d), ray.tmax);
+        let (r4, r8) = (ray4(&r), ray8(&r));
         occluded(
             nodes,
             tmax,

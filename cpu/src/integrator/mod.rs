@@ -685,10 +685,23 @@ impl<'a> PathTracer<'a> {
     /// hit it arrives at; None where it escaped.
     #[inline(always)]
     fn arrive(&self, path: &mut PathState, rays: &mut u64) -> Option<Arrival> {
+        let hit = self.scene.intersect_with(&path.ray, self.masks);
+        self.arrive_at(path, hit, rays)
+    }
+
+    /// [`PathTracer::arrive`] with the path's ray already traced: `hit` is
+    /// what it found.
+    #[inline(always)]
+    fn arrive_at(
+        &self,
+        path: &mut PathState,
+        hit: Option<crate::bvh::Hit>,
+        rays: &mut u64,
+    ) -> Option<Arrival> {
         let scene = self.scene;
         let ray = &path.ray;
         *rays += 1;
-        let Some(hit) = scene.intersect_with(ray, self.masks) else {
+        let Some(hit) = hit else {
             if self.lights.probs.background > 0.0 {
                 let w = emitter_weight(self.mis, path.prev_mis, path.prev_bsdf_pdf, || {
                     self.lights.background_pdf(path.prev_bg_normal, ray.d)

@@ -11,6 +11,7 @@
 use glam::Vec3;
 
 use super::{Arrival, PathState, PathTracer};
+use crate::bvh::{PACKET, Ray};
 use crate::sobol::{BounceSamples, PathSampler, SampleBatch};
 
 /// Where a wave's random numbers come from. (Made once per wave and moved
@@ -71,8 +72,18 @@ impl PathTracer<'_> {
         let mut arrivals = [None::<Arrival>; 8];
         let mut depth = 0u32;
         while live != 0 {
+            let hits = if depth == 0 {
+                let rays: [Ray; PACKET] = std::array::from_fn(|k| paths[k].ray);
+                self.scene.intersect_packet(&rays, live, self.masks)
+            } else {
+                std::array::from_fn(|k| {
+                    (live & (1 << k) != 0)
+                        .then(|| self.scene.intersect_with(&paths[k].ray, self.masks))
+                        .flatten()
+                })
+            };
             for k in lanes_of(live) {
-                arrivals[k] = self.arrive(&mut paths[k], rays);
+                arrivals[k] = self.arrive_at(&mut paths[k], hits[k], rays);
                 if arrivals[k].is_none() {
                     live &= !(1 << k);
                 }

@@ -1,0 +1,448 @@
+//! Closest hits of up to eight coherent rays on the 8-wide tree, in one
+//! traversal (a packet): each node's eight boxes are tested once for the
+//! whole packet, by interval arithmetic over the rays' origins and inverse
+//! directions (Boulos et al. 2006, "Geometric and arithmetic culling
+//! methods for entire ray packets"; Embree's and Mitsuba's packets of
+//! coherent camera rays), and a leaf's triangles once per ray with the
+//! single-ray test.
+//!
+//! The interval test is conservative: it accepts every box that any ray of
+//! the packet accepts ([`super::intersect_aabb`] with the ray's own best
+//! hit), since each of its bounds is the same IEEE operations on the
+//! packet's extreme origin and inverse direction, and rounding is monotone.
+//! So every ray tests every triangle the single-ray traversal could find
+//! closest, with the same test: each ray's closest distance is the
+//! single-ray traversal's, bit for bit (an exact tie between two triangles
+//! may pick the other, as between the binary and the wide trees).
+//!
+//! It pays where the rays are alike: a pixel's camera rays share their
+//! origin and differ in direction by less than a pixel, so the packet
+//! visits nearly the nodes one of them visits, once instead of eight
+//! times. Rays whose directions differ in sign on an axis, or have a zero
+//! component, have no such bound; [`super::Bvh4::intersect_packet`] traces
+//! them one at a time.
+
+use super::wide8::{Bvh8Node, LeafBlock};
+use super::{Hit, Ray};
+
+/// Rays per packet.
+pub const PACKET: usize = 8;
+
+/// The packet's closest hits, or None where the rays have no interval
+/// bound or the CPU no AVX2 (then the caller traces them one at a time).
+/// Lanes outside `live` (bit k: ray k) are not traced and stay None.
+pub(super) fn intersect_packet8(
+    nodes: &[Bvh8Node],
+    blocks: &[LeafBlock],
+    rays: &[Ray; PACKET],
+    live: u8,
+) -> Option<[Option<Hit>; PACKET]> {
+    if nodes.is_empty() || live == 0 {
+        return Some([None; PACKET]);
+    }
+    #[cfg(target_arch = "x86_64")]
+    if std::arch::is_x86_feature_detected!("avx2") {
+        // SAFETY: the CPU has AVX2 (checked just above).
+        return unsafe { x86::intersect_packet_avx2(nodes, blocks, rays, live) };
+    }
+    let _ = (blocks, rays);
+    None
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+    use std::mem::MaybeUninit;
+
+    use glam::{BVec3, Vec3};
+
+    use super::super::traverse::{PreparedRay, SLAB_PAD};
+    use super::super::wide::{is_leaf_ref, leaf_range};
+    use super::super::wide_traverse::order_hits;
+    use super::super::wide_traverse::x86::{block_closest, ray4};
+    use super::super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE};
+    use super::{Hit, PACKET, Ray};
+
+    /// The packet: its rays one per lane (what [`PreparedRay::new`]
+    /// computes for each), and per axis the bounds of the interval test
+    /// with the byte offsets in a [`Bvh8Node`] of the near and far
+    /// coordinate arrays.
+    struct Packet8 {
+        o: [[f32; PACKET]; 3],
+        d: [[f32; PACKET]; 3],
+        inv_d: [[f32; PACKET]; 3],
+        shear: [[f32; PACKET]; 3],
+        /// The triangle test's axis permutation, the same for every ray.
+        k: [usize; 3],
+        /// The rays' origins and inverse directions as lanes.
+        o8: [__m256; 3],
+        inv8: [__m256; 3],
+        near: [usize; 3],
+        far: [usize; 3],
+        /// The origin bound that gives the entry distances' lower bound
+        /// (the largest origin where the rays travel toward +axis, else
+        /// the smallest) and the one that gives the exits' upper bound.
+        o_near: [__m256; 3],
+        o_far: [__m256; 3],
+        /// The smallest and largest inverse direction (one sign).
+        inv_lo: [__m256; 3],
+        inv_hi: [__m256; 3],
+    }
+
+    /// The triangle test's permutation for direction `d`, as
+    /// [`PreparedRay::new`] picks it, as a code: 2 kz + (whether kx and
+    /// ky swap), compared as one byte.
+    #[inline(always)]
+    fn permutation(d: [f32; 3]) -> u8 {
+        let a = d.map(f32::abs);
+        let kz = if a[0] >= a[1] && a[0] >= a[2] {
+            0
+        } else if a[1] >= a[2] {
+            1
+        } else {
+            2
+        };
+        2 * kz as u8 + (d[kz] < 0.0) as u8
+    }
+
+    /// (kx, ky, kz) of a [`permutation`] code.
+    #[inline(always)]
+    fn axes(code: u8) -> [usize; 3] {
+        const NEXT: [(usize, usize); 3] = [(1, 2), (2, 0), (0, 1)];
+        let kz = (code / 2) as usize;
+        let (kx, ky) = NEXT[kz];
+        if code & 1 != 0 {
+            [ky, kx, kz]
+        } else {
+            [kx, ky, kz]
+        }
+    }
+
+    /// The smallest and largest of the lanes in `live`.
+    #[inline(always)]
+    fn extremes(v: &[f32; PACKET], live: u8) -> (f32, f32) {
+        let mut lo = f32::INFINITY;
+        let mut hi = f32::NEG_INFINITY;
+        for (k, &x) in v.iter().enumerate() {
+            if live & (1 << k) != 0 {
+                lo = lo.min(x);
+                hi = hi.max(x);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The packet of `rays`, or None where two live rays' directions
+    /// differ in sign on an axis or in the triangle test's permutation, or
+    /// one has a zero component.
+    #[inline(always)]
+    fn packet8(rays: &[Ray; PACKET], live: u8) -> Option<Packet8> {
+        let first = rays[live.trailing_zeros() as usize].d.to_array();
+        let code = permutation(first);
+        let mut o = [[0f32; PACKET]; 3];
+        let mut d = [[0f32; PACKET]; 3];
+        for (j, r) in rays.iter().enumerate() {
+            let dj = r.d.to_array();
+            if live & (1 << j) != 0 && permutation(dj) != code {
+                return None;
+            }
+            for a in 0..3 {
+                o[a][j] = r.o[a];
+                d[a][j] = dj[a];
+            }
+        }
+        // SAFETY: called only from the AVX2 entry point below.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let load = |v: &[f32; PACKET]| _mm256_loadu_ps(v.as_ptr());
+            let store = |x: __m256| {
+                let mut v = [0f32; PACKET];
+                _mm256_storeu_ps(v.as_mut_ptr(), x);
+                v
+            };
+            let sign = _mm256_set1_ps(-0.0);
+            let mut inv_d = [[0f32; PACKET]; 3];
+            let mut negative = [false; 3];
+            for a in 0..3 {
+                let da = load(&d[a]);
+                // PreparedRay::new's safe reciprocal, lane by lane: the
+                // same quotient, and +-1e30 (d's sign) where |d| < 1e-30.
+                let big =
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(_mm256_andnot_ps(sign, da), _mm256_set1_ps(1e-30));
+                let inv = _mm256_blendv_ps(
+                    _mm256_or_ps(_mm256_and_ps(da, sign), _mm256_set1_ps(1e30)),
+                    _mm256_div_ps(_mm256_set1_ps(1.0), da),
+                    big,
+                );
+                let zero = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(da, _mm256_setzero_ps()));
+                let neg = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv, _mm256_setzero_ps()));
+                let (zero, neg) = (zero as u8 & live, neg as u8 & live);
+                if zero != 0 || (neg != 0 && neg != live) {
+                    return None;
+                }
+                negative[a] = neg != 0;
+                inv_d[a] = store(inv);
+            }
+            let k = axes(code);
+            let dz = load(&d[k[2]]);
+            let shear = [
+                store(_mm256_div_ps(load(&d[k[0]]), dz)),
+                store(_mm256_div_ps(load(&d[k[1]]), dz)),
+                store(_mm256_div_ps(_mm256_set1_ps(1.0), dz)),
+            ];
+            let arrays = [
+                (
+                    std::mem::offset_of!(Bvh8Node, lo_x),
+                    std::mem::offset_of!(Bvh8Node, hi_x),
+                ),
+                (
+                    std::mem::offset_of!(Bvh8Node, lo_y),
+                    std::mem::offset_of!(Bvh8Node, hi_y),
+                ),
+                (
+                    std::mem::offset_of!(Bvh8Node, lo_z),
+                    std::mem::offset_of!(Bvh8Node, hi_z),
+                ),
+            ];
+            let splat = _mm256_set1_ps;
+            let mut p = Packet8 {
+                o,
+                d,
+                inv_d,
+                shear,
+                k,
+                o8: [load(&o[0]), load(&o[1]), load(&o[2])],
+                inv8: [load(&inv_d[0]), load(&inv_d[1]), load(&inv_d[2])],
+                near: [0; 3],
+                far: [0; 3],
+                o_near: [_mm256_setzero_ps(); 3],
+                o_far: [_mm256_setzero_ps(); 3],
+                inv_lo: [_mm256_setzero_ps(); 3],
+                inv_hi: [_mm256_setzero_ps(); 3],
+            };
+            for a in 0..3 {
+                let (o_lo, o_hi) = extremes(&p.o[a], live);
+                let (i_lo, i_hi) = extremes(&p.inv_d[a], live);
+                // Toward +axis the entry (lo - o) inv is smallest at the
+                // largest origin and the exit (hi - o) inv largest at the
+                // smallest; toward -axis the other way round.
+                let (near, far, o_near, o_far) = if negative[a] {
+                    (arrays[a].1, arrays[a].0, o_lo, o_hi)
+                } else {
+                    (arrays[a].0, arrays[a].1, o_hi, o_lo)
+                };
+                p.near[a] = near;
+                p.far[a] = far;
+                p.o_near[a] = splat(o_near);
+                p.o_far[a] = splat(o_far);
+                p.inv_lo[a] = splat(i_lo);
+                p.inv_hi[a] = splat(i_hi);
+            }
+            Some(p)
+        }
+    }
+
+    impl Packet8 {
+        /// Ray `j` as [`PreparedRay::new`] makes it.
+        #[inline(always)]
+        fn ray(&self, j: usize) -> PreparedRay {
+            let v = |a: &[[f32; PACKET]; 3]| Vec3::new(a[0][j], a[1][j], a[2][j]);
+            PreparedRay {
+                o: v(&self.o),
+                d: v(&self.d),
+                inv_d: v(&self.inv_d),
+                zero_d: BVec3::FALSE,
+                kx: self.k[0],
+                ky: self.k[1],
+                kz: self.k[2],
+                shear: v(&self.shear),
+            }
+        }
+    }
+
+    /// The eight boxes against the packet: per box, a lower bound of every
+    /// ray's entry distance (+inf where no ray of the packet can hit it
+    /// before `tmax`, the largest of the rays' own limits), and the mask
+    /// of boxes some ray may hit. Per axis the entry's bound is the smaller
+    /// of (near plane - o_near) x each inverse direction bound, the exit's
+    /// the larger of (far plane - o_far) x each: the extremes of a product
+    /// monotone in each factor (see the module notes).
+    #[inline(always)]
+    fn intersect_aabb8_packet(p: &Packet8, n: &Bvh8Node, tmax: f32) -> (u32, [f32; 8]) {
+        // SAFETY: called only from the AVX2 entry point below; the loads
+        // read 32-byte aligned `[f32; 8]` fields of an align(64) node at
+        // offsets `packet8` took from its layout.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let base = (n as *const Bvh8Node).cast::<u8>();
+            let plane = |off: usize| _mm256_load_ps(base.add(off).cast::<f32>());
+            let mut tlo = [_mm256_setzero_ps(); 3];
+            let mut thi = [_mm256_setzero_ps(); 3];
+            for a in 0..3 {
+                let dn = _mm256_sub_ps(plane(p.near[a]), p.o_near[a]);
+                let df = _mm256_sub_ps(plane(p.far[a]), p.o_far[a]);
+                tlo[a] = _mm256_min_ps(
+                    _mm256_mul_ps(dn, p.inv_lo[a]),
+                    _mm256_mul_ps(dn, p.inv_hi[a]),
+                );
+                thi[a] = _mm256_max_ps(
+                    _mm256_mul_ps(df, p.inv_lo[a]),
+                    _mm256_mul_ps(df, p.inv_hi[a]),
+                );
+            }
+            let tnear = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
+                _mm256_setzero_ps(),
+            );
+            let tfar = _mm256_mul_ps(
+                _mm256_min_ps(
+                    _mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]),
+                    _mm256_set1_ps(tmax),
+                ),
+                _mm256_set1_ps(SLAB_PAD),
+            );
+            let hit = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
+            );
+            let mut dist = [0f32; 8];
+            _mm256_storeu_ps(
+                dist.as_mut_ptr(),
+                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tnear, hit),
+            );
+            (_mm256_movemask_ps(hit) as u32, dist)
+        }
+    }
+
+    /// Which rays hit child `slot`'s box before their best hit `best`:
+    /// lane k computes what the single-ray box test computes for ray k
+    /// (the same near/far planes, as the packet's rays agree in sign, and
+    /// the same operations), so a ray tests a leaf exactly where its own
+    /// traversal would.
+    #[inline(always)]
+    fn rays_in_box(p: &Packet8, n: &Bvh8Node, slot: usize, best: &[f32; PACKET]) -> u8 {
+        // SAFETY: called only from the AVX2 entry point below; the loads
+        // read `f32`s inside an align(64) node at offsets `packet8` took
+        // from its layout, plus the slot.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let base = (n as *const Bvh8Node).cast::<u8>();
+            let plane = |off: usize| _mm256_broadcast_ss(&*base.add(off).cast::<f32>().add(slot));
+            let mut tlo = [_mm256_setzero_ps(); 3];
+            let mut thi = [_mm256_setzero_ps(); 3];
+            for a in 0..3 {
+                tlo[a] = _mm256_mul_ps(_mm256_sub_ps(plane(p.near[a]), p.o8[a]), p.inv8[a]);
+                thi[a] = _mm256_mul_ps(_mm256_sub_ps(plane(p.far[a]), p.o8[a]), p.inv8[a]);
+            }
+            let tnear = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
+                _mm256_setzero_ps(),
+            );
+            let tfar = _mm256_mul_ps(
+                _mm256_min_ps(
+                    _mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]),
+                    _mm256_loadu_ps(best.as_ptr()),
+                ),
+                _mm256_set1_ps(SLAB_PAD),
+            );
+            let hit = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
+            );
+            _mm256_movemask_ps(hit) as u8
+        }
+    }
+
+    /// The packet's traversal: nodes nearest first by the packet's entry
+    /// bound, a waiting node dropped when the farthest of the rays' best
+    /// hits has moved in front of it; a leaf is tested by the rays that
+    /// hit its box (by their own box test when its node was visited).
+    /// None where the rays make no packet ([`packet8`]).
+    ///
+    /// # Safety
+    /// The CPU must support AVX2.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn intersect_packet_avx2(
+        nodes: &[Bvh8Node],
+        blocks: &[LeafBlock],
+        rays: &[Ray; PACKET],
+        live: u8,
+    ) -> Option<[Option<Hit>; PACKET]> {
+        let p = packet8(rays, live)?;
+        let mut best: [Hit; PACKET] = std::array::from_fn(|k| Hit {
+            t: rays[k].tmax,
+            tri: u32::MAX,
+            u: 0.0,
+            v: 0.0,
+        });
+        // The rays' best distances, lanes outside `live` at -inf (so they
+        // hit no box and never hold the packet's limit up).
+        let mut best_t: [f32; PACKET] = std::array::from_fn(|k| {
+            if live & (1 << k) != 0 {
+                rays[k].tmax
+            } else {
+                f32::NEG_INFINITY
+            }
+        });
+        let farthest = |t: &[f32; PACKET]| t.iter().fold(f32::NEG_INFINITY, |a, &b| a.max(b));
+        let mut far = farthest(&best_t);
+        // (node, the packet's entry bound, the rays that test it if a leaf)
+        let mut stack = [MaybeUninit::<(u32, f32, u8)>::uninit(); WIDE8_STACK_SIZE];
+        let mut sp = 0;
+        let (mut cur, mut cur_rays) = (0u32, live);
+        loop {
+            if is_leaf_ref(cur) {
+                let block = &blocks[leaf_range(cur).0];
+                let mut m = cur_rays;
+                while m != 0 {
+                    let k = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    block_closest(&ray4(&p.ray(k)), block, &mut best[k], &|_, _, _| true);
+                    best_t[k] = best[k].t;
+                }
+                far = farthest(&best_t);
+            } else {
+                let node = &nodes[cur as usize];
+                let (mask, dist) = intersect_aabb8_packet(&p, node, far);
+                if mask != 0 {
+                    let (order, n) = order_hits(mask, &dist);
+                    let rays_of = |s: usize| {
+                        if is_leaf_ref(node.child[s]) {
+                            rays_in_box(&p, node, s, &best_t)
+                        } else {
+                            live
+                        }
+                    };
+                    for &s in order[1..n].iter().rev() {
+                        let s = s as usize;
+                        let m = rays_of(s);
+                        if m != 0 {
+                            stack[sp] = MaybeUninit::new((node.child[s], dist[s], m));
+                            sp += 1;
+                        }
+                    }
+                    let s = order[0] as usize;
+                    cur_rays = rays_of(s);
+                    cur = node.child[s];
+                    if cur_rays != 0 {
+                        continue;
+                    }
+                }
+            }
+            loop {
+                if sp == 0 {
+                    return Some(std::array::from_fn(|k| {
+                        (live & (1 << k) != 0 && best[k].tri != u32::MAX).then_some(best[k])
+                    }));
+                }
+                sp -= 1;
+                // SAFETY: every entry below the stack pointer was pushed.
+                let (c, d, m) = unsafe { stack[sp].assume_init() };
+                if d <= far * SLAB_PAD {
+                    (cur, cur_rays) = (c, m);
+                    break;
+                }
+            }
+        }
+    }
+}
