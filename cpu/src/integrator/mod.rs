@@ -524,6 +524,7 @@ impl<'a> PathTracer<'a> {
 
     /// The shading frame and the BSDF of material `material` at a hit on
     /// triangle `tri` seen from `wo`, its textures applied.
+    #[inline(always)]
     fn shade(&self, material: u32, tri: u32, u: f32, v: f32, wo: Vec3) -> (SurfaceFrame, Bsdf) {
         let mut sf = self.surface(tri, u, v);
         let mut bsdf = self.scene.materials[material as usize].bsdf;
