@@ -285,9 +285,10 @@ fn check_wide8_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle], bin_leaves: 
             if is_leaf_ref(c) {
                 let (b, count) = leaf_range(c);
                 let block = &wide.blocks[b];
-                let first = block.first as usize;
+                let first = block.tri[0] as usize;
                 assert_eq!(block.count as usize, count);
                 for lane in 0..4 {
+                    assert_eq!(block.tri[lane] as usize, first + lane.min(count - 1));
                     let t = &tris[first + lane.min(count - 1)];
                     for (k, p) in [t.p0, t.p1, t.p2].iter().enumerate() {
                         for (axis, c) in p.iter().enumerate() {
@@ -353,6 +354,9 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
     check_structure(&bvh, &tris, &order);
     let all = Traversals::new(bvh.clone(), &tris);
     check_wide_structure(&all.wide, &bvh, &tris);
+    let (render, render_order) = Bvh4::build(input);
+    assert_eq!(render_order, order, "{name}: the render's triangle order");
+    check_render_tree8(&render, &tris);
     let results: Vec<Diff> = rays
         .par_chunks(256)
         .map(|chunk| {
@@ -363,6 +367,7 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
                 let want = brute_closest(&tris, ray);
                 let occluded = bvh.occluded(&tris, ray);
                 assert_traversals_agree(name, &all, &tris, ray);
+                assert_render_tree_agrees(name, &render, &tris, ray, got, occluded);
                 match (got, want) {
                     (None, None) => {}
                     (Some(g), Some(w)) => {
@@ -428,6 +433,105 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
         all.wide.nodes.len()
     );
     total
+}
+
+/// The 8-wide tree `Bvh4::build` makes for the CPU (its own binary tree,
+/// built for four-triangle blocks): every triangle in exactly one block
+/// lane (lanes past the count repeating the last), each lane's vertices
+/// those of the scene triangle it names, every child box holding its
+/// subtree's triangles, full nodes, within the depth bound.
+fn check_render_tree8(wide: &Bvh4, tris: &[Triangle]) {
+    use glint_cpu::bvh::WIDTH8;
+    let nodes = &wide.nodes8;
+    if tris.is_empty() {
+        assert!(nodes.is_empty() && wide.blocks.is_empty());
+        return;
+    }
+    let mut seen = vec![0u32; tris.len()];
+    let mut depth = 0;
+    // (node, depth, the box its parent gave it)
+    let mut stack = vec![(0usize, 0usize, Vec3::NEG_INFINITY, Vec3::INFINITY)];
+    while let Some((i, d, plo, phi)) = stack.pop() {
+        depth = depth.max(d);
+        let node = &nodes[i];
+        let used = node.child_count();
+        assert!(
+            used >= 2 || (nodes.len() == 1 && used == 1),
+            "node {i}: {used} children"
+        );
+        for s in 0..WIDTH8 {
+            let lo = Vec3::new(node.lo_x[s], node.lo_y[s], node.lo_z[s]);
+            let hi = Vec3::new(node.hi_x[s], node.hi_y[s], node.hi_z[s]);
+            let c = node.child[s];
+            if s >= used {
+                assert_eq!(c, SLOT_EMPTY);
+                continue;
+            }
+            assert!(lo.cmpge(plo).all() && hi.cmple(phi).all() && lo.cmple(hi).all());
+            if !is_leaf_ref(c) {
+                assert!((c as usize) < nodes.len() && c as usize > i);
+                stack.push((c as usize, d + 1, lo, hi));
+                continue;
+            }
+            let (b, count) = leaf_range(c);
+            let block = &wide.blocks[b];
+            assert_eq!(block.count as usize, count);
+            assert!((1..=4).contains(&count));
+            for lane in 0..4 {
+                let id = block.tri[lane] as usize;
+                assert_eq!(id, block.tri[lane.min(count - 1)] as usize);
+                if lane < count {
+                    seen[id] += 1;
+                }
+                let t = &tris[id];
+                for (k, p) in [t.p0, t.p1, t.p2].iter().enumerate() {
+                    let p = Vec3::from(*p);
+                    if p.is_finite() {
+                        assert!(
+                            p.cmpge(lo).all() && p.cmple(hi).all(),
+                            "block {b} outside its box"
+                        );
+                    }
+                    for axis in 0..3 {
+                        assert_eq!(block.v[k][axis][lane].to_bits(), p[axis].to_bits());
+                    }
+                }
+            }
+        }
+    }
+    assert!(
+        seen.iter().all(|&n| n == 1),
+        "a triangle in no block or in two"
+    );
+    assert!(depth <= MAX_WIDE_DEPTH);
+    assert_eq!(wide.depth8(), depth);
+}
+
+/// The render's tree against the binary traversal's answer (`want`,
+/// `want_occ`): the same closest distance (the triangle too, but for an
+/// exact tie), the same occlusion but for a hit within rounding of tmax.
+fn assert_render_tree_agrees(
+    name: &str,
+    render: &Bvh4,
+    tris: &[Triangle],
+    ray: &Ray,
+    want: Option<Hit>,
+    want_occ: bool,
+) {
+    let got = render.intersect(tris, ray);
+    match (got, want) {
+        (Some(g), Some(w)) if g.tri != w.tri => {
+            assert_eq!(g.t, w.t, "{name} render tree: {ray:?}: {g:?} binary {w:?}")
+        }
+        _ => assert_eq!(got, want, "{name} render tree: {ray:?}"),
+    }
+    if render.occluded(tris, ray) != want_occ {
+        let near_tmax = |t: f32| (t - ray.tmax).abs() <= 1e-5 * ray.tmax;
+        assert!(
+            brute_any_t(tris, ray).is_some_and(near_tmax),
+            "{name} render tree: occlusion differs, {ray:?}"
+        );
+    }
 }
 
 fn brute_any_t(tris: &[Triangle], ray: &Ray) -> Option<f32> {
@@ -1107,8 +1211,9 @@ fn packets_find_each_ray_s_closest_hit() {
         ("bunny", bunny()),
         ("cornell", geometry::asset_triangles("cornell.gltf")),
     ] {
-        let (bvh, tris, _) = build(&input);
-        let wide = Bvh4::collapse(&bvh, &tris);
+        // The render's tree (`Bvh4::build`), in the order it gives.
+        let (_, tris, _) = build(&input);
+        let (wide, _) = Bvh4::build(&input);
         let (lo, hi) = bounds_of(&tris);
         let size = (hi - lo).length();
         let mut rng = Pcg32::from_state(0x9ac4e7);

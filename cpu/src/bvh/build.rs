@@ -14,6 +14,29 @@ const BINS: usize = 16;
 const C_TRAV: f32 = 1.0;
 const C_ISECT: f32 = 1.0;
 
+/// What a leaf of n triangles costs to test, in the SAH.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum LeafCost {
+    /// n triangle tests: the GPU's loop over a leaf's triangles (and the
+    /// binary reference's).
+    Triangles,
+    /// One test per block of up to [`MAX_LEAF_SIZE`] triangles side by
+    /// side: the CPU's SIMD leaf test (`wide8::LeafBlock`) costs the same
+    /// for one triangle as for four, so a leaf of four is no dearer than a
+    /// leaf of one (Embree's SAH for its four-triangle leaves).
+    Blocks,
+}
+
+impl LeafCost {
+    fn of(self, count: usize) -> f32 {
+        C_ISECT
+            * match self {
+                LeafCost::Triangles => count,
+                LeafCost::Blocks => count.div_ceil(MAX_LEAF_SIZE),
+            } as f32
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 struct Aabb {
     min: Vec3,
@@ -61,12 +84,12 @@ struct Task {
     depth: usize,
 }
 
-pub(super) fn build(tris: &[Triangle]) -> (Vec<BvhNode>, Vec<u32>) {
-    build_capped(tris, MAX_DEPTH)
+pub(super) fn build(tris: &[Triangle], cost: LeafCost) -> (Vec<BvhNode>, Vec<u32>) {
+    build_capped(tris, MAX_DEPTH, cost)
 }
 
 /// Every leaf ends at depth <= max(max_depth, ceil(log2 n)).
-fn build_capped(tris: &[Triangle], max_depth: usize) -> (Vec<BvhNode>, Vec<u32>) {
+fn build_capped(tris: &[Triangle], max_depth: usize, cost: LeafCost) -> (Vec<BvhNode>, Vec<u32>) {
     if tris.is_empty() {
         return (Vec::new(), Vec::new());
     }
@@ -124,6 +147,7 @@ fn build_capped(tris: &[Triangle], max_depth: usize) -> (Vec<BvhNode>, Vec<u32>)
             &centroids,
             task.depth,
             max_depth,
+            cost,
         );
         let left_count = match split {
             None => {
@@ -218,6 +242,7 @@ fn choose_split(
     centroids: &Aabb,
     depth: usize,
     max_depth: usize,
+    leaf: LeafCost,
 ) -> Option<Split> {
     let count = idx.len();
     if count <= 1 {
@@ -278,7 +303,7 @@ fn choose_split(
             } else {
                 f32::INFINITY
             };
-            let leaf_cost = C_ISECT * count as f32;
+            let leaf_cost = leaf.of(count);
             if split_cost < leaf_cost || count > MAX_LEAF_SIZE {
                 Some(Split::Sah { axis, plane })
             } else {
@@ -366,21 +391,23 @@ mod tests {
                 }
             })
             .collect();
-        let (free, _) = build_capped(&tris, MAX_DEPTH);
-        assert!(
-            depth(&free, 0) > 12,
-            "the chain is not deep enough to test the guard"
-        );
-        let (capped, order) = build_capped(&tris, 12);
-        assert!(depth(&capped, 0) <= 12);
-        let mut seen = vec![0; tris.len()];
-        for n in capped.iter().filter(|n| n.tri_count > 0) {
-            assert!(n.tri_count as usize <= MAX_LEAF_SIZE);
-            for k in n.left_or_first..n.left_or_first + n.tri_count {
-                seen[order[k as usize] as usize] += 1;
+        for cost in [LeafCost::Triangles, LeafCost::Blocks] {
+            let (free, _) = build_capped(&tris, MAX_DEPTH, cost);
+            assert!(
+                depth(&free, 0) > 12,
+                "the chain is not deep enough to test the guard"
+            );
+            let (capped, order) = build_capped(&tris, 12, cost);
+            assert!(depth(&capped, 0) <= 12);
+            let mut seen = vec![0; tris.len()];
+            for n in capped.iter().filter(|n| n.tri_count > 0) {
+                assert!(n.tri_count as usize <= MAX_LEAF_SIZE);
+                for k in n.left_or_first..n.left_or_first + n.tri_count {
+                    seen[order[k as usize] as usize] += 1;
+                }
             }
+            assert!(seen.iter().all(|&s| s == 1));
         }
-        assert!(seen.iter().all(|&s| s == 1));
     }
 
     #[test]

@@ -83,7 +83,7 @@ impl Bvh {
     /// Deterministic: the same input gives the same nodes and order.
     /// Empty input gives no nodes, and every query on it misses.
     pub fn build(tris: &[Triangle]) -> (Bvh, Vec<u32>) {
-        let (nodes, order) = build::build(tris);
+        let (nodes, order) = build::build(tris, build::LeafCost::Triangles);
         (Bvh { nodes }, order)
     }
 
@@ -121,19 +121,41 @@ pub struct Bvh4 {
 }
 
 impl Bvh4 {
-    /// [`Bvh::build`], then [`Bvh4::collapse`]: the same triangle order.
+    /// The renderers' trees, and the triangle order the scene takes: the
+    /// 4-wide one (the GPU's) is [`Bvh::build`]'s binary tree collapsed,
+    /// its leaves ranges of that order; the 8-wide one (the CPU's) is
+    /// collapsed from a binary tree of its own, built with the SAH cost of
+    /// the CPU's leaf test (a block of up to four triangles tests at the
+    /// cost of one, [`build::LeafCost::Blocks`]), its blocks naming their
+    /// triangles by their index in that order. The two builds run side by
+    /// side (rayon).
     pub fn build(tris: &[Triangle]) -> (Bvh4, Vec<u32>) {
-        let (bvh, order) = Bvh::build(tris);
-        let ordered: Vec<Triangle> = order.iter().map(|&i| tris[i as usize]).collect();
-        (Bvh4::collapse(&bvh, &ordered), order)
+        let ((bvh, order), (bin8, order8)) = rayon::join(
+            || Bvh::build(tris),
+            || build::build(tris, build::LeafCost::Blocks),
+        );
+        // Where each input triangle lands in the scene's order.
+        let mut scene_index = vec![0u32; tris.len()];
+        for (pos, &i) in order.iter().enumerate() {
+            scene_index[i as usize] = pos as u32;
+        }
+        let tris8: Vec<Triangle> = order8.iter().map(|&i| tris[i as usize]).collect();
+        let (nodes8, blocks) = wide8::collapse8(&bin8, &tris8, |p| scene_index[order8[p] as usize]);
+        let wide = Bvh4 {
+            nodes: wide::collapse(&bvh.nodes),
+            nodes8,
+            blocks,
+        };
+        (wide, order)
     }
 
     /// Regroups a binary BVH four children to a node, and eight to a node
     /// with its leaves' triangles (`tris`, in the order the build returned)
     /// side by side; leaves, their triangle ranges and every child box are
-    /// kept unchanged.
+    /// kept unchanged: both widths have the binary tree's leaves (what the
+    /// tests compare with the binary reference traversal).
     pub fn collapse(bvh: &Bvh, tris: &[Triangle]) -> Bvh4 {
-        let (nodes8, blocks) = wide8::collapse8(&bvh.nodes, tris);
+        let (nodes8, blocks) = wide8::collapse8(&bvh.nodes, tris, |i| i as u32);
         Bvh4 {
             nodes: wide::collapse(&bvh.nodes),
             nodes8,

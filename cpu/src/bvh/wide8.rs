@@ -70,27 +70,35 @@ impl Bvh8Node {
 
 /// One leaf's triangles (at most [`MAX_LEAF_SIZE`] = 4) with their
 /// coordinates side by side, `v[vertex][axis][lane]`, so the SIMD triangle
-/// test loads each row without transposing (Embree's `Triangle4v`); lanes
-/// past `count` repeat the last triangle. The 8-wide tree's leaf references
-/// name a block, not a triangle range.
+/// test loads each row without transposing (Embree's `Triangle4v`), and
+/// each lane's index in the scene's triangle array; lanes past `count`
+/// repeat the last triangle. The 8-wide tree's leaf references name a
+/// block, not a triangle range: its leaves need not be ranges of the
+/// scene's order (the tree [`super::Bvh4::build`] makes for the CPU is
+/// built apart from the GPU's).
 #[repr(C, align(16))]
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LeafBlock {
     pub v: [[[f32; 4]; 3]; 3],
-    /// Index of the first triangle in the scene's (leaf-ordered) array.
-    pub first: u32,
+    /// Each lane's triangle: its index in the scene's triangle array.
+    pub tri: [u32; 4],
     /// Triangles in the block, 1..=4.
     pub count: u32,
-    _pad: [u32; 2],
+    _pad: [u32; 3],
 }
 
 const _: () = assert!(MAX_LEAF_SIZE <= 4);
 
 impl LeafBlock {
-    fn new(tris: &[Triangle], first: usize, count: usize) -> LeafBlock {
+    /// The block of `tris[first..first + count]`, lane j's index in the
+    /// scene's array `id(first + j)`.
+    fn new(tris: &[Triangle], first: usize, count: usize, id: &impl Fn(usize) -> u32) -> LeafBlock {
         let mut v = [[[0f32; 4]; 3]; 3];
+        let mut tri = [0u32; 4];
         for lane in 0..4 {
-            let t = &tris[first + lane.min(count - 1)];
+            let i = first + lane.min(count - 1);
+            let t = &tris[i];
+            tri[lane] = id(i);
             for (k, p) in [t.p0, t.p1, t.p2].into_iter().enumerate() {
                 for axis in 0..3 {
                     v[k][axis][lane] = p[axis];
@@ -99,16 +107,21 @@ impl LeafBlock {
         }
         LeafBlock {
             v,
-            first: first as u32,
+            tri,
             count: count as u32,
-            _pad: [0; 2],
+            _pad: [0; 3],
         }
     }
 }
 
 /// The binary tree `bin` collapsed into 8-wide nodes, with a block per
-/// leaf of `tris` (in the order the build returned).
-pub(super) fn collapse8(bin: &[BvhNode], tris: &[Triangle]) -> (Vec<Bvh8Node>, Vec<LeafBlock>) {
+/// leaf of `tris` (in the order the build returned); `id(i)` is the index
+/// in the scene's triangle array of `tris[i]`.
+pub(super) fn collapse8(
+    bin: &[BvhNode],
+    tris: &[Triangle],
+    id: impl Fn(usize) -> u32,
+) -> (Vec<Bvh8Node>, Vec<LeafBlock>) {
     let mut blocks = Vec::new();
     let nodes = collapse_slots(bin, WIDTH8)
         .iter()
@@ -117,7 +130,7 @@ pub(super) fn collapse8(bin: &[BvhNode], tris: &[Triangle]) -> (Vec<Bvh8Node>, V
             for (s, &(i, child)) in slots.iter().enumerate() {
                 let child = if is_leaf_ref(child) {
                     let (first, count) = leaf_range(child);
-                    blocks.push(LeafBlock::new(tris, first, count));
+                    blocks.push(LeafBlock::new(tris, first, count, &id));
                     leaf_ref((blocks.len() - 1) as u32, count as u32)
                 } else {
                     child

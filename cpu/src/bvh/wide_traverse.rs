@@ -827,10 +827,10 @@ pub(super) mod x86 {
         while mask != 0 {
             let j = mask.trailing_zeros() as usize;
             mask &= mask - 1;
-            if t[j] < best.t && present(block.first + j as u32, u[j], v[j]) {
+            if t[j] < best.t && present(block.tri[j], u[j], v[j]) {
                 *best = Hit {
                     t: t[j],
-                    tri: block.first + j as u32,
+                    tri: block.tri[j],
                     u: u[j],
                     v: v[j],
                 };
@@ -1094,7 +1094,7 @@ pub(super) mod x86 {
                 while mask != 0 {
                     let j = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    if present(b.first + j as u32, u[j], v[j]) {
+                    if present(b.tri[j], u[j], v[j]) {
                         return true;
                     }
                 }
