@@ -14,26 +14,41 @@ const BINS: usize = 16;
 const C_TRAV: f32 = 1.0;
 const C_ISECT: f32 = 1.0;
 
-/// What a leaf of n triangles costs to test, in the SAH.
+/// The SAH's prices: what a leaf of n triangles costs to test, and a
+/// traversal step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum LeafCost {
-    /// n triangle tests: the GPU's loop over a leaf's triangles (and the
-    /// binary reference's).
+    /// n triangle tests, and a step as dear as one (tinybvh's constants):
+    /// the GPU's loop over a leaf's triangles, and the binary reference.
     Triangles,
     /// One test per block of up to [`MAX_LEAF_SIZE`] triangles side by
-    /// side: the CPU's SIMD leaf test (`wide8::LeafBlock`) costs the same
-    /// for one triangle as for four, so a leaf of four is no dearer than a
-    /// leaf of one (Embree's SAH for its four-triangle leaves).
+    /// side, both for leaves and for the two sides of a split: the CPU's
+    /// SIMD leaf test (`wide8::LeafBlock`) costs the same for one triangle
+    /// as for four (Embree's SAH for its four-triangle leaves). A binary
+    /// step costs [`C_TRAV_BLOCKS`] of a block test, since the 8-wide
+    /// collapse tests about three binary levels per node test. Measured
+    /// against the alternatives in docs/benchmarks.md.
     Blocks,
 }
 
+/// A binary traversal step's cost in block tests, for [`LeafCost::Blocks`].
+const C_TRAV_BLOCKS: f32 = 0.25;
+
 impl LeafCost {
-    fn of(self, count: usize) -> f32 {
-        C_ISECT
-            * match self {
-                LeafCost::Triangles => count,
-                LeafCost::Blocks => count.div_ceil(MAX_LEAF_SIZE),
-            } as f32
+    /// The SAH's count of `n` triangles: tests for `Triangles`, blocks for
+    /// `Blocks`.
+    fn units(self, n: usize) -> f32 {
+        match self {
+            LeafCost::Triangles => n as f32,
+            LeafCost::Blocks => n.div_ceil(MAX_LEAF_SIZE) as f32,
+        }
+    }
+
+    fn traversal(self) -> f32 {
+        match self {
+            LeafCost::Triangles => C_TRAV,
+            LeafCost::Blocks => C_TRAV_BLOCKS,
+        }
     }
 }
 
@@ -197,12 +212,13 @@ fn ceil_log2(n: usize) -> usize {
 }
 
 /// The cheapest plane between the bins of one axis (the first of equal
-/// costs) and its unnormalised SAH cost A_L N_L + A_R N_R; `None` where
+/// costs) and its unnormalised SAH cost A_L N_L + A_R N_R (N in `leaf`'s units); `None` where
 /// every plane leaves one side empty.
 fn best_plane(
     bin_bounds: &[Aabb; BINS],
     bin_count: &[usize; BINS],
     count: usize,
+    leaf: LeafCost,
 ) -> Option<(f32, usize)> {
     // Sweep from the right: cost of the right side of plane i (bins > i).
     let mut right_cost = [0.0f32; BINS];
@@ -212,7 +228,7 @@ fn best_plane(
         acc.grow(&bin_bounds[plane + 1]);
         n += bin_count[plane + 1];
         right_cost[plane] = if n > 0 {
-            acc.half_area() * n as f32
+            acc.half_area() * leaf.units(n)
         } else {
             f32::NAN
         };
@@ -226,7 +242,7 @@ fn best_plane(
         if n == 0 || n == count {
             continue;
         }
-        let cost = acc.half_area() * n as f32 + right_cost[plane];
+        let cost = acc.half_area() * leaf.units(n) + right_cost[plane];
         if best.is_none_or(|(c, _)| cost < c) {
             best = Some((cost, plane));
         }
@@ -287,7 +303,7 @@ fn choose_split(
         if !binned[axis] {
             continue;
         }
-        if let Some((cost, plane)) = best_plane(&all_bounds[axis], &all_counts[axis], count)
+        if let Some((cost, plane)) = best_plane(&all_bounds[axis], &all_counts[axis], count, leaf)
             && best.is_none_or(|(c, _, _)| cost < c)
         {
             best = Some((cost, axis, plane));
@@ -299,11 +315,11 @@ fn choose_split(
             // SAH (Wald 2007, eq. 1): C = C_trav + C_isect (A_L N_L + A_R N_R) / A.
             let parent = bounds.half_area();
             let split_cost = if parent > 0.0 {
-                C_TRAV + C_ISECT * cost / parent
+                leaf.traversal() + C_ISECT * cost / parent
             } else {
                 f32::INFINITY
             };
-            let leaf_cost = leaf.of(count);
+            let leaf_cost = C_ISECT * leaf.units(count);
             if split_cost < leaf_cost || count > MAX_LEAF_SIZE {
                 Some(Split::Sah { axis, plane })
             } else {
