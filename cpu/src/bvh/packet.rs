@@ -59,7 +59,7 @@ mod x86 {
     use super::super::traverse::{PreparedRay, SLAB_PAD};
     use super::super::wide::{is_leaf_ref, leaf_range};
     use super::super::wide_traverse::order_hits;
-    use super::super::wide_traverse::x86::{block_closest, ray4};
+    use super::super::wide_traverse::x86::{PLANES8, block_closest, hits8, ray4, slab_end8};
     use super::super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE};
     use super::{Hit, PACKET, Ray};
 
@@ -190,20 +190,7 @@ mod x86 {
                 store(_mm256_div_ps(load(&d[k[1]]), dz)),
                 store(_mm256_div_ps(_mm256_set1_ps(1.0), dz)),
             ];
-            let arrays = [
-                (
-                    std::mem::offset_of!(Bvh8Node, lo_x),
-                    std::mem::offset_of!(Bvh8Node, hi_x),
-                ),
-                (
-                    std::mem::offset_of!(Bvh8Node, lo_y),
-                    std::mem::offset_of!(Bvh8Node, hi_y),
-                ),
-                (
-                    std::mem::offset_of!(Bvh8Node, lo_z),
-                    std::mem::offset_of!(Bvh8Node, hi_z),
-                ),
-            ];
+            let arrays = PLANES8;
             let splat = _mm256_set1_ps;
             let mut p = Packet8 {
                 o,
@@ -290,27 +277,8 @@ mod x86 {
                     _mm256_mul_ps(df, p.inv_hi[a]),
                 );
             }
-            let tnear = _mm256_max_ps(
-                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
-                _mm256_setzero_ps(),
-            );
-            let tfar = _mm256_mul_ps(
-                _mm256_min_ps(
-                    _mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]),
-                    _mm256_set1_ps(tmax),
-                ),
-                _mm256_set1_ps(SLAB_PAD),
-            );
-            let hit = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
-            );
-            let mut dist = [0f32; 8];
-            _mm256_storeu_ps(
-                dist.as_mut_ptr(),
-                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tnear, hit),
-            );
-            (_mm256_movemask_ps(hit) as u32, dist)
+            let (tnear, hit) = slab_end8(tlo, thi, _mm256_set1_ps(tmax));
+            hits8(tnear, hit)
         }
     }
 
@@ -334,21 +302,7 @@ mod x86 {
                 tlo[a] = _mm256_mul_ps(_mm256_sub_ps(plane(p.near[a]), p.o8[a]), p.inv8[a]);
                 thi[a] = _mm256_mul_ps(_mm256_sub_ps(plane(p.far[a]), p.o8[a]), p.inv8[a]);
             }
-            let tnear = _mm256_max_ps(
-                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
-                _mm256_setzero_ps(),
-            );
-            let tfar = _mm256_mul_ps(
-                _mm256_min_ps(
-                    _mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]),
-                    _mm256_loadu_ps(best.as_ptr()),
-                ),
-                _mm256_set1_ps(SLAB_PAD),
-            );
-            let hit = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
-                _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
-            );
+            let (_, hit) = slab_end8(tlo, thi, _mm256_loadu_ps(best.as_ptr()));
             _mm256_movemask_ps(hit) as u8
         }
     }

@@ -908,6 +908,69 @@ pub(super) mod x86 {
         intersect_impl(nodes, tris, r, tmax)
     }
 
+    /// Per axis, the byte offsets in a [`Bvh8Node`] of its lo and hi
+    /// coordinate arrays.
+    pub(in crate::bvh) const PLANES8: [(usize, usize); 3] = [
+        (
+            std::mem::offset_of!(Bvh8Node, lo_x),
+            std::mem::offset_of!(Bvh8Node, hi_x),
+        ),
+        (
+            std::mem::offset_of!(Bvh8Node, lo_y),
+            std::mem::offset_of!(Bvh8Node, hi_y),
+        ),
+        (
+            std::mem::offset_of!(Bvh8Node, lo_z),
+            std::mem::offset_of!(Bvh8Node, hi_z),
+        ),
+    ];
+
+    /// The end of a slab test of eight boxes (or of one box against eight
+    /// rays) from each axis's entry (`tlo`) and exit (`thi`) distances:
+    /// the entry max(tlo..., 0), the exit min(thi..., limit) x
+    /// [`SLAB_PAD`], and the lanes hit (entry <= exit, entry finite), as
+    /// [`intersect_aabb`] ends for one box.
+    #[inline(always)]
+    pub(in crate::bvh) fn slab_end8(
+        tlo: [__m256; 3],
+        thi: [__m256; 3],
+        limit: __m256,
+    ) -> (__m256, __m256) {
+        // SAFETY: called only from AVX2 code.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let tnear = _mm256_max_ps(
+                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
+                _mm256_setzero_ps(),
+            );
+            let tfar = _mm256_mul_ps(
+                _mm256_min_ps(_mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]), limit),
+                _mm256_set1_ps(SLAB_PAD),
+            );
+            let hit = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
+                _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
+            );
+            (tnear, hit)
+        }
+    }
+
+    /// The hit lanes as a mask, and the entry distances with +inf where
+    /// missed.
+    #[inline(always)]
+    pub(in crate::bvh) fn hits8(tnear: __m256, hit: __m256) -> (u32, [f32; 8]) {
+        // SAFETY: called only from AVX2 code.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let mut dist = [0f32; 8];
+            _mm256_storeu_ps(
+                dist.as_mut_ptr(),
+                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tnear, hit),
+            );
+            (_mm256_movemask_ps(hit) as u32, dist)
+        }
+    }
+
     /// The ray's box-test constants broadcast to eight lanes, and per axis
     /// which of a node's planes the ray meets first: the byte offsets in a
     /// [`Bvh8Node`] of the near (`lo_*` where the direction is positive,
@@ -924,20 +987,7 @@ pub(super) mod x86 {
 
     #[inline(always)]
     fn ray8(r: &PreparedRay) -> Ray8 {
-        let arrays = [
-            (
-                std::mem::offset_of!(Bvh8Node, lo_x),
-                std::mem::offset_of!(Bvh8Node, hi_x),
-            ),
-            (
-                std::mem::offset_of!(Bvh8Node, lo_y),
-                std::mem::offset_of!(Bvh8Node, hi_y),
-            ),
-            (
-                std::mem::offset_of!(Bvh8Node, lo_z),
-                std::mem::offset_of!(Bvh8Node, hi_z),
-            ),
-        ];
+        let arrays = PLANES8;
         let inv = r.inv_d.to_array();
         let near = std::array::from_fn(|a| {
             if inv[a] >= 0.0 {
@@ -1023,30 +1073,8 @@ pub(super) mod x86 {
                 // An empty slot's planes are +inf and -inf, so the test
                 // above already calls it outside.
             }
-            let tnear = _mm256_max_ps(
-                _mm256_max_ps(_mm256_max_ps(tlo[0], tlo[1]), tlo[2]),
-                _mm256_setzero_ps(),
-            );
-            let tfar = _mm256_mul_ps(
-                _mm256_min_ps(
-                    _mm256_min_ps(_mm256_min_ps(thi[0], thi[1]), thi[2]),
-                    _mm256_set1_ps(tmax),
-                ),
-                _mm256_set1_ps(SLAB_PAD),
-            );
-            let hit = _mm256_andnot_ps(
-                outside,
-                _mm256_and_ps(
-                    _mm256_cmp_ps::<_CMP_LE_OQ>(tnear, tfar),
-                    _mm256_cmp_ps::<_CMP_LT_OQ>(tnear, _mm256_set1_ps(f32::INFINITY)),
-                ),
-            );
-            let mut dist = [0f32; 8];
-            _mm256_storeu_ps(
-                dist.as_mut_ptr(),
-                _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), tnear, hit),
-            );
-            (_mm256_movemask_ps(hit) as u32, dist)
+            let (tnear, hit) = slab_end8(tlo, thi, _mm256_set1_ps(tmax));
+            hits8(tnear, _mm256_andnot_ps(outside, hit))
         }
     }
 
