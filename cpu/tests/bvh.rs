@@ -250,67 +250,40 @@ fn check_wide_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle]) -> usize {
     depth
 }
 
-/// The 8-wide tree of `wide`: every used slot inside its parent, empty
-/// slots last with the empty box, every leaf a block holding exactly its
-/// binary leaf's triangles (lanes past the count repeating the last), the
-/// leaves those of the binary tree, within the depth bound.
+/// The 8-wide tree of `wide` collapsed from `bin` ([`check_tree8`]'s
+/// invariants), its root's boxes inside the binary root's, and its leaves
+/// exactly the binary leaves: each block the binary leaf's range of
+/// triangles in order.
 fn check_wide8_structure(wide: &Bvh4, bin: &Bvh, tris: &[Triangle], bin_leaves: &[(usize, usize)]) {
-    use glint_cpu::bvh::WIDTH8;
-    let nodes = &wide.nodes8;
-    let mut leaves = Vec::new();
-    let mut depth = 0;
-    let root = (
+    let (rlo, rhi) = (
         Vec3::from(bin.nodes[0].aabb_min),
         Vec3::from(bin.nodes[0].aabb_max),
     );
-    let mut stack = vec![(0usize, 0usize, root.0, root.1)];
-    while let Some((i, d, plo, phi)) = stack.pop() {
-        depth = depth.max(d);
-        let node = &nodes[i];
-        let used = node.child_count();
-        assert!(
-            used >= 2 || (nodes.len() == 1 && used == 1),
-            "8-wide node {i}: {used} children"
-        );
-        for s in 0..WIDTH8 {
-            let lo = Vec3::new(node.lo_x[s], node.lo_y[s], node.lo_z[s]);
-            let hi = Vec3::new(node.hi_x[s], node.hi_y[s], node.hi_z[s]);
-            let c = node.child[s];
-            if s >= used {
-                assert_eq!(c, SLOT_EMPTY);
-                assert!(lo == Vec3::INFINITY && hi == Vec3::NEG_INFINITY);
-                continue;
-            }
-            assert!(lo.cmpge(plo).all() && hi.cmple(phi).all() && lo.cmple(hi).all());
-            if is_leaf_ref(c) {
-                let (b, count) = leaf_range(c);
-                let block = &wide.blocks[b];
-                let first = block.tri[0] as usize;
-                assert_eq!(block.count as usize, count);
-                for lane in 0..4 {
-                    assert_eq!(block.tri[lane] as usize, first + lane.min(count - 1));
-                    let t = &tris[first + lane.min(count - 1)];
-                    for (k, p) in [t.p0, t.p1, t.p2].iter().enumerate() {
-                        for (axis, c) in p.iter().enumerate() {
-                            assert_eq!(block.v[k][axis][lane].to_bits(), c.to_bits());
-                        }
-                    }
-                }
-                leaves.push((first, count));
-            } else {
-                assert!((c as usize) < nodes.len() && c as usize > i);
-                stack.push((c as usize, d + 1, lo, hi));
-            }
-        }
+    let root = &wide.nodes8[0];
+    for s in 0..root.child_count() {
+        let lo = Vec3::new(root.lo_x[s], root.lo_y[s], root.lo_z[s]);
+        let hi = Vec3::new(root.hi_x[s], root.hi_y[s], root.hi_z[s]);
+        assert!(lo.cmpge(rlo).all() && hi.cmple(rhi).all());
     }
+    let mut leaves: Vec<(usize, usize)> = check_tree8(wide, tris)
+        .iter()
+        .map(|ids| {
+            let first = ids[0] as usize;
+            for (j, &id) in ids.iter().enumerate() {
+                assert_eq!(
+                    id as usize,
+                    first + j,
+                    "a block that is not a binary leaf's range"
+                );
+            }
+            (first, ids.len())
+        })
+        .collect();
     leaves.sort();
     assert_eq!(
         leaves, bin_leaves,
         "the 8-wide leaves are not the binary leaves"
     );
-    assert_eq!(leaves.len(), wide.blocks.len());
-    assert!(depth <= MAX_WIDE_DEPTH);
-    assert_eq!(wide.depth8(), depth);
 }
 
 /// Every traversal of `t` against the binary one on `ray`: the same closest
@@ -356,7 +329,7 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
     check_wide_structure(&all.wide, &bvh, &tris);
     let (render, render_order) = Bvh4::build(input);
     assert_eq!(render_order, order, "{name}: the render's triangle order");
-    check_render_tree8(&render, &tris);
+    check_tree8(&render, &tris);
     let results: Vec<Diff> = rays
         .par_chunks(256)
         .map(|chunk| {
@@ -435,18 +408,21 @@ fn differential(name: &str, input: &[Triangle], rays: &[Ray]) -> Diff {
     total
 }
 
-/// The 8-wide tree `Bvh4::build` makes for the CPU (its own binary tree,
-/// built for four-triangle blocks): every triangle in exactly one block
-/// lane (lanes past the count repeating the last), each lane's vertices
-/// those of the scene triangle it names, every child box holding its
-/// subtree's triangles, full nodes, within the depth bound.
-fn check_render_tree8(wide: &Bvh4, tris: &[Triangle]) {
+/// An 8-wide tree's invariants (the one `Bvh4::build` makes for the CPU
+/// from its own binary tree, or `Bvh4::collapse`'s): every triangle in
+/// exactly one block lane (lanes past the count repeating the last), each
+/// lane's vertices bit for bit those of the scene triangle it names, every
+/// child box inside its parent's and holding its block's triangles, full
+/// nodes with empty slots last and empty, within the depth bound. Returns
+/// each block's triangles.
+fn check_tree8(wide: &Bvh4, tris: &[Triangle]) -> Vec<Vec<u32>> {
     use glint_cpu::bvh::WIDTH8;
     let nodes = &wide.nodes8;
     if tris.is_empty() {
         assert!(nodes.is_empty() && wide.blocks.is_empty());
-        return;
+        return Vec::new();
     }
+    let mut blocks = Vec::new();
     let mut seen = vec![0u32; tris.len()];
     let mut depth = 0;
     // (node, depth, the box its parent gave it)
@@ -465,6 +441,7 @@ fn check_render_tree8(wide: &Bvh4, tris: &[Triangle]) {
             let c = node.child[s];
             if s >= used {
                 assert_eq!(c, SLOT_EMPTY);
+                assert!(lo == Vec3::INFINITY && hi == Vec3::NEG_INFINITY);
                 continue;
             }
             assert!(lo.cmpge(plo).all() && hi.cmple(phi).all() && lo.cmple(hi).all());
@@ -477,6 +454,7 @@ fn check_render_tree8(wide: &Bvh4, tris: &[Triangle]) {
             let block = &wide.blocks[b];
             assert_eq!(block.count as usize, count);
             assert!((1..=4).contains(&count));
+            blocks.push(block.tri[..count].to_vec());
             for lane in 0..4 {
                 let id = block.tri[lane] as usize;
                 assert_eq!(id, block.tri[lane.min(count - 1)] as usize);
@@ -484,9 +462,12 @@ fn check_render_tree8(wide: &Bvh4, tris: &[Triangle]) {
                     seen[id] += 1;
                 }
                 let t = &tris[id];
+                // A triangle with a non-finite vertex is binned as a point
+                // at the origin (the builder's rule): its box says nothing.
+                let finite = t.vertices().iter().all(|v| v.is_finite());
                 for (k, p) in [t.p0, t.p1, t.p2].iter().enumerate() {
                     let p = Vec3::from(*p);
-                    if p.is_finite() {
+                    if finite {
                         assert!(
                             p.cmpge(lo).all() && p.cmple(hi).all(),
                             "block {b} outside its box"
@@ -503,8 +484,10 @@ fn check_render_tree8(wide: &Bvh4, tris: &[Triangle]) {
         seen.iter().all(|&n| n == 1),
         "a triangle in no block or in two"
     );
+    assert_eq!(blocks.len(), wide.blocks.len());
     assert!(depth <= MAX_WIDE_DEPTH);
     assert_eq!(wide.depth8(), depth);
+    blocks
 }
 
 /// The render's tree against the binary traversal's answer (`want`,
