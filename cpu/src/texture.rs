@@ -269,6 +269,13 @@ pub fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// [`srgb_to_linear`] of every 8-bit value `b / 255`, as [`unpack_texel`]
+/// makes it: the decode of a texel channel by table, the same bits as the
+/// function (a test checks all 256), without its `powf` per channel and
+/// fetch (four fetches of three channels per filtered lookup).
+static SRGB_TO_LINEAR_8: std::sync::LazyLock<[f32; 256]> =
+    std::sync::LazyLock::new(|| std::array::from_fn(|b| srgb_to_linear(b as f32 / 255.0)));
+
 /// A packed RGBA8 texel as four values in [0, 1].
 pub fn unpack_texel(t: u32) -> Vec4 {
     Vec4::new(
@@ -308,12 +315,14 @@ pub fn texture_fetch(texels: &[u32], t: &GpuTexture, x: i32, y: i32, srgb: bool)
     let (w, h) = (t.width as i32, t.height as i32);
     let x = wrap_texel(x, w, t.flags & 3);
     let y = wrap_texel(y, h, (t.flags >> 2) & 3);
-    let c = unpack_texel(texels[t.offset as usize + (y * w + x) as usize]);
+    let texel = texels[t.offset as usize + (y * w + x) as usize];
+    let c = unpack_texel(texel);
     if srgb {
+        let lut = &*SRGB_TO_LINEAR_8;
         Vec4::new(
-            srgb_to_linear(c.x),
-            srgb_to_linear(c.y),
-            srgb_to_linear(c.z),
+            lut[(texel & 255) as usize],
+            lut[((texel >> 8) & 255) as usize],
+            lut[((texel >> 16) & 255) as usize],
             c.w,
         )
     } else {
@@ -618,6 +627,31 @@ mod tests {
         assert_eq!(wrap_texel(4, 4, WRAP_MIRROR), 3);
         assert_eq!(wrap_texel(-1, 4, WRAP_MIRROR), 0);
         assert_eq!(wrap_texel(8, 4, WRAP_MIRROR), 0);
+    }
+
+    #[test]
+    fn srgb_table_is_the_function_bit_for_bit() {
+        for b in 0..256u32 {
+            let c = unpack_texel(b | b << 8 | b << 16);
+            let want = srgb_to_linear(c.x);
+            assert_eq!(
+                SRGB_TO_LINEAR_8[b as usize].to_bits(),
+                want.to_bits(),
+                "{b}"
+            );
+            let got = texture_fetch(
+                &[b | b << 8 | b << 16],
+                &GpuTexture {
+                    width: 1,
+                    height: 1,
+                    ..Default::default()
+                },
+                0,
+                0,
+                true,
+            );
+            assert_eq!(got.x.to_bits(), want.to_bits(), "{b}");
+        }
     }
 
     #[test]
