@@ -288,6 +288,11 @@ pub fn unpack_texel(t: u32) -> Vec4 {
 
 /// Integer texel coordinate `i` wrapped into [0, n) by `mode`.
 pub fn wrap_texel(i: i32, n: i32, mode: u32) -> i32 {
+    if (0..n).contains(&i) {
+        // Inside the image every mode leaves it be (and most lookups are
+        // inside): no integer division.
+        return i;
+    }
     match mode {
         WRAP_CLAMP => i.clamp(0, n - 1),
         WRAP_MIRROR => {
@@ -315,7 +320,13 @@ pub fn texture_fetch(texels: &[u32], t: &GpuTexture, x: i32, y: i32, srgb: bool)
     let (w, h) = (t.width as i32, t.height as i32);
     let x = wrap_texel(x, w, t.flags & 3);
     let y = wrap_texel(y, h, (t.flags >> 2) & 3);
-    let texel = texels[t.offset as usize + (y * w + x) as usize];
+    fetch_wrapped(texels, t, x, y, srgb)
+}
+
+/// [`texture_fetch`] of a texel already inside the image.
+#[inline]
+fn fetch_wrapped(texels: &[u32], t: &GpuTexture, x: i32, y: i32, srgb: bool) -> Vec4 {
+    let texel = texels[t.offset as usize + (y * t.width as i32 + x) as usize];
     let c = unpack_texel(texel);
     if srgb {
         let lut = &*SRGB_TO_LINEAR_8;
@@ -343,10 +354,14 @@ pub fn texture_sample(texels: &[u32], t: &GpuTexture, uv: Vec2, srgb: bool) -> V
     let (x0, y0) = (x.floor(), y.floor());
     let (fx, fy) = (x - x0, y - y0);
     let (ix, iy) = (x0 as i32, y0 as i32);
-    let a = texture_fetch(texels, t, ix, iy, srgb);
-    let b = texture_fetch(texels, t, ix + 1, iy, srgb);
-    let c = texture_fetch(texels, t, ix, iy + 1, srgb);
-    let d = texture_fetch(texels, t, ix + 1, iy + 1, srgb);
+    // The two columns and two rows wrapped once each, not per texel.
+    let (w, h) = (t.width as i32, t.height as i32);
+    let [x0, x1] = [ix, ix + 1].map(|i| wrap_texel(i, w, t.flags & 3));
+    let [y0, y1] = [iy, iy + 1].map(|i| wrap_texel(i, h, (t.flags >> 2) & 3));
+    let a = fetch_wrapped(texels, t, x0, y0, srgb);
+    let b = fetch_wrapped(texels, t, x1, y0, srgb);
+    let c = fetch_wrapped(texels, t, x0, y1, srgb);
+    let d = fetch_wrapped(texels, t, x1, y1, srgb);
     (a * (1.0 - fx) + b * fx) * (1.0 - fy) + (c * (1.0 - fx) + d * fx) * fy
 }
 
