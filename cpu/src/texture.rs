@@ -645,6 +645,21 @@ mod tests {
     }
 
     #[test]
+    fn wrap_texel_is_each_mode_s_rule() {
+        for n in [1i32, 2, 3, 7] {
+            for i in -3 * n..3 * n {
+                let mirror = {
+                    let k = i.rem_euclid(2 * n);
+                    if k >= n { 2 * n - 1 - k } else { k }
+                };
+                assert_eq!(wrap_texel(i, n, WRAP_CLAMP), i.clamp(0, n - 1));
+                assert_eq!(wrap_texel(i, n, WRAP_MIRROR), mirror, "{i} {n}");
+                assert_eq!(wrap_texel(i, n, WRAP_REPEAT), i.rem_euclid(n));
+            }
+        }
+    }
+
+    #[test]
     fn srgb_table_is_the_function_bit_for_bit() {
         for b in 0..256u32 {
             let c = unpack_texel(b | b << 8 | b << 16);
