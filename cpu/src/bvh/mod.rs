@@ -8,9 +8,11 @@
 //!   the watertight ray/triangle test (Woop, Benthin, Wald 2013, JCGT 2(1)).
 //!
 //! - [`Bvh4`]: the binary tree collapsed into 4-wide nodes ([`Bvh4Node`],
-//!   `wide.rs`), traversed with one SIMD box test per node (`wide_traverse.rs`).
-//!   Renders use it on both backends; the binary tree stays the reference the
-//!   wide one is tested against (its traversal lives with the tests, in
+//!   `wide.rs`), traversed with one SIMD box test per node (`wide_traverse.rs`),
+//!   and the CPU's 8-wide tree (`wide8.rs`, from a second binary build priced
+//!   for its leaf blocks; a pixel's camera rays traverse it as one packet,
+//!   `packet.rs`). Renders use them; the binary tree stays the reference the
+//!   wide ones are tested against (its traversal lives with the tests, in
 //!   `cpu/tests/support/binary.rs`: no render uses it).
 //!
 //! `shaders/bvh.glsl` mirrors this module function for function with the same
@@ -107,14 +109,17 @@ impl Bvh {
     }
 }
 
-/// The 4-wide BVH the renderers traverse (see `wide.rs`): the binary tree's
-/// leaves and boxes regrouped four to a node. Node 0 is the root; empty for
-/// an empty scene.
+/// The trees the renderers traverse: the 4-wide one (see `wide.rs`), a
+/// binary tree's leaves and boxes regrouped four to a node, which the GPU
+/// and CPUs without AVX2 read; and the 8-wide one. Node 0 is the root;
+/// empty for an empty scene.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh4 {
     pub nodes: Vec<Bvh4Node>,
-    /// The same tree collapsed eight children to a node (`wide8.rs`), which
-    /// CPUs with AVX2 traverse ([`Kernel::Avx2x8`]); the GPU reads `nodes`.
+    /// The 8-wide tree (`wide8.rs`), which CPUs with AVX2 traverse
+    /// ([`Kernel::Avx2x8`]): in a render, collapsed from a binary tree of
+    /// its own ([`Bvh4::build`]); from `nodes`' binary tree with
+    /// [`Bvh4::collapse`].
     pub nodes8: Vec<Bvh8Node>,
     /// The 8-wide tree's leaves: each leaf's triangles side by side.
     pub blocks: Vec<LeafBlock>,

@@ -1,9 +1,12 @@
-//! The 8-wide BVH of CPUs with AVX2: the binary tree collapsed eight
+//! The 8-wide BVH of CPUs with AVX2: a binary tree collapsed eight
 //! children to a node ([`super::wide::collapse_slots`], the same rule as the
-//! 4-wide tree, so its leaves, triangle order and child boxes are the
-//! binary tree's bit for bit), one coordinate of the eight boxes per
-//! 256-bit register, so one AVX instruction tests a coordinate of all eight
-//! (Embree's BVH8 layout). CPU only: the GPU reads the 4-wide tree.
+//! 4-wide tree, so its leaves and child boxes are that binary tree's bit for
+//! bit), one coordinate of the eight boxes per 256-bit register, so one AVX
+//! instruction tests a coordinate of all eight (Embree's BVH8 layout). CPU
+//! only: the GPU reads the 4-wide tree. The renders' 8-wide tree is
+//! collapsed from a binary tree of its own, built for its leaf blocks
+//! ([`super::Bvh4::build`]); [`super::Bvh4::collapse`] makes one from the
+//! GPU's binary tree, which the tests compare leaf for leaf.
 //!
 //! Why a second width: `bench/embree` measured glint's 4-wide traversal at
 //! 0.46-0.67 of Embree's (which traverses 8-wide nodes on AVX2 CPUs), and
