@@ -131,7 +131,7 @@ impl Bvh4 {
     /// its leaves ranges of that order; the 8-wide one (the CPU's) is
     /// collapsed from a binary tree of its own, built with the SAH cost of
     /// the CPU's leaf test (a block of up to four triangles tests at the
-    /// cost of one, [`build::LeafCost::Blocks`]), its blocks naming their
+    /// cost of one, `build::LeafCost::Blocks`), its blocks naming their
     /// triangles by their index in that order. The two builds run side by
     /// side (rayon).
     pub fn build(tris: &[Triangle]) -> (Bvh4, Vec<u32>) {
