@@ -447,11 +447,7 @@ impl Scene {
         masks: bool,
     ) -> [Option<crate::bvh::Hit>; crate::bvh::PACKET] {
         if masks {
-            return std::array::from_fn(|k| {
-                (live & (1 << k) != 0)
-                    .then(|| self.intersect_with(&rays[k], true))
-                    .flatten()
-            });
+            return crate::bvh::each_live(live, |k| self.intersect_with(&rays[k], true));
         }
         self.bvh.intersect_packet(&self.triangles, rays, live)
     }

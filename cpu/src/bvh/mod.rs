@@ -109,6 +109,12 @@ impl Bvh {
     }
 }
 
+/// `hit(k)` for each lane k in `live` (bit k), None for the others: a
+/// packet's rays traced one at a time.
+pub fn each_live(live: u8, hit: impl Fn(usize) -> Option<Hit>) -> [Option<Hit>; PACKET] {
+    std::array::from_fn(|k| if live & (1 << k) != 0 { hit(k) } else { None })
+}
+
 /// The trees the renderers traverse: the 4-wide one (see `wide.rs`), a
 /// binary tree's leaves and boxes regrouped four to a node, which the GPU
 /// and CPUs without AVX2 read; and the 8-wide one. Node 0 is the root;
@@ -188,11 +194,7 @@ impl Bvh4 {
         if let Some(hits) = self.intersect_packet_only(rays, live) {
             return hits;
         }
-        std::array::from_fn(|k| {
-            (live & (1 << k) != 0)
-                .then(|| self.intersect(tris, &rays[k]))
-                .flatten()
-        })
+        each_live(live, |k| self.intersect(tris, &rays[k]))
     }
 
     /// The packet traversal of [`Bvh4::intersect_packet`] alone: None

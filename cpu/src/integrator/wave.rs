@@ -72,18 +72,17 @@ impl PathTracer<'_> {
         let mut arrivals = [None::<Arrival>; 8];
         let mut depth = 0u32;
         while live != 0 {
-            let hits = if depth == 0 {
+            // The camera rays in one packet; later bounces' rays, no longer
+            // alike, one at a time (measured: docs/benchmarks.md).
+            let packet = (depth == 0).then(|| {
                 let rays: [Ray; PACKET] = std::array::from_fn(|k| paths[k].ray);
                 self.scene.intersect_packet(&rays, live, self.masks)
-            } else {
-                std::array::from_fn(|k| {
-                    (live & (1 << k) != 0)
-                        .then(|| self.scene.intersect_with(&paths[k].ray, self.masks))
-                        .flatten()
-                })
-            };
+            });
             for k in lanes_of(live) {
-                arrivals[k] = self.arrive_at(&mut paths[k], hits[k], rays);
+                arrivals[k] = match &packet {
+                    Some(hits) => self.arrive_at(&mut paths[k], hits[k], rays),
+                    None => self.arrive(&mut paths[k], rays),
+                };
                 if arrivals[k].is_none() {
                     live &= !(1 << k);
                 }
