@@ -200,11 +200,52 @@ fn metal_blend_is_by_probability() {
                 (got - want).abs().max_element() < 4e-3,
                 "alpha {alpha} m {m}: {got} vs {want}"
             );
-            // eval is the mixture too.
-            let wi = dir_cos(0.4, 0.3);
-            let f = blend.eval(wo, wi);
-            let fw = m * Bsdf::Conductor(metal).eval(wo, wi) + (1.0 - m) * nonmetal.eval(wo, wi);
-            assert!((f - fw).abs().max_element() < 1e-6, "{f} vs {fw}");
+            blend_is_its_parts_mixture(&blend, &Bsdf::Conductor(metal), &nonmetal, m, wo);
+        }
+    }
+}
+
+/// eval and pdf of the blend `blend` (weight `m` on `metal`) are the
+/// mixture of its parts' bit for bit, however many lobes the blend skips at
+/// its ends (a part of weight zero is not evaluated); at the ends its
+/// samples are the one part's.
+fn blend_is_its_parts_mixture(blend: &Bsdf, metal: &Bsdf, nonmetal: &Bsdf, m: f32, wo: Vec3) {
+    let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+    let mut rng = Pcg32::new(m.to_bits() as u64, 3);
+    for k in 0..256 {
+        let wi = if k == 0 {
+            dir_cos(0.4, 0.3)
+        } else {
+            dir_cos(rng.f32(), 6.28 * rng.f32())
+        };
+        let f = m * metal.eval(wo, wi) + (1.0 - m) * nonmetal.eval(wo, wi);
+        assert_eq!(bits(blend.eval(wo, wi)), bits(f), "m {m} wi {wi}");
+        assert_eq!(bits(blend.at(wo).eval(wi)), bits(f), "m {m} wi {wi}");
+        let pdf = m * metal.pdf(wo, wi) + (1.0 - m) * nonmetal.pdf(wo, wi);
+        assert_eq!(blend.pdf(wo, wi).to_bits(), pdf.to_bits(), "m {m} wi {wi}");
+        assert_eq!(
+            blend.at(wo).pdf(wi).to_bits(),
+            pdf.to_bits(),
+            "m {m} wi {wi}"
+        );
+        let (uc, u) = (rng.f32(), rng.vec2());
+        let part = match m {
+            0.0 => nonmetal,
+            1.0 => metal,
+            _ => continue,
+        };
+        let (a, b) = (blend.sample(wo, uc, u), part.sample(wo, uc, u));
+        assert_eq!(a.is_some(), b.is_some(), "m {m}");
+        if let (Some(a), Some(b)) = (a, b) {
+            assert_eq!((bits(a.wi), a.delta), (bits(b.wi), b.delta), "m {m}");
+            assert!(
+                (a.pdf - b.pdf).abs() <= 1e-6 * b.pdf,
+                "m {m}: {} vs {}",
+                a.pdf,
+                b.pdf
+            );
+            let rel = ((a.weight - b.weight).abs() / b.weight.max(Vec3::splat(1e-6))).max_element();
+            assert!(rel < 1e-5, "m {m}: {} vs {}", a.weight, b.weight);
         }
     }
 }

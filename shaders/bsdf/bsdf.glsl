@@ -403,12 +403,18 @@ bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out Bsd
 
 // metallic.rs: the conductor with probability w, the coated non-metal of
 // base and m.coat with 1 - w (Mitsuba 3's blendbsdf).
+// A lobe of weight exactly zero (metallic 0 or 1) is not evaluated: its
+// term added nothing (metallic.rs, `lobes`).
 vec3 metallic_eval(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
-    return w * conductor_eval(m, wo, wi) + (1.0 - w) * coated_eval(base, m, wo, wi);
+    vec3 f_c = w != 0.0 ? conductor_eval(m, wo, wi) : vec3(0.0);
+    vec3 f_n = 1.0 - w != 0.0 ? coated_eval(base, m, wo, wi) : vec3(0.0);
+    return w * f_c + (1.0 - w) * f_n;
 }
 
 float metallic_pdf(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
-    return w * conductor_pdf(m, wo, wi) + (1.0 - w) * coated_pdf(base, m, wo, wi);
+    float pdf_c = w != 0.0 ? conductor_pdf(m, wo, wi) : 0.0;
+    float pdf_n = 1.0 - w != 0.0 ? coated_pdf(base, m, wo, wi) : 0.0;
+    return w * pdf_c + (1.0 - w) * pdf_n;
 }
 
 bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
@@ -429,8 +435,12 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
         wi = s.wi;
         pdf_c = s.pdf;
         f_c = s.weight * (s.pdf / abs(wi.z));
-        pdf_n = coated_pdf(base, m, wo, wi);
-        f_n = coated_eval(base, m, wo, wi);
+        pdf_n = 0.0;
+        f_n = vec3(0.0);
+        if (1.0 - w != 0.0) {
+            pdf_n = coated_pdf(base, m, wo, wi);
+            f_n = coated_eval(base, m, wo, wi);
+        }
     } else {
         float ucn = clamp((uc - w) / (1.0 - w), 0.0, ONE_MINUS_EPS);
         if (!coated_sample(base, m, wo, ucn, u, s)) {
@@ -443,8 +453,12 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
         wi = s.wi;
         pdf_n = s.pdf;
         f_n = s.weight * (s.pdf / abs(wi.z));
-        pdf_c = conductor_pdf(m, wo, wi);
-        f_c = conductor_eval(m, wo, wi);
+        pdf_c = 0.0;
+        f_c = vec3(0.0);
+        if (w != 0.0) {
+            pdf_c = conductor_pdf(m, wo, wi);
+            f_c = conductor_eval(m, wo, wi);
+        }
     }
     float pdf = w * pdf_c + (1.0 - w) * pdf_n;
     if (!(pdf > 0.0) || isinf(pdf)) {

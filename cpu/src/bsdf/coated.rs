@@ -318,6 +318,19 @@ pub struct CoatAtWo {
     p_base: f32,
 }
 
+impl CoatAtWo {
+    /// A coat no one reads: a pure metal's, in the metallic blend
+    /// (`metallic::metallic_coat_at_wo`), whose non-metal has weight zero.
+    pub const UNREAD: Self = Self {
+        alpha: 0.0,
+        smooth: false,
+        eo: Vec3::ZERO,
+        e_avg: Vec3::ZERO,
+        p_coat: 0.0,
+        p_base: 0.0,
+    };
+}
+
 /// The coat at `wo` (either side: the model is two-sided).
 pub fn coat_at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3) -> CoatAtWo {
     at_wo(base, coat, r, wo.z.abs())

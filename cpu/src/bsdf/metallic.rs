@@ -3,6 +3,11 @@
 //! non-metal (`coated.rs`) with 1 - metallic, both with the conductor's
 //! roughness. A one-sample mixture (pbrt-v4 style): eval and pdf are the
 //! mixtures, so MIS sees the combined density. Two-sided.
+//!
+//! A lobe whose weight is exactly zero (metallic 0 or 1, the ends every
+//! untextured glTF metallic factor and most metallic textures sit at) is
+//! not evaluated: its term, zero times a finite number, added nothing, so
+//! the blend gives the same bits without it ([`lobes`]).
 
 use glam::{Vec2, Vec3};
 
@@ -22,7 +27,7 @@ pub fn metallic_eval(
     wo: Vec3,
     wi: Vec3,
 ) -> Vec3 {
-    let w = coat_at_wo(base, coat, &c.roughness, wo);
+    let w = metallic_coat_at_wo(m, base, c, coat, wo);
     metallic_eval_at(m, base, c, coat, &w, wo, wi)
 }
 
@@ -34,7 +39,7 @@ pub fn metallic_pdf(
     wo: Vec3,
     wi: Vec3,
 ) -> f32 {
-    let w = coat_at_wo(base, coat, &c.roughness, wo);
+    let w = metallic_coat_at_wo(m, base, c, coat, wo);
     metallic_pdf_at(m, c, coat, &w, wo, wi)
 }
 
@@ -48,7 +53,12 @@ pub fn metallic_eval_at(
     wo: Vec3,
     wi: Vec3,
 ) -> Vec3 {
-    m * conductor_eval(c, wo, wi) + (1.0 - m) * coated_eval_at(base, coat, &c.roughness, w, wo, wi)
+    let (f_c, f_n) = lobes(
+        m,
+        || conductor_eval(c, wo, wi),
+        || coated_eval_at(base, coat, &c.roughness, w, wo, wi),
+    );
+    m * f_c + (1.0 - m) * f_n
 }
 
 /// [`metallic_pdf`] with the non-metal's coat at wo already looked up.
@@ -60,7 +70,43 @@ pub fn metallic_pdf_at(
     wo: Vec3,
     wi: Vec3,
 ) -> f32 {
-    m * conductor_pdf(c, wo, wi) + (1.0 - m) * coated_pdf_at(coat, &c.roughness, w, wo, wi)
+    let (pdf_c, pdf_n) = lobes(
+        m,
+        || conductor_pdf(c, wo, wi),
+        || coated_pdf_at(coat, &c.roughness, w, wo, wi),
+    );
+    m * pdf_c + (1.0 - m) * pdf_n
+}
+
+/// The metal's and the non-metal's values, each only where its weight
+/// (`m`, `1 - m`) is not zero, else zero: the blend `m a + (1 - m) b` of
+/// them is the blend of both computed, bit for bit, wherever the skipped
+/// one is finite (0 x finite is +-0, and x + 0 is x).
+#[inline(always)]
+fn lobes<T: Default>(m: f32, metal: impl FnOnce() -> T, nonmetal: impl FnOnce() -> T) -> (T, T) {
+    let a = if m != 0.0 { metal() } else { T::default() };
+    let b = if 1.0 - m != 0.0 {
+        nonmetal()
+    } else {
+        T::default()
+    };
+    (a, b)
+}
+
+/// The non-metal's coat at wo, for a blend that reads it: a pure metal
+/// (metallic 1) reads none of it, and skips the table lookups.
+pub fn metallic_coat_at_wo(
+    m: f32,
+    base: Vec3,
+    c: &ConductorParams,
+    coat: &CoatParams,
+    wo: Vec3,
+) -> CoatAtWo {
+    if 1.0 - m != 0.0 {
+        coat_at_wo(base, coat, &c.roughness, wo)
+    } else {
+        CoatAtWo::UNREAD
+    }
 }
 
 /// `uc` first picks the metal (uc < m), then, rescaled to [0, 1), the
@@ -74,7 +120,7 @@ pub fn metallic_sample(
     uc: f32,
     u: Vec2,
 ) -> Option<BsdfSample> {
-    let w = coat_at_wo(base, coat, &c.roughness, wo);
+    let w = metallic_coat_at_wo(m, base, c, coat, wo);
     metallic_sample_at(m, base, c, coat, &w, wo, uc, u)
 }
 
@@ -104,8 +150,15 @@ pub fn metallic_sample_at(
         wi = s.wi;
         pdf_c = s.pdf;
         f_c = s.weight * (s.pdf / wi.z.abs());
-        pdf_n = coated_pdf_at(coat, &c.roughness, w, wo, wi);
-        f_n = coated_eval_at(base, coat, &c.roughness, w, wo, wi);
+        // The other lobe where its weight is not zero (as in `lobes`).
+        (pdf_n, f_n) = if 1.0 - m != 0.0 {
+            (
+                coated_pdf_at(coat, &c.roughness, w, wo, wi),
+                coated_eval_at(base, coat, &c.roughness, w, wo, wi),
+            )
+        } else {
+            (0.0, Vec3::ZERO)
+        };
     } else {
         let uc = ((uc - m) / (1.0 - m)).clamp(0.0, ONE_MINUS_EPS);
         let s = coated_sample_at(base, coat, &c.roughness, w, wo, uc, u)?;
@@ -120,8 +173,11 @@ pub fn metallic_sample_at(
         wi = s.wi;
         pdf_n = s.pdf;
         f_n = s.weight * (s.pdf / wi.z.abs());
-        pdf_c = conductor_pdf(c, wo, wi);
-        f_c = conductor_eval(c, wo, wi);
+        (pdf_c, f_c) = if m != 0.0 {
+            (conductor_pdf(c, wo, wi), conductor_eval(c, wo, wi))
+        } else {
+            (0.0, Vec3::ZERO)
+        };
     }
     let pdf = m * pdf_c + (1.0 - m) * pdf_n;
     if !(pdf > 0.0) || !pdf.is_finite() {

@@ -41,8 +41,8 @@ use conductor::{conductor_eval, conductor_pdf, conductor_sample};
 use dielectric::{dielectric_eval, dielectric_is_smooth, dielectric_pdf, dielectric_sample};
 use diffuse::{diffuse_eval, diffuse_pdf, diffuse_sample};
 use metallic::{
-    metallic_eval, metallic_eval_at, metallic_pdf, metallic_pdf_at, metallic_sample,
-    metallic_sample_at,
+    metallic_coat_at_wo, metallic_eval, metallic_eval_at, metallic_pdf, metallic_pdf_at,
+    metallic_sample, metallic_sample_at,
 };
 use plastic::{PlasticParams, plastic_eval, plastic_pdf, plastic_sample};
 use roughplastic::{RoughPlasticParams, roughplastic_eval, roughplastic_pdf, roughplastic_sample};
@@ -388,11 +388,13 @@ impl Bsdf {
                 roughness,
             } if coat.clearcoat <= 0.0 => Some(coat_at_wo(*base, coat, roughness, wo)),
             Bsdf::Metallic {
+                metallic,
                 base,
                 conductor,
                 coat,
-                ..
-            } if coat.clearcoat <= 0.0 => Some(coat_at_wo(*base, coat, &conductor.roughness, wo)),
+            } if coat.clearcoat <= 0.0 => {
+                Some(metallic_coat_at_wo(*metallic, *base, conductor, coat, wo))
+            }
             _ => None,
         };
         BsdfAt {
