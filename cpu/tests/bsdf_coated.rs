@@ -216,7 +216,7 @@ fn blend_is_its_parts_mixture(blend: &Bsdf, metal: &Bsdf, nonmetal: &Bsdf, m: f3
         let wi = if k == 0 {
             dir_cos(0.4, 0.3)
         } else {
-            dir_cos(rng.f32(), 6.28 * rng.f32())
+            dir_cos(rng.f32(), std::f32::consts::TAU * rng.f32())
         };
         let f = m * metal.eval(wo, wi) + (1.0 - m) * nonmetal.eval(wo, wi);
         assert_eq!(bits(blend.eval(wo, wi)), bits(f), "m {m} wi {wi}");
