@@ -4,7 +4,7 @@ in one run on one machine: time per sample and efficiency at equal error.
 
 For every scene: `glint export` writes the prepared scene as Mitsuba XML (the
 same geometry, camera, lights and image; Mitsuba's own BSDFs exactly, the
-glTF materials approximated, with warnings). Each renderer renders a
+glTF materials approximated, with warnings; the textures as bitmaps). Each renderer renders a
 high-spp reference of its own scene and ROUNDS timed renders at SPP (other
 seeds); relMSE (the contract's) of each render against its own reference,
 and of Mitsuba's reference against glint's (how far the translation is from

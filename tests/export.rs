@@ -28,6 +28,12 @@ fn scratch(name: &str) -> PathBuf {
 /// (vertex count, face count, has normals) of a binary PLY's header, after
 /// checking the body's length.
 fn ply(path: &Path) -> (usize, usize, bool) {
+    let (v, f, normals, _) = ply_body(path);
+    (v, f, normals)
+}
+
+/// [`ply`] and the vertices' texture coordinates (empty where none).
+fn ply_body(path: &Path) -> (usize, usize, bool, Vec<[f32; 2]>) {
     let bytes = std::fs::read(path).unwrap();
     let end = bytes
         .windows(11)
@@ -45,9 +51,21 @@ fn ply(path: &Path) -> (usize, usize, bool) {
     };
     let (v, f) = (count("vertex"), count("face"));
     let normals = header.contains("property float nx");
-    let stride = if normals { 24 } else { 12 };
+    let uv = header.contains("property float u\nproperty float v\n");
+    let stride = 12 + if normals { 12 } else { 0 } + if uv { 8 } else { 0 };
     assert_eq!(bytes.len() - end, v * stride + f * 13, "{}", path.display());
-    (v, f, normals)
+    let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+    let uvs = if uv {
+        (0..v)
+            .map(|i| {
+                let o = end + i * stride + stride - 8;
+                [f32_at(o), f32_at(o + 4)]
+            })
+            .collect()
+    } else {
+        Vec::new()
+    };
+    (v, f, normals, uvs)
 }
 
 fn export(scene: &Path, dir: &Path) -> String {
@@ -197,7 +215,7 @@ fn approximations_each_get_a_warning_and_bad_input_one_line() {
     assert!(stderr.contains("principled"), "{stderr}");
     let dir2 = scratch("textured");
     let stderr = export(&asset("textured.gltf"), &dir2);
-    assert!(stderr.contains("textures are not written"), "{stderr}");
+    assert!(stderr.contains("Mitsuba's tangent frame"), "{stderr}");
     let out = glint()
         .arg("export")
         .arg(asset("no-such.gltf"))
@@ -210,4 +228,154 @@ fn approximations_each_get_a_warning_and_bad_input_one_line() {
     for d in [dir, dir2] {
         let _ = std::fs::remove_dir_all(&d);
     }
+}
+
+/// The shape element of mesh `id` and its file.
+fn shape<'a>(root: roxmltree::Node<'a, 'a>, id: &str) -> (roxmltree::Node<'a, 'a>, String) {
+    let shape = root
+        .children()
+        .find(|n| n.has_tag_name("shape") && n.attribute("id") == Some(id))
+        .unwrap_or_else(|| panic!("no shape {id}"));
+    let file = shape
+        .children()
+        .find(|n| n.attribute("name") == Some("filename"))
+        .and_then(|n| n.attribute("value"))
+        .unwrap()
+        .to_string();
+    (shape, file)
+}
+
+/// The bitmap named `name` under `node`: its texels (rgb, row by row).
+fn bitmap(dir: &Path, node: roxmltree::Node, name: &str) -> (u32, u32, Vec<[f32; 3]>) {
+    let tex = node
+        .descendants()
+        .find(|n| n.has_tag_name("texture") && n.attribute("name") == Some(name))
+        .unwrap_or_else(|| panic!("no texture {name}"));
+    assert_eq!(tex.attribute("type"), Some("bitmap"));
+    let file = tex
+        .children()
+        .find(|n| n.attribute("name") == Some("filename"))
+        .and_then(|n| n.attribute("value"))
+        .unwrap();
+    let img = image::open(dir.join(file)).unwrap().into_rgb32f();
+    let px = img.pixels().map(|p| p.0).collect();
+    (img.width(), img.height(), px)
+}
+
+/// The textured scene's textures as Mitsuba reads them: every texel of
+/// each bitmap is glint's decoded texel with its factor (base colour), its
+/// channel (metallic B, roughness G), the normal map's scale or the alpha
+/// cutoff applied; each mesh carries the texture coordinates glint
+/// interpolates; normal map and mask wrap the model, which is two-sided.
+#[test]
+fn textured_materials_write_their_textures() {
+    use glint::cpu::texture::texture_fetch;
+    let dir = scratch("textures");
+    // The bundled scene with factors that are not 1, for the texels to
+    // carry: the checker's colour, the metal's roughness and metallic, the
+    // bumps' normal scale.
+    let mut gltf: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(asset("textured.gltf")).unwrap()).unwrap();
+    let mats = &mut gltf["materials"];
+    mats[0]["pbrMetallicRoughness"]["baseColorFactor"] = serde_json::json!([0.5, 0.8, 0.25, 1.0]);
+    mats[1]["pbrMetallicRoughness"]["roughnessFactor"] = serde_json::json!(0.6);
+    mats[1]["pbrMetallicRoughness"]["metallicFactor"] = serde_json::json!(0.9);
+    mats[2]["normalTexture"]["scale"] = serde_json::json!(0.7);
+    let file = scratch("textures-scene.gltf");
+    std::fs::write(&file, serde_json::to_vec(&gltf).unwrap()).unwrap();
+    export(&file, &dir);
+    let scene = glint::cpu::loader::parse(&file).unwrap();
+    let st = &scene.textures;
+    let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    let root = doc.root_element();
+    // Texel (x, y) of texture ref `r`, decoded as glint reads it.
+    let texel = |r: &glint::cpu::texture::TexRef, i: usize, w: u32, srgb: bool| {
+        let t = st.table[r.texture as usize];
+        assert_eq!(w, t.width);
+        let (x, y) = ((i as u32 % w) as i32, (i as u32 / w) as i32);
+        texture_fetch(&st.texels, &t, x, y, srgb)
+    };
+    let bsdf_types = |n: roxmltree::Node| -> Vec<String> {
+        n.descendants()
+            .filter(|n| n.has_tag_name("bsdf"))
+            .map(|n| n.attribute("type").unwrap().to_string())
+            .collect()
+    };
+    let mut checked = 0;
+    for (m, mt) in st.materials.iter().enumerate() {
+        if !mt.is_used() {
+            continue;
+        }
+        let (node, file) = shape(root, &format!("m{m}"));
+        let types = bsdf_types(node);
+        assert!(types.contains(&"twosided".to_string()), "m{m}: {types:?}");
+        if mt.base_color.is_some() {
+            let (w, _, px) = bitmap(&dir, node, "base_color");
+            let factor = glam::Vec3::from_slice(&mt.base_factor[..3]);
+            for (i, p) in px.iter().enumerate() {
+                let want = factor * texel(&mt.base_color, i, w, true).truncate();
+                assert_eq!(*p, want.to_array(), "m{m} base colour texel {i}");
+            }
+            checked += 1;
+        }
+        if mt.metallic_roughness.is_some() {
+            let r = &mt.metallic_roughness;
+            for (name, k, factor) in [
+                ("metallic", 2, mt.mr_factor[0]),
+                ("roughness", 1, mt.mr_factor[1]),
+            ] {
+                let (w, _, px) = bitmap(&dir, node, name);
+                for (i, p) in px.iter().enumerate() {
+                    let want = factor * texel(r, i, w, false)[k];
+                    assert_eq!(*p, [want; 3], "m{m} {name} texel {i}");
+                }
+            }
+            checked += 1;
+        }
+        if mt.normal.is_some() {
+            assert_eq!(types[0], "normalmap", "m{m}: {types:?}");
+            let (w, _, px) = bitmap(&dir, node, "normalmap");
+            for (i, p) in px.iter().enumerate().step_by(7) {
+                let c = texel(&mt.normal, i, w, false).truncate() * 2.0 - glam::Vec3::ONE;
+                let got = glam::Vec3::from(*p) * 2.0 - glam::Vec3::ONE;
+                let want = glam::Vec3::new(c.x * mt.normal.scale, c.y * mt.normal.scale, c.z);
+                assert!(
+                    (got - want).abs().max_element() < 1e-6,
+                    "m{m} normal texel {i}"
+                );
+            }
+            checked += 1;
+        }
+        if mt.has_alpha_test() {
+            assert_eq!(types[0], "mask", "m{m}: {types:?}");
+            let (w, _, px) = bitmap(&dir, node, "opacity");
+            for (i, p) in px.iter().enumerate() {
+                let a = mt.base_alpha * texel(&mt.base_color, i, w, false).w;
+                let want = if a >= mt.alpha_cutoff { 1.0 } else { 0.0 };
+                assert_eq!(*p, [want; 3], "m{m} opacity texel {i}");
+            }
+            checked += 1;
+        }
+        // The mesh's texture coordinates: its triangles' (the export's
+        // triangle order may be another's, so as sorted triples).
+        let (_, f, _, uvs) = ply_body(&dir.join(&file));
+        let key = |t: &[[f32; 2]]| t.iter().flatten().map(|v| v.to_bits()).collect::<Vec<_>>();
+        let mut got: Vec<Vec<u32>> = uvs.chunks(3).map(key).collect();
+        let mut want: Vec<Vec<u32>> = scene
+            .triangles
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.material == m as u32)
+            .map(|(i, _)| key(&st.uvs[i].uv.map(|c| [c[0], c[1]])))
+            .collect();
+        got.sort();
+        want.sort();
+        assert_eq!(uvs.len(), 3 * f, "m{m}");
+        assert_eq!(got, want, "m{m}");
+    }
+    // Base colour (checker, leaf), metallic-roughness, normal map, mask.
+    assert_eq!(checked, 5);
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_file(&file);
 }

@@ -15,9 +15,19 @@
 //! non-metal and metallic blend (Mitsuba's `principled`), height-correlated
 //! shadowing (Mitsuba's GGX is separable), `multiscatter`, anisotropic
 //! lobes (oriented by Mitsuba's own tangent frame), the spot light's
-//! falloff (glTF's quadratic ramp against Mitsuba's smoothstep), textures
-//! (their factors only), alpha masks, interior absorption and environment
-//! maps (not written).
+//! falloff (glTF's quadratic ramp against Mitsuba's smoothstep), interior
+//! absorption and environment maps (not written).
+//!
+//! Textures of the glTF metallic-roughness model are written as bitmaps
+//! (`textures/*.exr`, linear, their factors multiplied in) on the meshes'
+//! texture coordinates, with their wrap mode, filter and
+//! `KHR_texture_transform`: base colour, metallic and roughness on
+//! `principled`, the normal map as Mitsuba's `normalmap` (its tangent frame
+//! is Mitsuba's own, from the texture coordinates), the alpha mask as
+//! `mask` (MASK: opacity 0 or 1 at the cutoff; BLEND: the alpha) and the
+//! emissive texture on the area light; a base colour texture on a
+//! `diffuse` extras model. The coat's other textures (transmission, clear
+//! coat, specular) keep their factors, with a warning.
 
 use std::fmt::Write as _;
 use std::io::Write as _;
@@ -29,6 +39,9 @@ use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
 use glint_cpu::camera::scene_camera;
 use glint_cpu::scene::{NO_LIGHT, TRI_NORMALS, TRI_SHADING_SHIFT};
 use glint_cpu::{PunctualLight, RenderOptions, Scene};
+
+mod textures;
+use textures::{Bitmaps, emission_xml, textured_bsdf_xml, uv_set};
 
 /// What `export` wrote: the files (relative to the folder) and what it
 /// could only approximate, one line each.
@@ -98,11 +111,26 @@ fn conductor(c: &ConductorParams, what: &str, warnings: &mut Vec<String>) -> Str
 /// metallic blend: base colour, roughness sqrt(alpha), the coat's IOR and
 /// thin transmission. An approximation: a different layering model.
 fn principled(base: Vec3, metallic: f32, alpha: f32, eta: f32, spec_trans: f32) -> String {
+    principled_xml(
+        &rgb("base_color", base),
+        &float("metallic", metallic),
+        &float("roughness", alpha.max(0.0).sqrt()),
+        eta,
+        spec_trans,
+    )
+}
+
+/// [`principled`] with its base colour, metallic and roughness given as
+/// XML (values or textures).
+fn principled_xml(
+    base: &str,
+    metallic: &str,
+    roughness: &str,
+    eta: f32,
+    spec_trans: f32,
+) -> String {
     format!(
-        r#"<bsdf type="principled">{}{}{}{}{}</bsdf>"#,
-        rgb("base_color", base),
-        float("metallic", metallic),
-        float("roughness", alpha.max(0.0).sqrt()),
+        r#"<bsdf type="principled">{base}{metallic}{roughness}{}{}</bsdf>"#,
         float("eta", eta.max(1.0001)),
         float("spec_trans", spec_trans)
     )
@@ -192,10 +220,26 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
     }
 }
 
+/// `xml` (the BSDF `bsdf`) reflecting on both sides, as glint's opaque
+/// models do: Mitsuba's own are one-sided (black from behind), so the
+/// export wraps them in `twosided`; a transmissive model keeps its sides.
+fn two_sided(bsdf: &Bsdf, xml: String) -> String {
+    if bsdf.has_transmission() {
+        xml
+    } else {
+        format!(r#"<bsdf type="twosided">{xml}</bsdf>"#)
+    }
+}
+
 /// A triangle list as a binary little-endian PLY: three vertices per
-/// triangle (positions, and normals where `normals` is Some), faces in
-/// order.
-fn write_ply(path: &Path, positions: &[[f32; 3]], normals: Option<&[[f32; 3]]>) -> Result<()> {
+/// triangle (positions, and normals and texture coordinates where given),
+/// faces in order.
+fn write_ply(
+    path: &Path,
+    positions: &[[f32; 3]],
+    normals: Option<&[[f32; 3]]>,
+    uvs: Option<&[[f32; 2]]>,
+) -> Result<()> {
     let mut out = Vec::new();
     let n = positions.len();
     write!(
@@ -209,6 +253,9 @@ fn write_ply(path: &Path, positions: &[[f32; 3]], normals: Option<&[[f32; 3]]>) 
             "property float nx\nproperty float ny\nproperty float nz\n"
         )?;
     }
+    if uvs.is_some() {
+        write!(out, "property float u\nproperty float v\n")?;
+    }
     write!(
         out,
         "element face {}\nproperty list uchar int vertex_indices\nend_header\n",
@@ -220,6 +267,11 @@ fn write_ply(path: &Path, positions: &[[f32; 3]], normals: Option<&[[f32; 3]]>) 
         }
         if let Some(ns) = normals {
             for c in &ns[i] {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        if let Some(uvs) = uvs {
+            for c in &uvs[i] {
                 out.extend_from_slice(&c.to_le_bytes());
             }
         }
@@ -239,19 +291,28 @@ struct Mesh {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     smooth: bool,
+    /// Texture coordinate set `uv_set`'s, where asked for.
+    uvs: Vec<[f32; 2]>,
 }
 
-/// The triangles of material `m` that emit (or not), or None when it has
+/// The triangles of material `m` that emit (or not), with texture
+/// coordinate set `uv_set` (0 or 1) where it is Some, or None when it has
 /// none.
-fn mesh_of(scene: &Scene, m: u32, emitting: bool) -> Option<Mesh> {
+fn mesh_of(scene: &Scene, m: u32, emitting: bool, uv_set: Option<u32>) -> Option<Mesh> {
     let mut mesh = Mesh {
         positions: Vec::new(),
         normals: Vec::new(),
         smooth: false,
+        uvs: Vec::new(),
     };
-    for t in &scene.triangles {
+    for (i, t) in scene.triangles.iter().enumerate() {
         if t.material != m || (t.light != NO_LIGHT) != emitting {
             continue;
+        }
+        if let Some(set) = uv_set {
+            let uv = &scene.textures.uvs[i].uv;
+            let o = if set == 1 { 2 } else { 0 };
+            mesh.uvs.extend((0..3).map(|k| [uv[k][o], uv[k][o + 1]]));
         }
         let [a, b, c] = t.vertices();
         let ng = t.geometric_normal().normalize_or_zero();
@@ -380,22 +441,40 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
     let mut warnings = Vec::new();
     let mut files = Vec::new();
     let mut shapes = String::new();
-    if !scene.textures.is_empty() {
-        warnings.push("textures are not written: each material keeps its factors".into());
-    }
+    let mut bitmaps = Bitmaps {
+        scene,
+        dir,
+        files: Vec::new(),
+    };
     for (m, mat) in scene.materials.iter().enumerate() {
         let what = format!("material {m} ({})", mat.name);
         if mat.absorption != Vec3::ZERO {
             warnings.push(format!("{what}: interior absorption is not written"));
         }
-        if scene
-            .textures
-            .material(m as u32)
-            .is_some_and(|t| t.has_alpha_test())
-        {
+        let mt = scene.textures.material(m as u32);
+        let textured = match mt {
+            Some(mt) => textured_bsdf_xml(&mut bitmaps, mt, &mat.bsdf, &what, &mut warnings)?,
+            None => None,
+        };
+        let emission_tex = match mt {
+            Some(mt) if mat.is_emissive() => {
+                emission_xml(&mut bitmaps, mt, mat.emission, &mut warnings)?
+            }
+            _ => None,
+        };
+        if textured.is_none() && mt.is_some_and(|t| t.has_alpha_test()) {
             warnings.push(format!("{what}: the alpha mask is not written"));
         }
-        let bsdf = bsdf_xml(&mat.bsdf, &what, &mut warnings);
+        let uv_set = match mt {
+            Some(mt) if textured.is_some() || emission_tex.is_some() => {
+                Some(uv_set(mt, &what, &mut warnings))
+            }
+            _ => None,
+        };
+        let bsdf = match textured {
+            Some(xml) => xml,
+            None => two_sided(&mat.bsdf, bsdf_xml(&mat.bsdf, &what, &mut warnings)),
+        };
         if mat.is_emissive() && mat.double_sided {
             warnings.push(format!(
                 "{what}: a double-sided emitter written one-sided (Mitsuba's area lights emit from the front)"
@@ -403,19 +482,20 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
         }
         for emitting in [false, true] {
             {
-                let Some(mesh) = mesh_of(scene, m as u32, emitting) else {
+                let Some(mesh) = mesh_of(scene, m as u32, emitting, uv_set) else {
                     continue;
                 };
                 let id = format!("m{m}{}", if emitting { "e" } else { "" });
                 let name = format!("meshes/{id}.ply");
                 let normals = mesh.smooth.then_some(&mesh.normals[..]);
-                write_ply(&dir.join(&name), &mesh.positions, normals)?;
+                let uvs = uv_set.map(|_| &mesh.uvs[..]);
+                write_ply(&dir.join(&name), &mesh.positions, normals, uvs)?;
                 files.push(name.clone());
                 let emitter = if emitting {
-                    format!(
-                        r#"<emitter type="area">{}</emitter>"#,
-                        rgb("radiance", mat.emission)
-                    )
+                    let radiance = emission_tex
+                        .clone()
+                        .unwrap_or_else(|| rgb("radiance", mat.emission));
+                    format!(r#"<emitter type="area">{radiance}</emitter>"#)
                 } else {
                     String::new()
                 };
@@ -446,6 +526,7 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
     std::fs::write(dir.join("scene.xml"), xml)
         .with_context(|| format!("{}", dir.join("scene.xml").display()))?;
     files.insert(0, "scene.xml".into());
+    files.extend(bitmaps.files);
     warnings.dedup();
     Ok(Export { files, warnings })
 }
