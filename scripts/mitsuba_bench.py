@@ -28,8 +28,10 @@ Output: target/mitsuba-bench/ (scenes, images, table.md); the table on stdout.
 """
 
 import glob
+import hashlib
 import json
 import os
+import shutil
 import statistics
 import subprocess
 import sys
@@ -40,6 +42,22 @@ OUT = os.path.join(ROOT, "target", "mitsuba-bench")
 VENV = os.path.join(ROOT, "target", "mitsuba-venv")
 GLINT = os.path.join(ROOT, "target", "release", "glint")
 MITSUBA_VERSION = "3.9.1"
+
+
+def export_digest(d):
+    """A digest of what `glint export` wrote into `d` (scene.xml, meshes,
+    textures): the references are kept under it, so a scene, a translation
+    or a loader that changes makes new ones. (A change to glint's renderer
+    that changes its images needs `rm -r target/mitsuba-bench`.)"""
+    h = hashlib.sha256()
+    files = [os.path.join(d, "scene.xml")]
+    for sub in ("meshes", "textures"):
+        files += sorted(glob.glob(os.path.join(d, sub, "*")))
+    for f in files:
+        h.update(os.path.relpath(f, d).encode())
+        with open(f, "rb") as fh:
+            h.update(fh.read())
+    return h.hexdigest()[:12]
 
 
 def run(cmd, **kw):
@@ -152,6 +170,8 @@ def main():
     for scene in scenes:
         name = os.path.splitext(os.path.basename(scene))[0]
         d = os.path.join(OUT, name)
+        for sub in ("meshes", "textures"):  # a previous export's files
+            shutil.rmtree(os.path.join(d, sub), ignore_errors=True)
         ex = subprocess.run([GLINT, "export", scene, "-o", d, "--width", str(width),
                              "--spp", str(spp)], capture_output=True, text=True)
         if ex.returncode != 0:
@@ -159,8 +179,9 @@ def main():
             continue
         approximate = sum(1 for l in ex.stderr.splitlines() if "warning" in l)
         xml = os.path.join(d, "scene.xml")
-        g_ref = os.path.join(d, f"glint-ref-{width}-{ref_spp}.exr")
-        m_ref = os.path.join(d, f"mitsuba-ref-{width}-{ref_spp}.exr")
+        key = export_digest(d)
+        g_ref = os.path.join(d, f"glint-ref-{width}-{ref_spp}-{key}.exr")
+        m_ref = os.path.join(d, f"mitsuba-ref-{width}-{ref_spp}-{key}.exr")
         if not os.path.exists(g_ref):
             glint_render(scene, width, ref_spp, 999_983, g_ref)
         if not os.path.exists(m_ref):
