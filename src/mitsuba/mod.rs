@@ -220,11 +220,17 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
     }
 }
 
-/// `xml` (the BSDF `bsdf`) reflecting on both sides, as glint's opaque
-/// models do: Mitsuba's own are one-sided (black from behind), so the
-/// export wraps them in `twosided`; a transmissive model keeps its sides.
-fn two_sided(bsdf: &Bsdf, xml: String) -> String {
-    if bsdf.has_transmission() {
+/// `xml` (the BSDF `bsdf` of a material, `double_sided` as glTF's
+/// doubleSided) reflecting on both sides where the material is double-sided.
+/// glint's opaque models reflect on both sides of the geometry; Mitsuba's
+/// are black from behind, so a double-sided material (a leaf, a plane seen
+/// from either side) is wrapped in `twosided`. A single-sided one is not:
+/// Mitsuba's `twosided` also reflects where only the shading normal turns
+/// away from the viewer (at smooth silhouettes), where glint's light-leak
+/// rule gives nothing, as the one-sided model does; a transmissive model
+/// keeps its sides.
+fn two_sided(bsdf: &Bsdf, double_sided: bool, xml: String) -> String {
+    if !double_sided || bsdf.has_transmission() {
         xml
     } else {
         format!(r#"<bsdf type="twosided">{xml}</bsdf>"#)
@@ -453,7 +459,7 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
         }
         let mt = scene.textures.material(m as u32);
         let textured = match mt {
-            Some(mt) => textured_bsdf_xml(&mut bitmaps, mt, &mat.bsdf, &what, &mut warnings)?,
+            Some(mt) => textured_bsdf_xml(&mut bitmaps, mt, mat, &what, &mut warnings)?,
             None => None,
         };
         let emission_tex = match mt {
@@ -473,7 +479,11 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
         };
         let bsdf = match textured {
             Some(xml) => xml,
-            None => two_sided(&mat.bsdf, bsdf_xml(&mat.bsdf, &what, &mut warnings)),
+            None => two_sided(
+                &mat.bsdf,
+                mat.double_sided,
+                bsdf_xml(&mat.bsdf, &what, &mut warnings),
+            ),
         };
         if mat.is_emissive() && mat.double_sided {
             warnings.push(format!(

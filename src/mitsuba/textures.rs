@@ -9,12 +9,12 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use glam::{Vec3, Vec4};
-use glint_cpu::Scene;
 use glint_cpu::bsdf::Bsdf;
 use glint_cpu::texture::{
     MAP_EXTRAS, MAP_GLTF, MaterialTextures, TEX_NEAREST, TexRef, WRAP_CLAMP, WRAP_MIRROR,
     texture_fetch,
 };
+use glint_cpu::{Material, Scene};
 
 use super::{bsdf_xml, float, principled_xml, rgb, two_sided};
 
@@ -121,16 +121,17 @@ fn used(mt: &MaterialTextures) -> Vec<&TexRef> {
     .collect()
 }
 
-/// A material's BSDF (`bsdf`, its factors) with its textures `mt` (and
+/// A material's BSDF (`mat.bsdf`, its factors) with its textures `mt` (and
 /// its normal map and alpha mask on any model), or None where it has none
 /// the export writes (then `bsdf_xml` writes it).
 pub(super) fn textured_bsdf_xml(
     out: &mut Bitmaps,
     mt: &MaterialTextures,
-    bsdf: &Bsdf,
+    mat: &Material,
     what: &str,
     warnings: &mut Vec<String>,
 ) -> Result<Option<String>> {
+    let bsdf = &mat.bsdf;
     for (r, name) in [
         (&mt.transmission, "transmission"),
         (&mt.clearcoat, "clear coat"),
@@ -172,6 +173,7 @@ pub(super) fn textured_bsdf_xml(
     }
     let mut xml = two_sided(
         bsdf,
+        mat.double_sided,
         match inner {
             Some(xml) => xml,
             None => bsdf_xml(bsdf, what, warnings),
