@@ -532,7 +532,9 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     outputs.write(svg_slot, |w| Ok(w.write_all(svg.as_bytes())?))?;
     outputs.write(png_slot, |w| Ok(w.write_all(&png)?))?;
     for (slot, (film, meta)) in image_slots.iter().zip(&films) {
-        outputs.write(*slot, |w| encode(film, w, OutputFormat::Exr, meta, false))?;
+        outputs.write(*slot, |w| {
+            encode(film, w, OutputFormat::Exr, Some(meta), false)
+        })?;
     }
     outputs.commit()?;
     print!("{md}");

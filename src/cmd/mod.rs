@@ -399,16 +399,17 @@ pub fn render_on(
 }
 
 /// Encode `film`: PNG through `Film::encode`; EXR with glint's header
-/// attributes from `meta`, and the variance of the mean when `variance`.
+/// attributes from `meta` (which only the EXR records), and the variance of
+/// the mean when `variance`.
 pub fn encode(
     film: &Film,
     w: &mut std::io::BufWriter<std::fs::File>,
     format: OutputFormat,
-    meta: &RenderMeta,
+    meta: Option<&RenderMeta>,
     variance: bool,
 ) -> Result<()> {
     match format {
-        OutputFormat::Exr => RadianceImage::from_film(film, variance, Some(meta.clone()))
+        OutputFormat::Exr => RadianceImage::from_film(film, variance, meta.cloned())
             .write_with(
                 w,
                 &glint::cpu::exr_file::samples_channel(film)

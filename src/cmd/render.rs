@@ -193,9 +193,15 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &opts,
     )?;
 
-    let meta = shard::render_meta(&scene, &opts, shard, r.film.spp);
+    // Only an EXR records what it was rendered from; its scene key hashes
+    // the whole loaded scene (the textures' texels too), so a PNG skips it.
+    let meta = formats
+        .contains(&OutputFormat::Exr)
+        .then(|| shard::render_meta(&scene, &opts, shard, r.film.spp));
     for (&slot, &format) in image_slots.iter().zip(&formats) {
-        outputs.write(slot, |w| encode(&r.film, w, format, &meta, args.variance))?;
+        outputs.write(slot, |w| {
+            encode(&r.film, w, format, meta.as_ref(), args.variance)
+        })?;
     }
     if let Some(slot) = stats_slot {
         let json = stats_json(args, &scene, &opts, &r, load_seconds);
