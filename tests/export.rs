@@ -4,6 +4,10 @@
 //! looks, Mitsuba's own BSDFs written exactly, and a warning line for each
 //! approximation (the rendered comparison is `scripts/mitsuba_bench.py`).
 
+#[path = "../cpu/tests/fixtures/gltf_builder.rs"]
+#[allow(dead_code)]
+mod builder;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -384,4 +388,56 @@ fn textured_materials_write_their_textures() {
     assert_eq!(checked, 5);
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_file(&file);
+}
+
+/// An emissive texture goes on the area light: its bitmap is emissiveFactor
+/// times the sRGB-decoded texels, on the emitter mesh's texture coordinates.
+#[test]
+fn an_emissive_texture_is_the_area_light_s_radiance() {
+    use serde_json::json;
+    let mut d = builder::Doc::new();
+    let texels = [
+        [255u8, 0, 0, 255],
+        [0, 128, 0, 255],
+        [0, 0, 64, 255],
+        [255; 4],
+    ]
+    .concat();
+    let t = d.png_texture(2, 2, &texels, json!({ "magFilter": 9728 }));
+    let m = d.material(json!({
+        "pbrMetallicRoughness": { "baseColorFactor": [0.5, 0.5, 0.5, 1], "metallicFactor": 0 },
+        "emissiveTexture": { "index": t }, "emissiveFactor": [1, 0.75, 0.5],
+        "extensions": { "KHR_materials_emissive_strength": { "emissiveStrength": 3 } }
+    }));
+    let q = d.uv_quad(1.0, 0.0, Some(m));
+    d.node(json!({ "mesh": q }));
+    let file = d.write_gltf(&builder::temp_dir("export-emissive"), "scene");
+    let dir = scratch("emissive");
+    export(&file, &dir);
+    let scene = glint::cpu::loader::parse(&file).unwrap();
+    let xml = std::fs::read_to_string(dir.join("scene.xml")).unwrap();
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    let (node, ply_file) = shape(doc.root_element(), "m0e");
+    let emitter = node.children().find(|n| n.has_tag_name("emitter")).unwrap();
+    let (w, h, px) = bitmap(&dir, emitter, "radiance");
+    assert_eq!((w, h), (2, 2));
+    assert!(
+        xml.contains(r#"<string name="filter_type" value="nearest"/>"#),
+        "{xml}"
+    );
+    let emission = scene.materials[0].emission;
+    for (i, p) in px.iter().enumerate() {
+        let c = &texels[4 * i..4 * i + 3];
+        let want = emission
+            * glam::Vec3::from_array(
+                [0, 1, 2].map(|k| glint::cpu::texture::srgb_to_linear(c[k] as f32 / 255.0)),
+            );
+        assert!(
+            (glam::Vec3::from(*p) - want).abs().max_element() < 1e-6,
+            "texel {i}: {p:?} vs {want}"
+        );
+    }
+    let (_, f, _, uvs) = ply_body(&dir.join(ply_file));
+    assert_eq!((f, uvs.len()), (2, 6));
+    let _ = std::fs::remove_dir_all(&dir);
 }

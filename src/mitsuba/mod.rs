@@ -136,6 +136,12 @@ fn principled_xml(
     )
 }
 
+/// The warning for a glTF model (`model`: "non-metal", "metallic blend")
+/// written as `principled`.
+fn principled_warning(what: &str, model: &str) -> String {
+    format!("{what}: the glTF {model} written as Mitsuba's principled (another layering model)")
+}
+
 /// A material's BSDF as Mitsuba XML.
 fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
     match bsdf {
@@ -195,9 +201,7 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
             coat,
             roughness,
         } => {
-            warnings.push(format!(
-                "{what}: the glTF non-metal written as Mitsuba's principled (another layering model)"
-            ));
+            warnings.push(principled_warning(what, "non-metal"));
             principled(*base, 0.0, roughness.alpha_u, coat.eta, coat.transmission)
         }
         Bsdf::Metallic {
@@ -206,9 +210,7 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
             conductor,
             coat,
         } => {
-            warnings.push(format!(
-                "{what}: the glTF metallic blend written as Mitsuba's principled (another layering model)"
-            ));
+            warnings.push(principled_warning(what, "metallic blend"));
             principled(
                 *base,
                 *metallic,

@@ -16,7 +16,7 @@ use glint_cpu::texture::{
 };
 use glint_cpu::{Material, Scene};
 
-use super::{bsdf_xml, float, principled_xml, rgb, two_sided};
+use super::{bsdf_xml, float, principled_warning, principled_xml, rgb, two_sided};
 
 /// Writes a scene's bitmaps into `dir` (`textures/t<n>.exr`), one per use.
 pub(super) struct Bitmaps<'a> {
@@ -149,9 +149,7 @@ pub(super) fn textured_bsdf_xml(
     let inner = match (mt.mode, bsdf) {
         (MAP_GLTF, Bsdf::Dielectric { .. }) => None,
         (MAP_GLTF, _) => {
-            warnings.push(format!(
-                "{what}: the glTF metallic blend written as Mitsuba's principled (another layering model)"
-            ));
+            warnings.push(principled_warning(what, "metallic blend"));
             Some(gltf_principled(out, mt, bsdf, warnings)?)
         }
         (MAP_EXTRAS, Bsdf::Diffuse { reflectance }) if mt.base_color.is_some() => {
