@@ -5,7 +5,6 @@
 //! approximation (the rendered comparison is `scripts/mitsuba_bench.py`).
 
 #[path = "../cpu/tests/fixtures/gltf_builder.rs"]
-#[allow(dead_code)]
 mod builder;
 
 use std::path::{Path, PathBuf};

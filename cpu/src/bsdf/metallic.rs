@@ -4,10 +4,10 @@
 //! roughness. A one-sample mixture (pbrt-v4 style): eval and pdf are the
 //! mixtures, so MIS sees the combined density. Two-sided.
 //!
-//! A lobe whose weight is exactly zero (metallic 0 or 1, the ends every
-//! untextured glTF metallic factor and most metallic textures sit at) is
-//! not evaluated: its term, zero times a finite number, added nothing, so
-//! the blend gives the same bits without it ([`lobes`]).
+//! A lobe whose weight is exactly zero (metallic 0 or 1: every textured
+//! glTF material is this blend, and most sit at one of its ends) is not
+//! evaluated: its term, zero times a finite number, added nothing, so the
+//! blend gives the same bits without it ([`lobes`]).
 
 use glam::{Vec2, Vec3};
 
