@@ -67,6 +67,10 @@ pub trait Lane:
     fn sin_cos(self) -> (Self, Self);
     /// Lane `i` (i < LANES).
     fn lane(self, i: usize) -> f32;
+    /// `f(i)` in lane i: what a table lookup per lane gathers.
+    fn from_fn(f: impl FnMut(usize) -> f32) -> Self;
+    /// Lane `i` of a mask.
+    fn mask_lane(m: Self::Mask, i: usize) -> bool;
     /// `t` in the lanes where `m` holds, else `f`, for masks.
     #[inline(always)]
     fn select_mask(m: Self::Mask, t: Self::Mask, f: Self::Mask) -> Self::Mask {
@@ -140,6 +144,14 @@ impl Lane for f32 {
     #[inline(always)]
     fn lane(self, _: usize) -> f32 {
         self
+    }
+    #[inline(always)]
+    fn from_fn(mut f: impl FnMut(usize) -> f32) -> Self {
+        f(0)
+    }
+    #[inline(always)]
+    fn mask_lane(m: bool, _: usize) -> bool {
+        m
     }
 }
 
@@ -316,6 +328,14 @@ impl Lane for F32x8 {
     #[inline(always)]
     fn lane(self, i: usize) -> f32 {
         self.0[i]
+    }
+    #[inline(always)]
+    fn from_fn(f: impl FnMut(usize) -> f32) -> Self {
+        Self(std::array::from_fn(f))
+    }
+    #[inline(always)]
+    fn mask_lane(m: Mask8, i: usize) -> bool {
+        m.test(i)
     }
 }
 

@@ -11,6 +11,7 @@
 
 use glam::{Vec2, Vec3};
 use glint_cpu::SamplerKind;
+use glint_cpu::bsdf::coated::{self, Coat, CoatParams};
 use glint_cpu::bsdf::conductor::{self, RoughConductor};
 use glint_cpu::bsdf::dielectric::RoughDielectric;
 use glint_cpu::bsdf::microfacet::{self, MIN_ALPHA};
@@ -466,6 +467,139 @@ fn rough_conductor_lanes_are_the_scalar_bsdf() {
             |a, b| samples_agree(a, b, SIN_TOL),
             "conductor_sample",
         );
+    }
+}
+
+/// A coated test's lanes: base colour, coat, roughness, wo, wi, uc, u.
+type Ct = (Vec3, CoatParams, Roughness, Vec3, Vec3, f32, Vec2);
+
+/// Eight coated non-metals' parameters as lanes.
+fn coat_lanes(l: &[Ct; 8]) -> Coat<F32x8> {
+    let c = l.map(|x| Coat::of(x.0, &x.1, &x.2));
+    Coat {
+        base: v3x8(c.map(|c| c.base.into())),
+        specular: v3x8(c.map(|c| c.specular.into())),
+        eta: F32x8(c.map(|c| c.eta)),
+        ax: F32x8(c.map(|c| c.ax)),
+        ay: F32x8(c.map(|c| c.ay)),
+        smooth: Mask8(c.map(|c| if c.smooth { !0 } else { 0 })),
+    }
+}
+
+/// eval, pdf and sample of eight coated non-metals' opaque part.
+#[inline(always)]
+fn ct_all(l: [Ct; 8]) -> ([Vec3; 8], [f32; 8], [Option<BsdfSample>; 8]) {
+    let c = coat_lanes(&l);
+    let (wo, wi) = (v3x8(l.map(|x| x.3)), v3x8(l.map(|x| x.4)));
+    let w = coated::lanes::at_wo(&c, wo.z.abs());
+    let eval = lanes3(coated::lanes::opaque_eval(&c, &w, wo, wi));
+    let pdf = lanes1(coated::lanes::opaque_pdf(&c, &w, wo, wi));
+    let s = coated::lanes::opaque_sample(&c, &w, wo, F32x8(l.map(|x| x.5)), l.map(|x| x.6).into());
+    (eval, pdf, samples(s))
+}
+
+fn coated_case(r: &mut Rand, kind: usize, smooth: bool) -> Ct {
+    let coat = CoatParams {
+        eta: 1.0 + 1.5 * r.f(),
+        specular: if r.f() < 0.5 {
+            Vec3::ONE
+        } else {
+            Vec3::new(r.f(), r.f(), r.f())
+        },
+        ..CoatParams::GLTF_DEFAULT
+    };
+    let alpha = if smooth { 0.0 } else { r.alpha() };
+    let rough = Roughness {
+        alpha_u: alpha,
+        alpha_v: if r.f() < 0.5 { alpha } else { r.alpha() },
+        shadowing: Shadowing::Correlated,
+        multiscatter: false,
+    };
+    let base = Vec3::new(r.f(), r.f(), r.f());
+    (
+        base,
+        coat,
+        rough,
+        dir_for(r, kind),
+        r.dir(),
+        r.f(),
+        u_for(r, kind),
+    )
+}
+
+/// The glTF coated non-metal's opaque part (the coat's albedo tables, the
+/// coat and base lobes, their mixture) in lanes: eval and pdf are the
+/// scalar bits in every lane, samples the scalar ones within the
+/// polynomial sine's error; a lane whose smooth coat picks its mirror (a
+/// delta, the scalar code's alone) is not valid in lanes. Lanes with NaN
+/// inputs and masked-off lanes of garbage leave the others' bits alone.
+#[test]
+fn coated_lanes_are_the_scalar_bsdf() {
+    let mut r = Rand(53);
+    let inputs: Vec<[Ct; 8]> = (0..BATCHES)
+        .map(|b| std::array::from_fn(|i| coated_case(&mut r, special(b, i), (b + i) % 7 == 3)))
+        .collect();
+    let run = |lv: SimdLevel, l: [Ct; 8]| {
+        simd_at!(lv, fn(l: [Ct; 8]) -> ([Vec3; 8], [f32; 8], [Option<BsdfSample>; 8]) {
+            ct_all(l)
+        }(l))
+    };
+    let at = |b: usize, i: usize| inputs[b][i];
+    each_level(
+        at,
+        |lv, l| run(lv, l).0,
+        |(base, coat, rough, wo, wi, _, _)| coated::coated_eval(base, &coat, &rough, wo, wi),
+        |a, b| same3(*a, *b),
+        "coated eval",
+    );
+    each_level(
+        at,
+        |lv, l| run(lv, l).1,
+        |(base, coat, rough, wo, wi, _, _)| coated::coated_pdf(base, &coat, &rough, wo, wi),
+        |a, b| same(*a, *b),
+        "coated pdf",
+    );
+    each_level(
+        at,
+        |lv, l| run(lv, l).2,
+        |(base, coat, rough, wo, _, uc, u)| coated::coated_sample(base, &coat, &rough, wo, uc, u),
+        |a, b| match b {
+            Some(s) if s.delta => a.is_none(),
+            _ => samples_agree(a, b, SIN_TOL),
+        },
+        "coated sample",
+    );
+    // The smooth coats' mirrors were in the batches, and most samples valid.
+    let (mut delta, mut valid) = (0, 0);
+    for l in &inputs {
+        for x in l {
+            match coated::coated_sample(x.0, &x.1, &x.2, x.3, x.5, x.6) {
+                Some(s) if s.delta => delta += 1,
+                Some(_) => valid += 1,
+                None => {}
+            }
+        }
+    }
+    assert!(
+        delta > 30 && valid > 1500,
+        "{delta} mirrors, {valid} rough samples"
+    );
+    // Masked-off lanes of garbage: the live lanes' bits are unchanged.
+    for level in SimdLevel::available() {
+        for l in inputs.iter().take(100) {
+            let mut junk = *l;
+            for x in &mut junk[5..] {
+                x.0 = Vec3::splat(f32::NAN);
+                x.1.eta = f32::INFINITY;
+                x.3 = Vec3::new(f32::NAN, f32::INFINITY, -0.0);
+                x.6 = Vec2::new(f32::NAN, 1e30);
+            }
+            let (a, b) = (run(level, *l), run(level, junk));
+            for i in 0..5 {
+                assert!(same3(a.0[i], b.0[i]) && same(a.1[i], b.1[i]), "lane {i}");
+                assert_eq!(format!("{:?}", a.2[i]), format!("{:?}", b.2[i]), "lane {i}");
+            }
+        }
     }
 }
 

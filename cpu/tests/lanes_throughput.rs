@@ -7,6 +7,7 @@
 //! call per lane, then the lane-generic ones on [`F32x8`] at each SIMD
 //! level this CPU has, interleaved round by round so a change of load falls
 //! on all alike.
+//! The glTF coated non-metal: the coat at wo, eval, pdf and a sample.
 //! The sampler: a bounce's eight Sobol numbers for 2^16 paths, one call
 //! per path against eight paths per call. Speeds are printed, never
 //! asserted; what is asserted is that every variant gives the same
@@ -15,9 +16,10 @@
 use std::time::Instant;
 
 use glam::{Vec2, Vec3};
+use glint_cpu::bsdf::coated::{self, Coat, CoatParams};
 use glint_cpu::bsdf::conductor::{self, RoughConductor};
 use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse};
-use glint_cpu::lanes::{F32x8, Lane, SimdLevel, U32x8, ULane, V2, V3};
+use glint_cpu::lanes::{F32x8, Lane, Mask8, SimdLevel, U32x8, ULane, V2, V3};
 use glint_cpu::simd_at;
 
 const N: usize = 1 << 16;
@@ -214,25 +216,97 @@ fn sampler_lanes_throughput() {
 #[ignore = "benchmark: cargo test --release -p glint-cpu --test lanes_throughput -- --ignored --nocapture --test-threads 1"]
 fn bsdf_lanes_throughput() {
     let inp = inputs();
+    compare("M BSDF calls/s", 6, || scalar(&inp), |l| wide_at(l, &inp));
+}
+
+/// The glTF coated non-metal's opaque part (rough coat, IOR 1.5): the coat
+/// at wo, eval, pdf and a sample per (wo, wi, u), scalar against lanes.
+#[test]
+#[ignore = "benchmark: cargo test --release -p glint-cpu --test lanes_throughput -- --ignored --nocapture --test-threads 1"]
+fn coated_lanes_throughput() {
+    let inp = inputs();
+    compare(
+        "M coated (at wo, eval, pdf, sample)/s",
+        1,
+        || coated_scalar(&inp),
+        |l| simd_at!(l, fn(inp: &Inputs) -> usize { coated_wide(inp) }(&inp)),
+    );
+}
+
+const BASE: Vec3 = Vec3::new(0.8, 0.5, 0.3);
+
+fn coated_scalar(inp: &Inputs) -> usize {
+    let (coat, r) = (CoatParams::GLTF_DEFAULT, inp.c.roughness);
+    let (mut n, mut acc) = (0, 0.0f32);
+    for i in 0..N {
+        let (wo, wi, u) = (inp.wo[i], inp.wi[i], inp.u[i]);
+        let w = coated::coat_at_wo(BASE, &coat, &r, wo);
+        acc += coated::coated_eval_at(BASE, &coat, &r, &w, wo, wi).y
+            + coated::coated_pdf_at(&coat, &r, &w, wo, wi);
+        if let Some(s) = coated::coated_sample_at(BASE, &coat, &r, &w, wo, inp.u[(i + 1) % N].x, u)
+        {
+            n += 1;
+            acc += s.weight.x + s.pdf;
+        }
+    }
+    std::hint::black_box(acc);
+    n
+}
+
+#[inline(always)]
+fn coated_wide(inp: &Inputs) -> usize {
+    let one = Coat::of(BASE, &CoatParams::GLTF_DEFAULT, &inp.c.roughness);
+    let c = Coat {
+        base: V3::splat(one.base.into()),
+        specular: V3::splat(one.specular.into()),
+        eta: F32x8::splat(one.eta),
+        ax: F32x8::splat(one.ax),
+        ay: F32x8::splat(one.ay),
+        smooth: Mask8::first(0),
+    };
+    let (mut n, mut acc) = (0, F32x8::splat(0.0));
+    for i in (0..N).step_by(8) {
+        let (wo, wi) = (pack3(&inp.wo[i..i + 8]), pack3(&inp.wi[i..i + 8]));
+        let uc = F32x8(std::array::from_fn(|k| inp.u[(i + k + 1) % N].x));
+        let w = coated::lanes::at_wo(&c, wo.z.abs());
+        acc = acc + coated::lanes::opaque_eval(&c, &w, wo, wi).y;
+        acc = acc + coated::lanes::opaque_pdf(&c, &w, wo, wi);
+        let s = coated::lanes::opaque_sample(&c, &w, wo, uc, pack2(&inp.u[i..i + 8]));
+        acc = acc + s.weight.x + s.pdf;
+        n += (0..8).filter(|&k| s.valid.test(k)).count();
+    }
+    std::hint::black_box(acc);
+    n
+}
+
+/// Time `scalar` against `wide_at` at every SIMD level (each must give the
+/// same count), interleaved over 20 rounds, and print calls per second
+/// (`per_item` calls for each of the N inputs).
+fn compare(
+    unit: &str,
+    per_item: usize,
+    scalar: impl Fn() -> usize,
+    wide_at: impl Fn(SimdLevel) -> usize,
+) {
     let levels = SimdLevel::available();
-    let reference = scalar(&inp);
+    let reference = scalar();
     for l in &levels {
-        assert_eq!(wide_at(*l, &inp), reference, "{l:?}");
+        assert_eq!(wide_at(*l), reference, "{l:?}");
     }
     let rounds = 20;
     let mut secs = vec![0.0f64; 1 + levels.len()];
     for _ in 0..rounds {
         let t = Instant::now();
-        std::hint::black_box(scalar(std::hint::black_box(&inp)));
+        std::hint::black_box(scalar());
         secs[0] += t.elapsed().as_secs_f64();
         for (k, l) in levels.iter().enumerate() {
             let t = Instant::now();
-            std::hint::black_box(wide_at(*l, std::hint::black_box(&inp)));
+            std::hint::black_box(wide_at(*l));
             secs[k + 1] += t.elapsed().as_secs_f64();
         }
     }
-    let calls = (rounds * N * 6) as f64;
-    println!("| variant | M BSDF calls/s | over scalar |\n|---|---:|---:|");
+    let calls = (rounds * N * per_item) as f64;
+    println!("| variant | {unit} | over scalar |\n|---|---:|---:|");
     println!("| scalar | {:.1} | 1.00 |", calls / secs[0] / 1e6);
     for (k, l) in levels.iter().enumerate() {
         println!(

@@ -43,13 +43,11 @@ use glam::{Vec2, Vec3};
 
 use super::conductor::{rough_alphas, two_sided};
 use super::fresnel::fresnel_dielectric;
-use super::microfacet::{
-    MIN_ALPHA, ggx_d, ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, ggx_visibility,
-    reflect_dir,
-};
+use super::microfacet::{MIN_ALPHA, ggx_g1, ggx_g2, ggx_sample_visible, reflect_dir};
 use super::thinwall::{thinwall_eval, thinwall_pdf, thinwall_sample};
 use super::warp::square_to_cosine_hemisphere;
 use super::{BsdfSample, Roughness};
+use crate::lanes::{Lane, V3};
 
 /// The coat of a [`super::Bsdf::Coated`] non-metal.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -337,51 +335,29 @@ pub fn coat_at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3) -> Coa
 }
 
 fn at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> CoatAtWo {
-    let smooth = r.is_smooth();
-    let (ax, ay) = rough_alphas(r);
-    let alpha = (ax * ay).sqrt();
-    let eo = coat.specular * coat_albedo(mu_o, alpha, coat.eta, smooth);
-    let e_avg = coat.specular * coat_albedo_avg(alpha, coat.eta, smooth);
-    let spec = mean(eo);
-    let diff = mean(base * (Vec3::ONE - eo));
-    let total = spec + diff;
-    let (p_coat, p_base) = if total > 0.0 {
-        (
-            (spec / total).clamp(0.0, 1.0),
-            (diff / total).clamp(0.0, 1.0),
-        )
-    } else {
-        (0.5, 0.5)
-    };
+    let a = lanes::at_wo(&Coat::of(base, coat, r), mu_o);
     CoatAtWo {
-        alpha,
-        smooth,
-        eo,
-        e_avg,
-        p_coat,
-        p_base,
+        alpha: a.alpha,
+        smooth: r.is_smooth(),
+        eo: a.eo.into(),
+        e_avg: a.e_avg.into(),
+        p_coat: a.p_coat,
+        p_base: a.p_base,
     }
 }
 
-fn mean(v: Vec3) -> f32 {
-    (v.x + v.y + v.z) * (1.0 / 3.0)
-}
-
-/// The albedo-scaled base term for wo, wi both above the surface.
-fn base_term(base: Vec3, coat: &CoatParams, w: &CoatAtWo, mu_i: f32) -> Vec3 {
-    let ei = coat.specular * coat_albedo(mu_i, w.alpha, coat.eta, w.smooth);
-    let denom = Vec3::ONE - w.e_avg;
-    if !(denom.min_element() > 0.0) {
-        return Vec3::ZERO;
+impl CoatAtWo {
+    /// The one lane of [`lanes::AtWo`].
+    #[inline(always)]
+    fn lane(&self) -> lanes::AtWo<f32> {
+        lanes::AtWo {
+            alpha: self.alpha,
+            eo: self.eo.into(),
+            e_avg: self.e_avg.into(),
+            p_coat: self.p_coat,
+            p_base: self.p_base,
+        }
     }
-    base * (Vec3::ONE - w.eo).max(Vec3::ZERO) * (Vec3::ONE - ei).max(Vec3::ZERO) * FRAC_1_PI / denom
-}
-
-/// s f_coat for wo, wi above the surface and their half vector wm (rough).
-fn coat_lobe(coat: &CoatParams, r: &Roughness, wo: Vec3, wi: Vec3, wm: Vec3) -> Vec3 {
-    let (ax, ay) = rough_alphas(r);
-    let f = fresnel_dielectric(wo.dot(wm), coat.eta);
-    coat.specular * (f * ggx_d(wm, ax, ay) * ggx_visibility(wo, wi, ax, ay, false))
 }
 
 /// The opaque part's f, `w` being [`coat_at_wo`] of `wo`.
@@ -393,40 +369,43 @@ fn opaque_eval(
     wo: Vec3,
     wi: Vec3,
 ) -> Vec3 {
+    // [`lanes::opaque_eval`] with its selects as branches: one path skips
+    // what the other side of a select would compute.
     let (wo, wi) = two_sided(wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return Vec3::ZERO;
     }
-    let mut f = base_term(base, coat, w, wi.z);
+    let c = Coat::of(base, coat, r);
+    let mut f: Vec3 = lanes::base_term(&c, &w.lane(), wi.z).into();
     if !w.smooth {
-        f += coat_lobe(coat, r, wo, wi, (wo + wi).normalize());
+        f += Vec3::from(lanes::coat_lobe(
+            &c,
+            wo.into(),
+            wi.into(),
+            (wo + wi).normalize().into(),
+        ));
     }
     f
 }
 
 fn opaque_pdf(r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
+    // [`lanes::opaque_pdf`] with its selects as branches. Only the
+    // roughness enters the density besides P at wo (in `w`).
     let (wo, wi) = two_sided(wo, wi);
     if wo.z <= 0.0 || wi.z <= 0.0 {
         return 0.0;
     }
-    w.p_base * wi.z * FRAC_1_PI + w.p_coat * coat_pdf_rough(r, w, wo, wi)
+    let rough = if w.smooth {
+        0.0
+    } else {
+        let c = Coat::of(Vec3::ZERO, &CoatParams::GLTF_DEFAULT, r);
+        lanes::coat_pdf_rough(&c, wo.into(), wi.into())
+    };
+    w.p_base * wi.z * FRAC_1_PI + w.p_coat * rough
 }
 
-/// The coat lobe's solid-angle density (0 for the smooth coat's delta).
-fn coat_pdf_rough(r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
-    if w.smooth {
-        return 0.0;
-    }
-    let (ax, ay) = rough_alphas(r);
-    let wm = (wo + wi).normalize();
-    let dot = wo.dot(wm);
-    if dot <= 0.0 {
-        return 0.0;
-    }
-    ggx_pdf_visible(wo, wm, ax, ay) / (4.0 * dot)
-}
-
-/// `uc` picks the lobe (coat with probability P), `u` samples it.
+/// `uc` picks the lobe (coat with probability P), `u` samples it: the
+/// smooth coat's mirror here, the rough lobes' math in [`lanes`].
 fn opaque_sample(
     base: Vec3,
     coat: &CoatParams,
@@ -441,58 +420,41 @@ fn opaque_sample(
     }
     let flip = wo.z < 0.0;
     let wo = Vec3::new(wo.x, wo.y, wo.z.abs());
-    let (mut wi, f, pdf);
-    if uc < w.p_coat {
-        if w.smooth {
-            // The mirror lobe, s F delta / |cos|, picked with probability P:
-            // throughput s F / P, discrete probability P.
-            let f = coat.specular * fresnel_dielectric(wo.z, coat.eta);
-            return Some(BsdfSample {
-                wi: Vec3::new(-wo.x, -wo.y, if flip { -wo.z } else { wo.z }),
-                weight: f / w.p_coat,
-                pdf: w.p_coat,
-                delta: true,
-                eta: 1.0,
-            });
-        }
-        let (ax, ay) = rough_alphas(r);
-        let wm = ggx_sample_visible(wo, ax, ay, u);
-        let dot = wo.dot(wm);
-        wi = reflect_dir(wo, wm);
+    if uc < w.p_coat && w.smooth {
+        // The mirror lobe, s F delta / |cos|, picked with probability P:
+        // throughput s F / P, discrete probability P.
+        let f = coat.specular * fresnel_dielectric(wo.z, coat.eta);
+        return Some(BsdfSample {
+            wi: Vec3::new(-wo.x, -wo.y, if flip { -wo.z } else { wo.z }),
+            weight: f / w.p_coat,
+            pdf: w.p_coat,
+            delta: true,
+            eta: 1.0,
+        });
+    }
+    // The lanes' lobes with their selects as branches: a direction that
+    // is not valid returns before its values are computed.
+    let (c, a, wo) = (Coat::of(base, coat, r), w.lane(), V3::from(wo));
+    let (wi, (f, pdf)) = if uc < w.p_coat {
+        let (wm, dot, wi) = lanes::coat_lobe_dir(&c, wo, u.into());
         if wi.z <= 0.0 || dot <= 0.0 {
             return None;
         }
-        // The coat's f and pdf from the sampled normal (see conductor.rs:
-        // wo + wi is ill-conditioned for near-specular grazing pairs).
-        let pdf_c = ggx_pdf_visible(wo, wm, ax, ay) / (4.0 * dot);
-        pdf = w.p_coat * pdf_c + w.p_base * wi.z * FRAC_1_PI;
-        f = coat_lobe(coat, r, wo, wi, wm) + base_term(base, coat, w, wi.z);
+        (wi, lanes::coat_lobe_values(&c, &a, wo, wm, dot, wi))
     } else {
-        wi = square_to_cosine_hemisphere(u);
+        let wi: V3<f32> = square_to_cosine_hemisphere(u).into();
         if wi.z <= 0.0 {
             return None;
         }
-        pdf = w.p_coat * coat_pdf_rough(r, w, wo, wi) + w.p_base * wi.z * FRAC_1_PI;
-        let mut fv = base_term(base, coat, w, wi.z);
-        if !w.smooth {
-            fv += coat_lobe(coat, r, wo, wi, (wo + wi).normalize());
-        }
-        f = fv;
-    }
-    if !(pdf > 0.0) || !pdf.is_finite() {
-        return None;
-    }
-    let weight = f * (wi.z / pdf);
-    if flip {
-        wi.z = -wi.z;
-    }
-    Some(BsdfSample {
+        (wi, lanes::base_lobe_values(&c, &a, wo, wi))
+    };
+    let lobe = lanes::Lobe {
+        valid: true,
         wi,
-        weight,
+        f,
         pdf,
-        delta: false,
-        eta: 1.0,
-    })
+    };
+    lanes::finish(lobe, flip).single()
 }
 
 /// The non-metal: the opaque coat over the base with probability 1 - t,
@@ -609,6 +571,283 @@ pub fn coated_albedo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) ->
     let (ax, ay) = rough_alphas(r);
     let e = coat.specular * coat_albedo(mu_o, (ax * ay).sqrt(), coat.eta, r.is_smooth());
     e + base * (Vec3::ONE - e)
+}
+
+/// The coated non-metal's parameters, one per lane: its opaque part (no
+/// transmission, no clear coat), which [`lanes`] writes once for one lane
+/// (the scalar functions above) and for eight.
+#[derive(Clone, Copy, Debug)]
+pub struct Coat<L: Lane> {
+    pub base: V3<L>,
+    /// `KHR_materials_specular`'s scale.
+    pub specular: V3<L>,
+    pub eta: L,
+    /// The clamped alphas ([`rough_alphas`]).
+    pub ax: L,
+    pub ay: L,
+    /// Below the smooth threshold: the coat is a mirror (a delta lobe).
+    pub smooth: L::Mask,
+}
+
+impl Coat<f32> {
+    #[inline(always)]
+    pub fn of(base: Vec3, coat: &CoatParams, r: &Roughness) -> Self {
+        let (ax, ay) = rough_alphas(r);
+        Self {
+            base: base.into(),
+            specular: coat.specular.into(),
+            eta: coat.eta,
+            ax,
+            ay,
+            smooth: r.is_smooth(),
+        }
+    }
+}
+
+/// The coated non-metal's opaque part over a lane type (see
+/// `crate::lanes`): the coat at wo (its albedo tables, one lookup per
+/// lane), f, the density and the two rough lobes' samples. A branch of the
+/// model is a select of both sides; the smooth coat's mirror (a delta) is
+/// [`opaque_sample`]'s own, so a lane with a smooth coat picking its coat
+/// lobe is not sampled here.
+pub mod lanes {
+    use std::f32::consts::FRAC_1_PI;
+
+    use super::Coat;
+    use crate::bsdf::LaneSample;
+    use crate::bsdf::conductor::lanes::two_sided;
+    use crate::bsdf::fresnel::lanes::fresnel_dielectric;
+    use crate::bsdf::microfacet::lanes::{
+        ggx_d, ggx_pdf_visible, ggx_sample_visible, ggx_visibility, reflect_dir,
+    };
+    use crate::bsdf::warp::lanes::square_to_cosine_hemisphere;
+    use crate::lanes::{Lane, V2, V3};
+
+    /// What f, the density and the samples share at wo ([`super::CoatAtWo`]).
+    #[derive(Clone, Copy, Debug)]
+    pub struct AtWo<L: Lane> {
+        pub alpha: L,
+        pub eo: V3<L>,
+        pub e_avg: V3<L>,
+        pub p_coat: L,
+        pub p_base: L,
+    }
+
+    #[inline(always)]
+    fn splat3<L: Lane>(v: f32) -> V3<L> {
+        V3::new(L::splat(v), L::splat(v), L::splat(v))
+    }
+
+    #[inline(always)]
+    fn mean<L: Lane>(v: V3<L>) -> L {
+        (v.x + v.y + v.z) * L::splat(1.0 / 3.0)
+    }
+
+    #[inline(always)]
+    fn max0<L: Lane>(v: V3<L>) -> V3<L> {
+        V3::new(v.x.max(L::zero()), v.y.max(L::zero()), v.z.max(L::zero()))
+    }
+
+    /// E(mu) of each lane's coat (a table lookup per lane).
+    #[inline(always)]
+    fn albedo<L: Lane>(c: &Coat<L>, mu: L, alpha: L) -> L {
+        L::from_fn(|i| {
+            super::coat_albedo(
+                mu.lane(i),
+                alpha.lane(i),
+                c.eta.lane(i),
+                L::mask_lane(c.smooth, i),
+            )
+        })
+    }
+
+    /// The coat at mu_o = |wo.z|.
+    #[inline(always)]
+    pub fn at_wo<L: Lane>(c: &Coat<L>, mu_o: L) -> AtWo<L> {
+        let alpha = (c.ax * c.ay).sqrt();
+        let eo = c.specular.scale(albedo(c, mu_o, alpha));
+        let avg = L::from_fn(|i| {
+            super::coat_albedo_avg(alpha.lane(i), c.eta.lane(i), L::mask_lane(c.smooth, i))
+        });
+        let e_avg = c.specular.scale(avg);
+        let spec = mean(eo);
+        let diff = mean(c.base * (splat3(1.0) - eo));
+        let total = spec + diff;
+        let some = total.gt(L::zero());
+        let half = L::splat(0.5);
+        AtWo {
+            alpha,
+            eo,
+            e_avg,
+            p_coat: L::select(some, (spec / total).clamp(0.0, 1.0), half),
+            p_base: L::select(some, (diff / total).clamp(0.0, 1.0), half),
+        }
+    }
+
+    /// The albedo-scaled base term for wo, wi both above the surface.
+    #[inline(always)]
+    pub fn base_term<L: Lane>(c: &Coat<L>, w: &AtWo<L>, mu_i: L) -> V3<L> {
+        let ei = c.specular.scale(albedo(c, mu_i, w.alpha));
+        let denom = splat3(1.0) - w.e_avg;
+        // glam's min_element: x.min(y.min(z)).
+        let ok = denom.x.min(denom.y.min(denom.z)).gt(L::zero());
+        let f =
+            (c.base * max0(splat3(1.0) - w.eo) * max0(splat3(1.0) - ei)).scale(L::splat(FRAC_1_PI));
+        let f = V3::new(f.x / denom.x, f.y / denom.y, f.z / denom.z);
+        V3::select(ok, f, splat3(0.0))
+    }
+
+    /// s f_coat for wo, wi above the surface and their half vector wm.
+    #[inline(always)]
+    pub fn coat_lobe<L: Lane>(c: &Coat<L>, wo: V3<L>, wi: V3<L>, wm: V3<L>) -> V3<L> {
+        let f = fresnel_dielectric(wo.dot(wm), c.eta);
+        c.specular
+            .scale(f * ggx_d(wm, c.ax, c.ay) * ggx_visibility(wo, wi, c.ax, c.ay, false))
+    }
+
+    /// f(wo, wi).
+    #[inline(always)]
+    pub fn opaque_eval<L: Lane>(c: &Coat<L>, w: &AtWo<L>, wo: V3<L>, wi: V3<L>) -> V3<L> {
+        let (wo, wi) = two_sided(wo, wi);
+        let below = wo.z.le(L::zero()) | wi.z.le(L::zero());
+        let f = base_term(c, w, wi.z);
+        let rough = f + coat_lobe(c, wo, wi, (wo + wi).normalize());
+        V3::select(below, splat3(0.0), V3::select(c.smooth, f, rough))
+    }
+
+    /// The coat lobe's solid-angle density (0 for the smooth coat's delta).
+    #[inline(always)]
+    pub fn coat_pdf_rough<L: Lane>(c: &Coat<L>, wo: V3<L>, wi: V3<L>) -> L {
+        let wm = (wo + wi).normalize();
+        let dot = wo.dot(wm);
+        let pdf = ggx_pdf_visible(wo, wm, c.ax, c.ay) / (L::splat(4.0) * dot);
+        L::select(c.smooth | dot.le(L::zero()), L::zero(), pdf)
+    }
+
+    /// The density of the opaque part's samples at wi.
+    #[inline(always)]
+    pub fn opaque_pdf<L: Lane>(c: &Coat<L>, w: &AtWo<L>, wo: V3<L>, wi: V3<L>) -> L {
+        let (wo, wi) = two_sided(wo, wi);
+        let below = wo.z.le(L::zero()) | wi.z.le(L::zero());
+        let pdf = w.p_base * wi.z * L::splat(FRAC_1_PI) + w.p_coat * coat_pdf_rough(c, wo, wi);
+        L::select(below, L::zero(), pdf)
+    }
+
+    /// A lobe's sample before [`finish`]: where it is valid, wi, the
+    /// mixture's f and density at wi.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Lobe<L: Lane> {
+        pub valid: L::Mask,
+        pub wi: V3<L>,
+        pub f: V3<L>,
+        pub pdf: L,
+    }
+
+    /// The rough coat's visible normals (wo above the surface): f and pdf
+    /// from the sampled normal (see conductor.rs: wo + wi is
+    /// ill-conditioned for near-specular grazing pairs).
+    #[inline(always)]
+    pub fn coat_lobe_sample<L: Lane>(c: &Coat<L>, w: &AtWo<L>, wo: V3<L>, u: V2<L>) -> Lobe<L> {
+        let (wm, dot, wi) = coat_lobe_dir(c, wo, u);
+        let (f, pdf) = coat_lobe_values(c, w, wo, wm, dot, wi);
+        Lobe {
+            valid: wi.z.gt(L::zero()) & dot.gt(L::zero()),
+            wi,
+            f,
+            pdf,
+        }
+    }
+
+    /// [`coat_lobe_sample`]'s direction: the sampled normal wm, wo . wm
+    /// and wi (valid where wi.z > 0 and wo . wm > 0).
+    #[inline(always)]
+    pub fn coat_lobe_dir<L: Lane>(c: &Coat<L>, wo: V3<L>, u: V2<L>) -> (V3<L>, L, V3<L>) {
+        let wm = ggx_sample_visible(wo, c.ax, c.ay, u);
+        (wm, wo.dot(wm), reflect_dir(wo, wm))
+    }
+
+    /// [`coat_lobe_sample`]'s f and density at its direction.
+    #[inline(always)]
+    pub fn coat_lobe_values<L: Lane>(
+        c: &Coat<L>,
+        w: &AtWo<L>,
+        wo: V3<L>,
+        wm: V3<L>,
+        dot: L,
+        wi: V3<L>,
+    ) -> (V3<L>, L) {
+        let pdf_c = ggx_pdf_visible(wo, wm, c.ax, c.ay) / (L::splat(4.0) * dot);
+        (
+            coat_lobe(c, wo, wi, wm) + base_term(c, w, wi.z),
+            w.p_coat * pdf_c + w.p_base * wi.z * L::splat(FRAC_1_PI),
+        )
+    }
+
+    /// The base's cosine lobe (wo above the surface).
+    #[inline(always)]
+    pub fn base_lobe_sample<L: Lane>(c: &Coat<L>, w: &AtWo<L>, wo: V3<L>, u: V2<L>) -> Lobe<L> {
+        let wi = square_to_cosine_hemisphere(u);
+        let (f, pdf) = base_lobe_values(c, w, wo, wi);
+        Lobe {
+            valid: wi.z.gt(L::zero()),
+            wi,
+            f,
+            pdf,
+        }
+    }
+
+    /// [`base_lobe_sample`]'s f and density at wi.
+    #[inline(always)]
+    pub fn base_lobe_values<L: Lane>(c: &Coat<L>, w: &AtWo<L>, wo: V3<L>, wi: V3<L>) -> (V3<L>, L) {
+        let f = base_term(c, w, wi.z);
+        let rough = f + coat_lobe(c, wo, wi, (wo + wi).normalize());
+        (
+            V3::select(c.smooth, f, rough),
+            w.p_coat * coat_pdf_rough(c, wo, wi) + w.p_base * wi.z * L::splat(FRAC_1_PI),
+        )
+    }
+
+    /// The sample of a lobe: its throughput, valid where the density is
+    /// positive and finite, wi turned back below where wo was (`flip`).
+    #[inline(always)]
+    pub fn finish<L: Lane>(l: Lobe<L>, flip: L::Mask) -> LaneSample<L> {
+        let finite = l.pdf.abs().lt(L::splat(f32::INFINITY));
+        let weight = l.f.scale(l.wi.z / l.pdf);
+        let wi = V3::new(l.wi.x, l.wi.y, L::select(flip, -l.wi.z, l.wi.z));
+        LaneSample {
+            valid: l.valid & l.pdf.gt(L::zero()) & finite,
+            wi,
+            weight,
+            pdf: l.pdf,
+            eta: L::one(),
+            delta: false,
+        }
+    }
+
+    /// The opaque part's sample where every lane's pick is a rough lobe:
+    /// `uc` picks the coat's visible normals (uc < P) or the base's cosine
+    /// lobe. A lane whose coat is smooth and picks it, or whose wo is in
+    /// the plane, is not valid ([`super::opaque_sample`] has the mirror).
+    #[inline(always)]
+    pub fn opaque_sample<L: Lane>(
+        c: &Coat<L>,
+        w: &AtWo<L>,
+        wo: V3<L>,
+        uc: L,
+        u: V2<L>,
+    ) -> LaneSample<L> {
+        let flip = wo.z.lt(L::zero());
+        let up = V3::new(wo.x, wo.y, wo.z.abs());
+        let pick = uc.lt(w.p_coat);
+        let (a, b) = (coat_lobe_sample(c, w, up, u), base_lobe_sample(c, w, up, u));
+        let lobe = Lobe {
+            valid: L::select_mask(pick, a.valid & !c.smooth, b.valid) & !wo.z.eq(L::zero()),
+            wi: V3::select(pick, a.wi, b.wi),
+            f: V3::select(pick, a.f, b.f),
+            pdf: L::select(pick, a.pdf, b.pdf),
+        };
+        finish(lobe, flip)
+    }
 }
 
 #[cfg(test)]
