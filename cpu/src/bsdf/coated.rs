@@ -306,26 +306,30 @@ pub fn coat_albedo_reference(mu: f32, alpha: f32, eta: f32, n: usize) -> f64 {
 /// that a path vertex looks its tables up once ([`super::BsdfAt`]).
 #[derive(Clone, Copy, Debug)]
 pub struct CoatAtWo {
-    alpha: f32,
+    /// The one lane of what [`lanes::at_wo`] finds.
+    at: lanes::AtWo<f32>,
     smooth: bool,
-    eo: Vec3,
-    e_avg: Vec3,
-    p_coat: f32,
-    /// 1 - p_coat, computed without the cancellation (at grazing angles
-    /// the coat takes nearly everything and 1 - p_coat would lose digits).
-    p_base: f32,
 }
 
 impl CoatAtWo {
     /// A coat no one reads: a pure metal's, in the metallic blend
     /// (`metallic::metallic_coat_at_wo`), whose non-metal has weight zero.
-    pub const UNREAD: Self = Self {
-        alpha: 0.0,
-        smooth: false,
-        eo: Vec3::ZERO,
-        e_avg: Vec3::ZERO,
-        p_coat: 0.0,
-        p_base: 0.0,
+    pub const UNREAD: Self = {
+        let zero = V3 {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+        };
+        Self {
+            at: lanes::AtWo {
+                alpha: 0.0,
+                eo: zero,
+                e_avg: zero,
+                p_coat: 0.0,
+                p_base: 0.0,
+            },
+            smooth: false,
+        }
     };
 }
 
@@ -335,28 +339,9 @@ pub fn coat_at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, wo: Vec3) -> Coa
 }
 
 fn at_wo(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> CoatAtWo {
-    let a = lanes::at_wo(&Coat::of(base, coat, r), mu_o);
     CoatAtWo {
-        alpha: a.alpha,
+        at: lanes::at_wo(&Coat::of(base, coat, r), mu_o),
         smooth: r.is_smooth(),
-        eo: a.eo.into(),
-        e_avg: a.e_avg.into(),
-        p_coat: a.p_coat,
-        p_base: a.p_base,
-    }
-}
-
-impl CoatAtWo {
-    /// The one lane of [`lanes::AtWo`].
-    #[inline(always)]
-    fn lane(&self) -> lanes::AtWo<f32> {
-        lanes::AtWo {
-            alpha: self.alpha,
-            eo: self.eo.into(),
-            e_avg: self.e_avg.into(),
-            p_coat: self.p_coat,
-            p_base: self.p_base,
-        }
     }
 }
 
@@ -376,7 +361,7 @@ fn opaque_eval(
         return Vec3::ZERO;
     }
     let c = Coat::of(base, coat, r);
-    let mut f: Vec3 = lanes::base_term(&c, &w.lane(), wi.z).into();
+    let mut f: Vec3 = lanes::base_term(&c, &w.at, wi.z).into();
     if !w.smooth {
         f += Vec3::from(lanes::coat_lobe(
             &c,
@@ -401,7 +386,7 @@ fn opaque_pdf(r: &Roughness, w: &CoatAtWo, wo: Vec3, wi: Vec3) -> f32 {
         let c = Coat::of(Vec3::ZERO, &CoatParams::GLTF_DEFAULT, r);
         lanes::coat_pdf_rough(&c, wo.into(), wi.into())
     };
-    w.p_base * wi.z * FRAC_1_PI + w.p_coat * rough
+    w.at.p_base * wi.z * FRAC_1_PI + w.at.p_coat * rough
 }
 
 /// `uc` picks the lobe (coat with probability P), `u` samples it: the
@@ -420,33 +405,33 @@ fn opaque_sample(
     }
     let flip = wo.z < 0.0;
     let wo = Vec3::new(wo.x, wo.y, wo.z.abs());
-    if uc < w.p_coat && w.smooth {
+    if uc < w.at.p_coat && w.smooth {
         // The mirror lobe, s F delta / |cos|, picked with probability P:
         // throughput s F / P, discrete probability P.
         let f = coat.specular * fresnel_dielectric(wo.z, coat.eta);
         return Some(BsdfSample {
             wi: Vec3::new(-wo.x, -wo.y, if flip { -wo.z } else { wo.z }),
-            weight: f / w.p_coat,
-            pdf: w.p_coat,
+            weight: f / w.at.p_coat,
+            pdf: w.at.p_coat,
             delta: true,
             eta: 1.0,
         });
     }
     // The lanes' lobes with their selects as branches: a direction that
     // is not valid returns before its values are computed.
-    let (c, a, wo) = (Coat::of(base, coat, r), w.lane(), V3::from(wo));
-    let (wi, (f, pdf)) = if uc < w.p_coat {
+    let (c, a, wo) = (Coat::of(base, coat, r), &w.at, V3::from(wo));
+    let (wi, (f, pdf)) = if uc < a.p_coat {
         let (wm, dot, wi) = lanes::coat_lobe_dir(&c, wo, u.into());
         if wi.z <= 0.0 || dot <= 0.0 {
             return None;
         }
-        (wi, lanes::coat_lobe_values(&c, &a, wo, wm, dot, wi))
+        (wi, lanes::coat_lobe_values(&c, a, wo, wm, dot, wi))
     } else {
         let wi: V3<f32> = square_to_cosine_hemisphere(u).into();
         if wi.z <= 0.0 {
             return None;
         }
-        (wi, lanes::base_lobe_values(&c, &a, wo, wi))
+        (wi, lanes::base_lobe_values(&c, a, wo, wi))
     };
     let lobe = lanes::Lobe {
         valid: true,
@@ -562,7 +547,7 @@ use crate::abi::ONE_MINUS_EPS;
 
 /// The coat's selection probability at wo (for tests and the blend).
 pub fn coated_coat_probability(base: Vec3, coat: &CoatParams, r: &Roughness, mu_o: f32) -> f32 {
-    at_wo(base, coat, r, mu_o.abs()).p_coat
+    at_wo(base, coat, r, mu_o.abs()).at.p_coat
 }
 
 /// The glTF non-metal's directional albedo at mu_o as the model promises
@@ -630,6 +615,8 @@ pub mod lanes {
         pub eo: V3<L>,
         pub e_avg: V3<L>,
         pub p_coat: L,
+        /// 1 - p_coat, computed without the cancellation (at grazing angles
+        /// the coat takes nearly everything and 1 - p_coat would lose digits).
         pub p_base: L,
     }
 
