@@ -71,6 +71,14 @@ pub trait Lane:
     fn from_fn(f: impl FnMut(usize) -> f32) -> Self;
     /// Lane `i` of a mask.
     fn mask_lane(m: Self::Mask, i: usize) -> bool;
+    /// Whether `m` holds in every lane.
+    fn all(m: Self::Mask) -> bool;
+    /// Whether `m` holds in no lane.
+    fn none(m: Self::Mask) -> bool;
+    /// `(v as i32) as f32` per lane: the integer part of a value inside
+    /// i32's range (0 for NaN), as a truncating conversion gives it, so it
+    /// rounds as the scalar code's `y as usize` does.
+    fn trunc_i32(self) -> Self;
     /// `t` in the lanes where `m` holds, else `f`, for masks.
     #[inline(always)]
     fn select_mask(m: Self::Mask, t: Self::Mask, f: Self::Mask) -> Self::Mask {
@@ -152,6 +160,18 @@ impl Lane for f32 {
     #[inline(always)]
     fn mask_lane(m: bool, _: usize) -> bool {
         m
+    }
+    #[inline(always)]
+    fn all(m: bool) -> bool {
+        m
+    }
+    #[inline(always)]
+    fn none(m: bool) -> bool {
+        !m
+    }
+    #[inline(always)]
+    fn trunc_i32(self) -> Self {
+        self as i32 as f32
     }
 }
 
@@ -336,6 +356,18 @@ impl Lane for F32x8 {
     #[inline(always)]
     fn mask_lane(m: Mask8, i: usize) -> bool {
         m.test(i)
+    }
+    #[inline(always)]
+    fn all(m: Mask8) -> bool {
+        m.0.iter().fold(!0, |a, &b| a & b) != 0
+    }
+    #[inline(always)]
+    fn none(m: Mask8) -> bool {
+        m.0.iter().fold(0, |a, &b| a | b) == 0
+    }
+    #[inline(always)]
+    fn trunc_i32(self) -> Self {
+        Self(lanewise!(|a: f32| a as i32 as f32; self))
     }
 }
 

@@ -537,7 +537,17 @@ fn coated_case(r: &mut Rand, kind: usize, smooth: bool) -> Ct {
 fn coated_lanes_are_the_scalar_bsdf() {
     let mut r = Rand(53);
     let inputs: Vec<[Ct; 8]> = (0..BATCHES)
-        .map(|b| std::array::from_fn(|i| coated_case(&mut r, special(b, i), (b + i) % 7 == 3)))
+        .map(|b| {
+            // Batches all rough, all smooth and mixed: the lookups' three ways.
+            std::array::from_fn(|i| {
+                let smooth = match b % 4 {
+                    0 => false,
+                    1 => true,
+                    _ => (b + i) % 7 == 3,
+                };
+                coated_case(&mut r, special(b, i), smooth)
+            })
+        })
         .collect();
     let run = |lv: SimdLevel, l: [Ct; 8]| {
         simd_at!(lv, fn(l: [Ct; 8]) -> ([Vec3; 8], [f32; 8], [Option<BsdfSample>; 8]) {

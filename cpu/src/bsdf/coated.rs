@@ -183,6 +183,12 @@ pub fn coat_eta_coord(eta: f32) -> f32 {
     ((eta - 1.0) / (eta + 1.0)).clamp(0.0, 1.0).sqrt()
 }
 
+/// [`coat_eta_coord`] in every lane.
+#[inline(always)]
+fn coat_eta_coord_lanes<L: Lane>(eta: L) -> L {
+    ((eta - L::one()) / (eta + L::one())).clamp(0.0, 1.0).sqrt()
+}
+
 /// The eta of grid coordinate t (the inverse of [`coat_eta_coord`]).
 pub fn coat_eta_of(t: f32) -> f32 {
     let x = t * t;
@@ -191,6 +197,12 @@ pub fn coat_eta_of(t: f32) -> f32 {
 
 /// Table coordinate of mu: mu^(1/4).
 pub fn coat_mu_coord(mu: f32) -> f32 {
+    mu.clamp(0.0, 1.0).sqrt().sqrt()
+}
+
+/// [`coat_mu_coord`] in every lane.
+#[inline(always)]
+fn coat_mu_coord_lanes<L: Lane>(mu: L) -> L {
     mu.clamp(0.0, 1.0).sqrt().sqrt()
 }
 
@@ -323,6 +335,11 @@ impl CoatAtWo {
         Self {
             at: lanes::AtWo {
                 alpha: 0.0,
+                grid: lanes::Grid {
+                    row: 0.0,
+                    fa: 0.0,
+                    fe: 0.0,
+                },
                 eo: zero,
                 e_avg: zero,
                 p_coat: 0.0,
@@ -590,8 +607,8 @@ impl Coat<f32> {
 }
 
 /// The coated non-metal's opaque part over a lane type (see
-/// `crate::lanes`): the coat at wo (its albedo tables, one lookup per
-/// lane), f, the density and the two rough lobes' samples. A branch of the
+/// `crate::lanes`): the coat at wo (the tables' alpha and eta cells found
+/// there once, [`lanes::Grid`]; lane by lane only the tables' loads), f, the density and the two rough lobes' samples. A branch of the
 /// model is a select of both sides; the smooth coat's mirror (a delta) is
 /// [`opaque_sample`]'s own, so a lane with a smooth coat picking its coat
 /// lobe is not sampled here.
@@ -608,10 +625,13 @@ pub mod lanes {
     use crate::bsdf::warp::lanes::square_to_cosine_hemisphere;
     use crate::lanes::{Lane, V2, V3};
 
+    use super::{COAT_E_LEN, COAT_N_ALPHA, COAT_N_ETA, COAT_N_MU};
+
     /// What f, the density and the samples share at wo ([`super::CoatAtWo`]).
     #[derive(Clone, Copy, Debug)]
     pub struct AtWo<L: Lane> {
         pub alpha: L,
+        pub grid: Grid<L>,
         pub eo: V3<L>,
         pub e_avg: V3<L>,
         pub p_coat: L,
@@ -635,28 +655,83 @@ pub mod lanes {
         V3::new(v.x.max(L::zero()), v.y.max(L::zero()), v.z.max(L::zero()))
     }
 
-    /// E(mu) of each lane's coat (a table lookup per lane).
+    /// Where each lane's (alpha, eta) falls on the E table's grid, found
+    /// once at wo for every E(mu) of the vertex: the offset of the mu row
+    /// at the lower alpha and eta nodes (a float, exact: the table has
+    /// fewer than 2^24 entries) and the fractions towards the next nodes.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Grid<L: Lane> {
+        pub row: L,
+        pub fa: L,
+        pub fe: L,
+    }
+
+    /// [`super::cell`] in every lane: the lower node (a float) and the
+    /// fraction towards the next.
     #[inline(always)]
-    fn albedo<L: Lane>(c: &Coat<L>, mu: L, alpha: L) -> L {
-        L::from_fn(|i| {
-            super::coat_albedo(
-                mu.lane(i),
-                alpha.lane(i),
-                c.eta.lane(i),
-                L::mask_lane(c.smooth, i),
-            )
-        })
+    fn cell<L: Lane>(t: L, n: usize) -> (L, L) {
+        let y = t.clamp(0.0, 1.0) * L::splat((n - 1) as f32);
+        let i = y.trunc_i32().min(L::splat((n - 2) as f32));
+        (i, y - i)
+    }
+
+    /// [`super::trilinear`] in the E table at mu, the alpha and eta cells
+    /// being `g`'s: lane by lane only the loads.
+    #[inline(always)]
+    fn table_e<L: Lane>(g: &Grid<L>, mu: L) -> L {
+        let (i, fx) = cell(super::coat_mu_coord_lanes(mu), COAT_N_MU);
+        let t = super::coat_tables();
+        let (nx, ny) = (COAT_N_MU, COAT_N_ALPHA);
+        let at = |o: usize| L::from_fn(|l| t[g.row.lane(l) as usize + i.lane(l) as usize + o]);
+        let plane = |k: usize| {
+            let o = k * ny * nx;
+            let (a0, a1, b0, b1) = (at(o), at(o + 1), at(o + nx), at(o + nx + 1));
+            let a = a0 + (a1 - a0) * fx;
+            let b = b0 + (b1 - b0) * fx;
+            a + (b - a) * g.fa
+        };
+        let p0 = plane(0);
+        p0 + (plane(1) - p0) * g.fe
+    }
+
+    /// E(mu) of each lane's coat with s = 1 ([`super::coat_albedo`]): the
+    /// table, or the exact Fresnel term for a smooth coat.
+    #[inline(always)]
+    fn albedo<L: Lane>(c: &Coat<L>, g: &Grid<L>, mu: L) -> L {
+        if L::none(c.smooth) {
+            return table_e(g, mu);
+        }
+        let f = fresnel_dielectric(mu.clamp(0.0, 1.0), c.eta);
+        if L::all(c.smooth) {
+            return f;
+        }
+        L::select(c.smooth, f, table_e(g, mu))
     }
 
     /// The coat at mu_o = |wo.z|.
     #[inline(always)]
     pub fn at_wo<L: Lane>(c: &Coat<L>, mu_o: L) -> AtWo<L> {
         let alpha = (c.ax * c.ay).sqrt();
-        let eo = c.specular.scale(albedo(c, mu_o, alpha));
-        let avg = L::from_fn(|i| {
-            super::coat_albedo_avg(alpha.lane(i), c.eta.lane(i), L::mask_lane(c.smooth, i))
-        });
-        let e_avg = c.specular.scale(avg);
+        // The tables' alpha: a smooth coat's E_avg is the alpha = 0 row
+        // (its E is Fresnel's, no row at all).
+        let table_alpha = L::select(c.smooth, L::zero(), alpha);
+        let (j, fa) = cell(table_alpha.clamp(0.0, 1.0).sqrt(), COAT_N_ALPHA);
+        let (k, fe) = cell(super::coat_eta_coord_lanes(c.eta), COAT_N_ETA);
+        let avg_row = k * L::splat(COAT_N_ALPHA as f32) + j;
+        let grid = Grid {
+            row: avg_row * L::splat(COAT_N_MU as f32),
+            fa,
+            fe,
+        };
+        let eo = c.specular.scale(albedo(c, &grid, mu_o));
+        // [`super::bilinear`] in the E_avg table.
+        let t = &super::coat_tables()[COAT_E_LEN..];
+        let at = |o: usize| L::from_fn(|l| t[avg_row.lane(l) as usize + o]);
+        let ny = COAT_N_ALPHA;
+        let (a0, a1, b0, b1) = (at(0), at(1), at(ny), at(ny + 1));
+        let a = a0 + (a1 - a0) * fa;
+        let b = b0 + (b1 - b0) * fa;
+        let e_avg = c.specular.scale(a + (b - a) * fe);
         let spec = mean(eo);
         let diff = mean(c.base * (splat3(1.0) - eo));
         let total = spec + diff;
@@ -664,6 +739,7 @@ pub mod lanes {
         let half = L::splat(0.5);
         AtWo {
             alpha,
+            grid,
             eo,
             e_avg,
             p_coat: L::select(some, (spec / total).clamp(0.0, 1.0), half),
@@ -674,7 +750,7 @@ pub mod lanes {
     /// The albedo-scaled base term for wo, wi both above the surface.
     #[inline(always)]
     pub fn base_term<L: Lane>(c: &Coat<L>, w: &AtWo<L>, mu_i: L) -> V3<L> {
-        let ei = c.specular.scale(albedo(c, mu_i, w.alpha));
+        let ei = c.specular.scale(albedo(c, &w.grid, mu_i));
         let denom = splat3(1.0) - w.e_avg;
         // glam's min_element: x.min(y.min(z)).
         let ok = denom.x.min(denom.y.min(denom.z)).gt(L::zero());
