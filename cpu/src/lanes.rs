@@ -18,9 +18,11 @@
 //!   AVX2 (and FMA-free, so the lanes round as the scalar code does) where
 //!   [`SimdLevel::detect`] finds it, and in a baseline SSE2 function
 //!   elsewhere ([`simd_at!`](crate::simd_at) makes both copies). The operations are exact per lane
-//!   (IEEE add, sub, mul, div, sqrt), except `sin_cos`: a Cody-Waite
-//!   reduction and Cephes' minimax polynomials, within 2e-7 of libm on the
-//!   angles the samplers use (|x| <= 2 pi).
+//!   (IEEE add, sub, mul, div, sqrt), and `sin_cos` is one formula for
+//!   both lane types (a Cody-Waite reduction and Cephes' minimax
+//!   polynomials, within 2e-7 of libm on the angles the samplers use,
+//!   |x| <= 2 pi), so the eight lanes compute what eight calls of the
+//!   one-lane instantiation compute, bit for bit.
 //! - [`V3`] is a 3-vector of lanes with glam's formulas (`dot` summed in
 //!   x, y, z order, `normalize` as v * (1 / |v|)), so that `V3<f32>`
 //!   rounds as `glam::Vec3` does.
@@ -63,7 +65,8 @@ pub trait Lane:
     fn max(self, o: Self) -> Self;
     /// `f32::clamp` per lane (NaN stays NaN).
     fn clamp(self, lo: f32, hi: f32) -> Self;
-    /// `(sin, cos)`: libm's for `f32`, a polynomial for wide lanes.
+    /// `(sin, cos)` by one polynomial in every lane ([`sin_cos_poly`]), so
+    /// that one lane and eight compute the same bits.
     fn sin_cos(self) -> (Self, Self);
     /// Lane `i` (i < LANES).
     fn lane(self, i: usize) -> f32;
@@ -147,7 +150,7 @@ impl Lane for f32 {
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
-        f32::sin_cos(self)
+        sin_cos_poly(self)
     }
     #[inline(always)]
     fn lane(self, _: usize) -> f32 {
@@ -511,10 +514,31 @@ impl<L: Lane> V3<L> {
     pub fn scale(self, s: L) -> Self {
         Self::new(self.x * s, self.y * s, self.z * s)
     }
+    #[inline(always)]
+    pub fn length(self) -> L {
+        self.length_squared().sqrt()
+    }
     /// glam's `normalize`: v * (1 / |v|).
     #[inline(always)]
     pub fn normalize(self) -> Self {
         self.scale(L::one() / self.length_squared().sqrt())
+    }
+    /// glam's `normalize_or_zero`: v * (1 / |v|) where that reciprocal is
+    /// finite and positive, else zero.
+    #[inline(always)]
+    pub fn normalize_or_zero(self) -> Self {
+        let rcp = L::one() / self.length();
+        let ok = rcp.abs().lt(L::splat(f32::INFINITY)) & rcp.gt(L::zero());
+        Self::select(ok, self.scale(rcp), Self::splat(Vec3::ZERO))
+    }
+    /// glam's `cross`.
+    #[inline(always)]
+    pub fn cross(self, o: Self) -> Self {
+        Self::new(
+            self.y * o.z - o.y * self.z,
+            self.z * o.x - o.z * self.x,
+            self.x * o.y - o.x * self.y,
+        )
     }
     #[inline(always)]
     pub fn select(m: L::Mask, t: Self, f: Self) -> Self {

@@ -34,12 +34,12 @@ use glam::{Vec2, Vec3};
 use crate::envmap::EnvMap;
 use crate::film::LightSampling;
 use crate::frame::Frame;
+use crate::lanes::{Lane, V2, V3};
 use crate::sampling::{
     UNIFORM_SPHERE_PDF, cosine_hemisphere_pdf, sample_cdf, square_to_cosine_hemisphere,
-    square_to_uniform_sphere, square_to_uniform_triangle,
+    square_to_uniform_sphere,
 };
 use crate::scene::{PunctualLight, Scene, TRI_DOUBLE_SIDED};
-use crate::spherical::{sample_spherical_triangle, spherical_triangle_shape};
 use crate::texture::emission_factor;
 
 /// Rec. 709 / sRGB luminance.
@@ -81,32 +81,85 @@ impl GpuEmitter {
 /// triangle finds the density the light sample used.
 #[inline]
 pub fn spherical_sampling_angle(v: [Vec3; 3], e: &GpuEmitter, p: Vec3) -> Option<f32> {
-    // Far for its size: omega <= area / d_min^2, and d_min >= the distance
-    // to the centroid less the bounding radius. This exit, exact as a
-    // bound, spares most light samples the solid angle.
-    let d2 = (p - Vec3::from(e.center)).length_squared();
-    if d2 > e.radius * e.radius {
-        let d_min = d2.sqrt() - e.radius;
-        if e.area < SPHERICAL_SAMPLING_MIN * d_min * d_min {
-            return None;
-        }
-    }
-    // Nearly in the triangle's plane (height over the farthest vertex's
-    // distance): the sampled directions graze the plane, where f32 loses
-    // the point they hit.
-    let n = (v[1] - v[0]).cross(v[2] - v[0]);
-    let far2 = (v[0] - p)
-        .length_squared()
-        .max((v[1] - p).length_squared())
-        .max((v[2] - p).length_squared());
-    let height = n.dot(p - v[0]).abs();
-    if !(height >= SPHERICAL_SAMPLING_HEIGHT * n.length() * far2.sqrt()) {
+    let p = V3::from(p);
+    if lanes::far(Vec3::from(e.center).into(), e.radius, e.area, p) {
         return None;
     }
-    let (omega, shape) = spherical_triangle_shape(v, p);
-    ((SPHERICAL_SAMPLING_MIN..=SPHERICAL_SAMPLING_MAX).contains(&omega)
-        && shape >= SPHERICAL_SAMPLING_SHAPE)
-        .then_some(omega)
+    let (ok, omega) = lanes::near_angle(v.map(V3::from), p);
+    ok.then_some(omega)
+}
+
+/// Light sampling's emitter math over any [`crate::lanes::Lane`] type: one
+/// source with the scalar forms ([`spherical_sampling_angle`],
+/// [`Lights::sample_emitter_lanes`]), their one-lane instantiation bit for
+/// bit.
+pub mod lanes {
+    use super::{
+        SPHERICAL_SAMPLING_HEIGHT, SPHERICAL_SAMPLING_MAX, SPHERICAL_SAMPLING_MIN,
+        SPHERICAL_SAMPLING_SHAPE,
+    };
+    use crate::lanes::{Lane, V3};
+    use crate::spherical::lanes::spherical_triangle_shape;
+
+    /// [`super::spherical_sampling_angle`]'s first exit: the emitter
+    /// (centroid `center`, bounding radius `radius`, area `area`) is far
+    /// for its size from `p`: omega <= area / d_min^2, and d_min >= the
+    /// distance to the centroid less the bounding radius. Exact as a
+    /// bound, it spares most light samples the solid angle.
+    #[inline(always)]
+    pub fn far<L: Lane>(center: V3<L>, radius: L, area: L, p: V3<L>) -> L::Mask {
+        let d2 = (p - center).length_squared();
+        let d_min = d2.sqrt() - radius;
+        d2.gt(radius * radius) & area.lt(L::splat(SPHERICAL_SAMPLING_MIN) * d_min * d_min)
+    }
+
+    /// The rest of [`super::spherical_sampling_angle`] for an emitter
+    /// that is not [`far`]: whether it is sampled by solid angle from `p`,
+    /// and the solid angle.
+    #[inline(always)]
+    pub fn near_angle<L: Lane>(v: [V3<L>; 3], p: V3<L>) -> (L::Mask, L) {
+        // Nearly in the triangle's plane (height over the farthest
+        // vertex's distance): the sampled directions graze the plane, where
+        // f32 loses the point they hit.
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        let far2 = (v[0] - p)
+            .length_squared()
+            .max((v[1] - p).length_squared())
+            .max((v[2] - p).length_squared());
+        let height = n.dot(p - v[0]).abs();
+        let high = height.ge(L::splat(SPHERICAL_SAMPLING_HEIGHT) * n.length() * far2.sqrt());
+        let (omega, shape) = spherical_triangle_shape(v, p);
+        let ok = high
+            & omega.ge(L::splat(SPHERICAL_SAMPLING_MIN))
+            & omega.le(L::splat(SPHERICAL_SAMPLING_MAX))
+            & shape.ge(L::splat(SPHERICAL_SAMPLING_SHAPE));
+        (ok, omega)
+    }
+}
+
+/// Emitter light samples in lanes ([`Lights::sample_emitter_lanes`]):
+/// where each is valid, its direction, distance, Le / pdf and density.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterSamples<L: Lane> {
+    pub valid: L::Mask,
+    pub wi: V3<L>,
+    pub dist: L,
+    pub weight: V3<L>,
+    pub pdf: L,
+}
+
+impl<L: Lane> EmitterSamples<L> {
+    /// Lane `i`'s sample, where it is valid.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> Option<LightSample> {
+        L::mask_lane(self.valid, i).then(|| LightSample {
+            wi: self.wi.lane(i),
+            dist: self.dist.lane(i),
+            weight: self.weight.lane(i),
+            pdf: self.pdf.lane(i),
+            delta: false,
+        })
+    }
 }
 
 impl From<&PunctualLight> for GpuLight {
@@ -304,43 +357,137 @@ impl Lights {
     /// An emissive triangle by power (`u_idx`), a point on it (`u`) by
     /// solid angle or by area ([`spherical_sampling_angle`]).
     fn sample_emitter(&self, scene: &Scene, p: Vec3, u_idx: f32, u: Vec2) -> Option<LightSample> {
+        self.sample_emitter_lanes::<f32>(scene, p.into(), u_idx, u.into(), true)
+            .lane(0)
+    }
+
+    /// [`Self::sample_emitter`] in every lane of `live` (the others are
+    /// not valid): the triangles (a search of the power CDF), their
+    /// vertices and their emission gathered lane by lane, the rest in
+    /// lanes. The scalar form is its one-lane instantiation.
+    #[inline(always)]
+    pub fn sample_emitter_lanes<L: Lane>(
+        &self,
+        scene: &Scene,
+        p: V3<L>,
+        u_idx: L,
+        u: V2<L>,
+        live: L::Mask,
+    ) -> EmitterSamples<L> {
         let pr = self.probs;
         let n = self.emitters.len() as u32;
-        let i = sample_cdf(|k| self.emitters[k as usize].cdf, n, u_idx);
-        let e = self.emitters[i as usize];
-        let t = &scene.triangles[e.tri as usize];
-        let v = t.vertices();
-        let omega = self.sampling_angle(v, &e, p);
-        let b = match omega {
-            Some(omega) => sample_spherical_triangle(v, p, omega, u)?,
-            None => square_to_uniform_triangle(u),
+        let mut idx = [0u32; 8];
+        for (l, i) in idx.iter_mut().enumerate().take(L::LANES) {
+            *i = sample_cdf(|k| self.emitters[k as usize].cdf, n, u_idx.lane(l));
+        }
+        // Each lane's emitter and triangle, copied once.
+        let ems: [GpuEmitter; 8] = std::array::from_fn(|l| {
+            if l < L::LANES {
+                self.emitters[idx[l] as usize]
+            } else {
+                GpuEmitter::default()
+            }
+        });
+        let tris: [crate::scene::Triangle; 8] = std::array::from_fn(|l| {
+            if l < L::LANES {
+                scene.triangles[ems[l].tri as usize]
+            } else {
+                crate::scene::Triangle::default()
+            }
+        });
+        let em = |l: usize| &ems[l];
+        let gather = |f: fn(&crate::scene::Triangle, &GpuEmitter) -> [f32; 3]| {
+            let w: [[f32; 3]; 8] = std::array::from_fn(|l| f(&tris[l], &ems[l]));
+            V3::new(
+                L::from_fn(|l| w[l][0]),
+                L::from_fn(|l| w[l][1]),
+                L::from_fn(|l| w[l][2]),
+            )
         };
-        let q = (1.0 - b.x - b.y) * v[0] + b.x * v[1] + b.y * v[2];
+        let v = [
+            gather(|t, _| t.p0),
+            gather(|t, _| t.p1),
+            gather(|t, _| t.p2),
+        ];
+        let e_area = L::from_fn(|l| em(l).area);
+        let pmf = L::from_fn(|l| em(l).pmf);
+        // By solid angle where it pays (`spherical_sampling_angle`).
+        let no = L::zero().lt(L::zero());
+        let (solid, omega) = if self.sampling == LightSampling::Area {
+            (no, L::zero())
+        } else {
+            let far = lanes::far(
+                gather(|_, e| e.center),
+                L::from_fn(|l| em(l).radius),
+                e_area,
+                p,
+            );
+            let near = live & !far;
+            if L::none(near) {
+                (no, L::zero())
+            } else {
+                let (ok, omega) = lanes::near_angle(v, p);
+                (ok & near, omega)
+            }
+        };
+        let (found, by_angle) = if L::none(solid) {
+            (
+                no,
+                V2 {
+                    x: L::zero(),
+                    y: L::zero(),
+                },
+            )
+        } else {
+            crate::spherical::lanes::sample_spherical_triangle(v, p, omega, u)
+        };
+        let by_area = crate::sampling::lanes::square_to_uniform_triangle(u);
+        let b = V2 {
+            x: L::select(solid, by_angle.x, by_area.x),
+            y: L::select(solid, by_angle.y, by_area.y),
+        };
+        let q = v[0].scale(L::one() - b.x - b.y) + v[1].scale(b.x) + v[2].scale(b.y);
         let d = q - p;
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();
-        if !(dist > 0.0) {
-            return None;
-        }
         let wi = d / dist;
-        let le = emitted(scene, e.tri, b.x, b.y, -wi)?;
-        let pdf = match omega {
-            Some(omega) => pr.area * e.pmf / omega,
-            None => {
-                let cos_l = t.geometric_normal().normalize().dot(-wi).abs();
-                pr.area * e.pmf / e.area * dist2 / cos_l
-            }
+        let mut valid = live & L::select_mask(solid, found, !no) & dist.gt(L::zero());
+        // The emission toward p, lane by lane where the sample stands.
+        let mut le = [Vec3::ZERO; 8];
+        let emits = L::from_fn(|l| {
+            let e = L::mask_lane(valid, l)
+                .then(|| emitted(scene, em(l).tri, b.x.lane(l), b.y.lane(l), -wi.lane(l)))
+                .flatten();
+            le[l] = e.unwrap_or(Vec3::ZERO);
+            if e.is_some() { 1.0 } else { 0.0 }
+        });
+        valid = valid & emits.gt(L::zero());
+        let area_p = L::splat(pr.area);
+        let pdf_by_area = || {
+            let ng = (v[1] - v[0]).cross(v[2] - v[0]);
+            let cos_l = ng.normalize().dot(-wi).abs();
+            area_p * pmf / e_area * dist2 / cos_l
         };
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        Some(LightSample {
+        let pdf = if L::all(solid) {
+            area_p * pmf / omega
+        } else if L::none(solid) {
+            pdf_by_area()
+        } else {
+            L::select(solid, area_p * pmf / omega, pdf_by_area())
+        };
+        valid = valid & pdf.gt(L::zero()) & pdf.abs().lt(L::splat(f32::INFINITY));
+        let le = V3::new(
+            L::from_fn(|l| le[l].x),
+            L::from_fn(|l| le[l].y),
+            L::from_fn(|l| le[l].z),
+        );
+        EmitterSamples {
+            valid,
             wi,
             dist,
             weight: le / pdf,
             pdf,
-            delta: false,
-        })
+        }
     }
 
     /// A punctual light, uniformly (`u_idx`).

@@ -21,7 +21,17 @@ pub fn pcg4d(v: [u32; 4]) -> [u32; 4] {
 /// [`pcg4d`] over any [`crate::lanes::ULane`] type (one source with the
 /// scalar form).
 pub mod lanes {
-    use crate::lanes::ULane;
+    use crate::lanes::{Lane, ULane, V2};
+
+    /// [`super::square_to_uniform_triangle`].
+    #[inline(always)]
+    pub fn square_to_uniform_triangle<L: Lane>(u: V2<L>) -> V2<L> {
+        let su0 = u.x.sqrt();
+        V2 {
+            x: L::one() - su0,
+            y: u.y * su0,
+        }
+    }
 
     #[inline(always)]
     pub fn pcg4d<U: ULane>(v: [U; 4]) -> [U; 4] {
@@ -229,8 +239,8 @@ pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * std::f32::consts::PI);
 /// map, Turk 1990 / pbrt-v4 `SampleUniformTriangle`'s classic form):
 /// p = (1 - b1 - b2) p0 + b1 p1 + b2 p2.
 pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
-    let su0 = u.x.sqrt();
-    Vec2::new(1.0 - su0, u.y * su0)
+    let b = lanes::square_to_uniform_triangle(u.into());
+    Vec2::new(b.x, b.y)
 }
 
 /// Index i with cdf[i-1] <= u < cdf[i] in an inclusive, non-decreasing CDF

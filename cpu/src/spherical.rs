@@ -11,9 +11,8 @@
 //! sampling by solid angle makes the weight constant over the triangle.
 
 use glam::{Vec2, Vec3};
-use std::f32::consts::PI;
 
-use crate::abi::{ATAN_P3, ATAN_P5, ATAN_P7, ATAN_P9, ATAN_TAN_3PI_8, ATAN_TAN_PI_8};
+use crate::lanes::V3;
 
 /// atan(y / x) for y >= 0, in [0, pi], with the same operations on both
 /// backends: Cephes' `atanf` (range reduction to |t| <= tan(pi / 8) and
@@ -22,22 +21,7 @@ use crate::abi::{ATAN_P3, ATAN_P5, ATAN_P7, ATAN_P9, ATAN_TAN_3PI_8, ATAN_TAN_PI
 /// fourth digit).
 #[inline]
 pub fn atan2_nonneg(y: f32, x: f32) -> f32 {
-    const PI_2: f32 = std::f32::consts::FRAC_PI_2;
-    const PI_4: f32 = std::f32::consts::FRAC_PI_4;
-    let (ax, flip) = if x < 0.0 { (-x, true) } else { (x, false) };
-    // t = y / ax >= 0, reduced without forming it where it overflows.
-    let (base, t) = if y > ATAN_TAN_3PI_8 * ax {
-        (PI_2, -ax / y)
-    } else if y > ATAN_TAN_PI_8 * ax {
-        (PI_4, (y - ax) / (y + ax))
-    } else if ax > 0.0 {
-        (0.0, y / ax)
-    } else {
-        return 0.0;
-    };
-    let z = t * t;
-    let r = base + (((ATAN_P9 * z + ATAN_P7) * z + ATAN_P5) * z + ATAN_P3) * z * t + t;
-    if flip { PI - r } else { r }
+    lanes::atan2_nonneg(y, x)
 }
 
 /// The solid angle triangle `v` subtends from `p` (van Oosterom and
@@ -57,21 +41,7 @@ pub fn triangle_solid_angle(v: [Vec3; 3], p: Vec3) -> f32 {
 /// differences of nearly equal angles): measured in `cpu/tests/light_sampling.rs`.
 #[inline]
 pub fn spherical_triangle_shape(v: [Vec3; 3], p: Vec3) -> (f32, f32) {
-    let a = (v[0] - p).normalize_or_zero();
-    let b = (v[1] - p).normalize_or_zero();
-    let c = (v[2] - p).normalize_or_zero();
-    let num = a.dot(b.cross(c)).abs();
-    let den = 1.0 + a.dot(b) + b.dot(c) + c.dot(a);
-    let omega = 2.0 * atan2_nonneg(num, den);
-    if !omega.is_finite() {
-        return (0.0, 0.0);
-    }
-    let chord2 = (a - b)
-        .length_squared()
-        .max((b - c).length_squared())
-        .max((c - a).length_squared());
-    let shape = if chord2 > 0.0 { omega / chord2 } else { 0.0 };
-    (omega, shape)
+    lanes::spherical_triangle_shape(v.map(V3::from), p.into())
 }
 
 /// A direction sampled uniformly in the solid angle triangle `v` subtends
@@ -80,74 +50,149 @@ pub fn spherical_triangle_shape(v: [Vec3; 3], p: Vec3) -> (f32, f32) {
 /// is degenerate as seen from `p` (two vertices in one direction).
 /// `omega` is [`triangle_solid_angle`]`(v, p)`, the density's reciprocal.
 pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, omega: f32, u: Vec2) -> Option<Vec2> {
-    let a = (v[0] - p).normalize_or_zero();
-    let b = (v[1] - p).normalize_or_zero();
-    let c = (v[2] - p).normalize_or_zero();
-    // The great circles' normals through a and its neighbours: the
-    // spherical triangle's angle alpha at a, as its cosine and sine (no
-    // inverse trigonometry).
-    let n_ab = a.cross(b);
-    let n_ca = c.cross(a);
-    if n_ab.length_squared() == 0.0
-        || n_ca.length_squared() == 0.0
-        || b.cross(c).length_squared() == 0.0
-    {
-        return None;
+    let (valid, b) = lanes::sample_spherical_triangle(v.map(V3::from), p.into(), omega, u.into());
+    valid.then(|| Vec2::new(b.x, b.y))
+}
+
+/// The spherical triangle's functions over any [`crate::lanes::Lane`]
+/// type: one source with the scalar forms above (their one-lane
+/// instantiation, bit for bit), each branch a select and each early
+/// return a lane left invalid. Eight lanes take their sines from the
+/// lanes' polynomial, so their samples differ from the scalar ones within
+/// its error.
+pub mod lanes {
+    use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+
+    use crate::abi::{ATAN_P3, ATAN_P5, ATAN_P7, ATAN_P9, ATAN_TAN_3PI_8, ATAN_TAN_PI_8};
+    use crate::lanes::{Lane, V2, V3};
+
+    /// [`super::atan2_nonneg`].
+    #[inline(always)]
+    pub fn atan2_nonneg<L: Lane>(y: L, x: L) -> L {
+        let flip = x.lt(L::zero());
+        let ax = L::select(flip, -x, x);
+        // t = y / ax >= 0, reduced without forming it where it overflows.
+        let big = y.gt(L::splat(ATAN_TAN_3PI_8) * ax);
+        let mid = y.gt(L::splat(ATAN_TAN_PI_8) * ax);
+        let base = L::select(
+            big,
+            L::splat(FRAC_PI_2),
+            L::select(mid, L::splat(FRAC_PI_4), L::zero()),
+        );
+        // One division of the picked numerator and denominator.
+        let num = L::select(big, -ax, L::select(mid, y - ax, y));
+        let den = L::select(big, y, L::select(mid, y + ax, ax));
+        let t = num / den;
+        let z = t * t;
+        let r = base
+            + (((L::splat(ATAN_P9) * z + L::splat(ATAN_P7)) * z + L::splat(ATAN_P5)) * z
+                + L::splat(ATAN_P3))
+                * z
+                * t
+            + t;
+        let r = L::select(flip, L::splat(PI) - r, r);
+        L::select(big | mid | ax.gt(L::zero()), r, L::zero())
     }
-    let (n_ab, n_ca) = (n_ab.normalize(), n_ca.normalize());
-    let cos_alpha = -n_ab.dot(n_ca);
-    let sin_alpha = n_ab.cross(n_ca).length();
-    // The sub-triangle (a, b, c') whose area is u.x of the whole: its
-    // angles sum to pi + u.x omega, and Arvo's construction needs the sine
-    // and cosine of that sum less alpha.
-    let (sin_u, cos_u) = (u.x * omega).sin_cos();
-    let (sin_ap, cos_ap) = (-sin_u, -cos_u);
-    let sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
-    let cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
-    let k1 = cos_phi + cos_alpha;
-    let k2 = sin_phi - sin_alpha * a.dot(b);
-    let cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
-        / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
-    // NaN only where the triangle covers (nearly) a hemisphere, which the
-    // caller's solid-angle bound keeps out.
-    let cos_bp = if cos_bp.is_nan() {
-        return None;
-    } else {
-        cos_bp.clamp(-1.0, 1.0)
-    };
-    // c' on the arc from a to c, then the direction on the arc from b to
-    // c' at the fraction u.y of the arc's (1 - cos) measure.
-    let sin_bp = (1.0 - cos_bp * cos_bp).max(0.0).sqrt();
-    let cp = cos_bp * a + sin_bp * (c - c.dot(a) * a).normalize_or_zero();
-    // 1 - cos theta as |c' - b|^2 / 2 and sin theta from it: no
-    // cancellation when the arc is short.
-    let one_minus_cos = u.y * 0.5 * (cp - b).length_squared();
-    let cos_theta = 1.0 - one_minus_cos;
-    let sin_theta = (one_minus_cos * (2.0 - one_minus_cos)).max(0.0).sqrt();
-    let w = cos_theta * b + sin_theta * (cp - cp.dot(b) * b).normalize_or_zero();
-    // Where w meets the triangle (Moller-Trumbore with the ray p + t w).
-    let e1 = v[1] - v[0];
-    let e2 = v[2] - v[0];
-    let s1 = w.cross(e2);
-    let divisor = s1.dot(e1);
-    if divisor == 0.0 || !divisor.is_finite() {
-        return None;
+
+    /// [`super::spherical_triangle_shape`]: (omega, shape).
+    #[inline(always)]
+    pub fn spherical_triangle_shape<L: Lane>(v: [V3<L>; 3], p: V3<L>) -> (L, L) {
+        let a = (v[0] - p).normalize_or_zero();
+        let b = (v[1] - p).normalize_or_zero();
+        let c = (v[2] - p).normalize_or_zero();
+        let num = a.dot(b.cross(c)).abs();
+        let den = L::one() + a.dot(b) + b.dot(c) + c.dot(a);
+        let omega = L::splat(2.0) * atan2_nonneg(num, den);
+        let finite = omega.abs().lt(L::splat(f32::INFINITY));
+        let chord2 = (a - b)
+            .length_squared()
+            .max((b - c).length_squared())
+            .max((c - a).length_squared());
+        let shape = L::select(chord2.gt(L::zero()), omega / chord2, L::zero());
+        (
+            L::select(finite, omega, L::zero()),
+            L::select(finite, shape, L::zero()),
+        )
     }
-    let inv = 1.0 / divisor;
-    let s = p - v[0];
-    let b1 = (s.dot(s1) * inv).clamp(0.0, 1.0);
-    let b2 = (w.dot(s.cross(e1)) * inv).clamp(0.0, 1.0);
-    let sum = b1 + b2;
-    Some(if sum > 1.0 {
-        Vec2::new(b1 / sum, b2 / sum)
-    } else {
-        Vec2::new(b1, b2)
-    })
+
+    /// [`super::sample_spherical_triangle`]: where the sample exists, and
+    /// its barycentrics.
+    #[inline(always)]
+    pub fn sample_spherical_triangle<L: Lane>(
+        v: [V3<L>; 3],
+        p: V3<L>,
+        omega: L,
+        u: V2<L>,
+    ) -> (L::Mask, V2<L>) {
+        let a = (v[0] - p).normalize_or_zero();
+        let b = (v[1] - p).normalize_or_zero();
+        let c = (v[2] - p).normalize_or_zero();
+        // The great circles' normals through a and its neighbours: the
+        // spherical triangle's angle alpha at a, as its cosine and sine (no
+        // inverse trigonometry).
+        let n_ab = a.cross(b);
+        let n_ca = c.cross(a);
+        let zero = L::zero();
+        let degenerate = n_ab.length_squared().eq(zero)
+            | n_ca.length_squared().eq(zero)
+            | b.cross(c).length_squared().eq(zero);
+        let (n_ab, n_ca) = (n_ab.normalize(), n_ca.normalize());
+        let cos_alpha = -n_ab.dot(n_ca);
+        let sin_alpha = n_ab.cross(n_ca).length();
+        // The sub-triangle (a, b, c') whose area is u.x of the whole: its
+        // angles sum to pi + u.x omega, and Arvo's construction needs the
+        // sine and cosine of that sum less alpha.
+        let (sin_u, cos_u) = (u.x * omega).sin_cos();
+        let (sin_ap, cos_ap) = (-sin_u, -cos_u);
+        let sin_phi = sin_ap * cos_alpha - cos_ap * sin_alpha;
+        let cos_phi = cos_ap * cos_alpha + sin_ap * sin_alpha;
+        let k1 = cos_phi + cos_alpha;
+        let k2 = sin_phi - sin_alpha * a.dot(b);
+        let cos_bp = (k2 + (k2 * cos_phi - k1 * sin_phi) * cos_alpha)
+            / ((k2 * sin_phi + k1 * cos_phi) * sin_alpha);
+        // NaN only where the triangle covers (nearly) a hemisphere, which
+        // the caller's solid-angle bound keeps out.
+        let nan = !cos_bp.eq(cos_bp);
+        let cos_bp = cos_bp.clamp(-1.0, 1.0);
+        // c' on the arc from a to c, then the direction on the arc from b
+        // to c' at the fraction u.y of the arc's (1 - cos) measure.
+        let sin_bp = (L::one() - cos_bp * cos_bp).max(zero).sqrt();
+        let cp = a.scale(cos_bp) + (c - a.scale(c.dot(a))).normalize_or_zero().scale(sin_bp);
+        // 1 - cos theta as |c' - b|^2 / 2 and sin theta from it: no
+        // cancellation when the arc is short.
+        let one_minus_cos = u.y * L::splat(0.5) * (cp - b).length_squared();
+        let cos_theta = L::one() - one_minus_cos;
+        let sin_theta = (one_minus_cos * (L::splat(2.0) - one_minus_cos))
+            .max(zero)
+            .sqrt();
+        let w = b.scale(cos_theta)
+            + (cp - b.scale(cp.dot(b)))
+                .normalize_or_zero()
+                .scale(sin_theta);
+        // Where w meets the triangle (Moller-Trumbore with the ray p + t w).
+        let e1 = v[1] - v[0];
+        let e2 = v[2] - v[0];
+        let s1 = w.cross(e2);
+        let divisor = s1.dot(e1);
+        let no_hit = divisor.eq(zero) | !divisor.abs().lt(L::splat(f32::INFINITY));
+        let inv = L::one() / divisor;
+        let s = p - v[0];
+        let b1 = (s.dot(s1) * inv).clamp(0.0, 1.0);
+        let b2 = (w.dot(s.cross(e1)) * inv).clamp(0.0, 1.0);
+        let sum = b1 + b2;
+        let over = sum.gt(L::one());
+        let bary = V2 {
+            x: L::select(over, b1 / sum, b1),
+            y: L::select(over, b2 / sum, b2),
+        };
+        (!(degenerate | nan | no_hit), bary)
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::f32::consts::PI;
 
     #[test]
     fn atan2_nonneg_matches_the_library() {

@@ -1,8 +1,8 @@
 //! The wide lanes against the scalar path, per call: every lane-generic
 //! function (`bsdf::*::lanes`) run on eight lanes at each SIMD level this
 //! CPU has must give, lane by lane, what its scalar form gives on that
-//! lane's inputs: the same bits where the function is exact arithmetic,
-//! within the polynomial sine's error where it samples an angle. Batches
+//! lane's inputs, bit for bit (the one polynomial sine of both lane types
+//! included). Batches
 //! mix ordinary inputs with the ones the branches exist for (directions on
 //! the horizon or below it, the disk's centre, NaN), and lanes that a
 //! caller has masked off hold garbage that must not reach the others. The
@@ -18,6 +18,7 @@ use glint_cpu::bsdf::microfacet::{self, MIN_ALPHA};
 use glint_cpu::bsdf::{BsdfSample, LaneSample, SMOOTH_ALPHA_THRESHOLD};
 use glint_cpu::bsdf::{ConductorParams, Roughness, Shadowing, diffuse, fresnel, warp};
 use glint_cpu::lanes::{F32x8, Lane, Mask8, SimdLevel, U32x8, ULane, V2, V3};
+use glint_cpu::lights::LightSample;
 use glint_cpu::simd_at;
 use glint_cpu::sobol::{self, PathSampler};
 
@@ -75,22 +76,11 @@ fn same(a: f32, b: f32) -> bool {
     a.to_bits() == b.to_bits() || (a.is_nan() && b.is_nan())
 }
 
-/// Within `tol` relative (to 1 at least), or both NaN.
-fn close(a: f32, b: f32, tol: f32) -> bool {
-    (a.is_nan() && b.is_nan()) || (a - b).abs() <= tol * a.abs().max(b.abs()).max(1.0)
-}
-
 fn same3(a: Vec3, b: Vec3) -> bool {
     (0..3).all(|k| same(a[k], b[k]))
 }
 
-fn close3(a: Vec3, b: Vec3, tol: f32) -> bool {
-    (0..3).all(|k| close(a[k], b[k], tol))
-}
-
 const BATCHES: usize = 400;
-/// The polynomial sine against libm (2e-7), carried through the warps.
-const SIN_TOL: f32 = 2e-5;
 
 /// Run `wide` at every SIMD level on 8 lanes made by `inputs(batch, lane)`
 /// and compare each lane with `scalar` via `check`.
@@ -151,20 +141,18 @@ fn samples(s: LaneSample<F32x8>) -> [Option<BsdfSample>; 8] {
     })
 }
 
-/// Two samples agree: both none, or the same within `tol`. A lane whose
-/// scalar sample sits on the validity edge (wi on the horizon, within the
-/// polynomial's error) may fall either way.
-fn samples_agree(w: &Option<BsdfSample>, s: &Option<BsdfSample>, tol: f32) -> bool {
+/// Two samples are the same: both none, or the same bits (NaN as NaN).
+fn same_sample(w: &Option<BsdfSample>, s: &Option<BsdfSample>) -> bool {
     match (w, s) {
         (None, None) => true,
         (Some(a), Some(b)) => {
             a.delta == b.delta
-                && close(a.eta, b.eta, tol)
-                && close3(a.wi, b.wi, tol)
-                && close3(a.weight, b.weight, 1e3 * tol)
-                && close(a.pdf, b.pdf, 1e3 * tol)
+                && same(a.eta, b.eta)
+                && same3(a.wi, b.wi)
+                && same3(a.weight, b.weight)
+                && same(a.pdf, b.pdf)
         }
-        (Some(x), None) | (None, Some(x)) => x.wi.z.abs() < 1e-4,
+        _ => false,
     }
 }
 
@@ -268,7 +256,7 @@ fn microfacet_terms_are_the_scalar_bits_in_every_lane() {
                 Vec2::new((ax * 7.0).fract(), (ay * 5.0).fract()),
             )
         },
-        |a, b| close3(*a, *b, SIN_TOL),
+        |a, b| same3(*a, *b),
         "ggx_sample_visible",
     );
 }
@@ -352,7 +340,7 @@ fn diffuse_lanes_are_the_scalar_lambertian() {
             }(l))
         },
         |(rho, wo, _, u)| diffuse::diffuse_sample(rho, wo, u),
-        |a, b| samples_agree(a, b, SIN_TOL),
+        same_sample,
         "diffuse_sample",
     );
     each_level(
@@ -363,7 +351,7 @@ fn diffuse_lanes_are_the_scalar_lambertian() {
             }(l))
         },
         |(_, _, _, u)| warp::square_to_cosine_hemisphere(u),
-        |a, b| close3(*a, *b, SIN_TOL),
+        |a, b| same3(*a, *b),
         "square_to_cosine_hemisphere",
     );
 }
@@ -464,7 +452,7 @@ fn rough_conductor_lanes_are_the_scalar_bsdf() {
             at,
             |lv, l| simd_at!(lv, fn(l: [Cd; 8]) -> [Option<BsdfSample>; 8] { cd_sample(l) }(l)),
             |(p, wo, _, u)| conductor::conductor_sample(&p, wo, u),
-            |a, b| samples_agree(a, b, SIN_TOL),
+            same_sample,
             "conductor_sample",
         );
     }
@@ -529,8 +517,8 @@ fn coated_case(r: &mut Rand, kind: usize, smooth: bool) -> Ct {
 
 /// The glTF coated non-metal's opaque part (the coat's albedo tables, the
 /// coat and base lobes, their mixture) in lanes: eval and pdf are the
-/// scalar bits in every lane, samples the scalar ones within the
-/// polynomial sine's error; a lane whose smooth coat picks its mirror (a
+/// scalar bits in every lane, and so are the samples; a lane whose smooth
+/// coat picks its mirror (a
 /// delta, the scalar code's alone) is not valid in lanes. Lanes with NaN
 /// inputs and masked-off lanes of garbage leave the others' bits alone.
 #[test]
@@ -575,7 +563,7 @@ fn coated_lanes_are_the_scalar_bsdf() {
         |(base, coat, rough, wo, _, uc, u)| coated::coated_sample(base, &coat, &rough, wo, uc, u),
         |a, b| match b {
             Some(s) if s.delta => a.is_none(),
-            _ => samples_agree(a, b, SIN_TOL),
+            _ => same_sample(a, b),
         },
         "coated sample",
     );
@@ -676,10 +664,11 @@ fn simd_levels_agree_bit_for_bit() {
     }
 }
 
-/// `F32x8::sin_cos` is within 2e-7 of libm over the angles the samplers
-/// draw, and the scalar lane type is libm itself.
+/// The lanes' sine and cosine (one polynomial for both lane types) are
+/// within 2e-7 of libm over the angles the samplers draw, and eight lanes
+/// at every SIMD level are the one-lane type's bits.
 #[test]
-fn wide_sine_is_libm_within_its_bound() {
+fn lane_sine_is_libm_within_its_bound_and_one_formula() {
     for level in SimdLevel::available() {
         let worst = simd_at!(level, fn() -> f32 {
             let mut worst = 0.0f32;
@@ -689,6 +678,8 @@ fn wide_sine_is_libm_within_its_bound() {
                 }));
                 let (s, c) = x.sin_cos();
                 for i in 0..8 {
+                    let (ls, lc) = Lane::sin_cos(x.0[i]);
+                    assert!(same(s.0[i], ls) && same(c.0[i], lc), "{}", x.0[i]);
                     let (rs, rc) = x.0[i].sin_cos();
                     worst = worst.max((s.0[i] - rs).abs()).max((c.0[i] - rc).abs());
                 }
@@ -697,7 +688,6 @@ fn wide_sine_is_libm_within_its_bound() {
         }());
         assert!(worst <= 2e-7, "{level:?}: {worst:e}");
     }
-    assert_eq!(1.25f32.sin_cos(), Lane::sin_cos(1.25f32));
 }
 
 /// One sampler tuple per lane: (seed key, pixel, sample, bounce).
@@ -1002,7 +992,7 @@ fn dielectric_lanes_are_the_scalar_bsdf() {
                 }(l, sep))
             },
             |x| dielectric::dielectric_sample(x.0, &dl_roughness(&x, sep), x.3, x.5, x.6),
-            |a, b| samples_agree(a, b, SIN_TOL),
+            same_sample,
             "dielectric_sample",
         );
         each_level(
@@ -1052,4 +1042,126 @@ fn dielectric_lanes_are_the_scalar_bsdf() {
             "fresnel_dielectric and refract_dir",
         );
     }
+}
+
+/// One emitter light sample's inputs: the shading point, the index number
+/// and the point's pair.
+type Em = (Vec3, f32, Vec2);
+
+/// Two light samples are the same: both none, or the same bits.
+fn same_light(w: &Option<LightSample>, s: &Option<LightSample>) -> bool {
+    match (w, s) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.delta == b.delta
+                && same3(a.wi, b.wi)
+                && same(a.dist, b.dist)
+                && same3(a.weight, b.weight)
+                && same(a.pdf, b.pdf)
+        }
+        _ => false,
+    }
+}
+
+/// The emitter light sample (the power CDF, the far test, the solid angle
+/// and Arvo's spherical triangle where near, the uniform triangle where
+/// far, the emission and the density) in lanes on the bundled Cornell box
+/// (two emitter triangles) is the scalar sample's bits in every lane, by
+/// solid angle and by area alike: points spread through the box, in the
+/// light's own plane (the height test), on the light, beside it (the solid
+/// angle's upper bound), and lanes of NaN; lanes masked off are not valid
+/// and leave the others alone (the same lanes with garbage in the masked
+/// ones give the same bits).
+#[test]
+fn emitter_samples_in_lanes_are_the_scalar_ones() {
+    use glint_cpu::film::LightSampling;
+    use glint_cpu::lights::Lights;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell.gltf");
+    let scene = glint_cpu::loader::load(&path).unwrap();
+    let ceiling = scene
+        .triangles
+        .iter()
+        .find(|t| t.light != glint_cpu::scene::NO_LIGHT)
+        .unwrap()
+        .p0[1];
+    let mut r = Rand(77);
+    let point = |r: &mut Rand, kind: usize| match kind {
+        1 => Vec3::new(r.f() - 0.5, ceiling, r.f() - 0.5),
+        2 => Vec3::new(f32::NAN, 1.0, 0.0),
+        3 => Vec3::new(0.2 * r.f() - 0.1, ceiling - 1e-3 * r.f(), 0.2 * r.f() - 0.1),
+        4 => Vec3::new(0.0, ceiling - 0.02 - 0.2 * r.f(), 0.0),
+        _ => Vec3::new(2.0 * r.f() - 1.0, 2.0 * r.f(), 2.0 * r.f() - 1.0),
+    };
+    let inputs: Vec<[Em; 8]> = (0..BATCHES)
+        .map(|b| {
+            std::array::from_fn(|i| {
+                let p = point(&mut r, special(b, i));
+                (p, r.f(), Vec2::new(r.f(), r.f()))
+            })
+        })
+        .collect();
+    let (mut by_angle, mut valid) = (0, 0);
+    for sampling in [LightSampling::SolidAngle, LightSampling::Area] {
+        let lights = Lights {
+            sampling,
+            ..Lights::new(&scene)
+        };
+        let run = |lv: SimdLevel, l: [Em; 8], mask: Mask8| {
+            simd_at!(lv, fn(lights: &Lights, scene: &glint_cpu::scene::Scene, l: [Em; 8], mask: Mask8) -> [Option<LightSample>; 8] {
+                let s = lights.sample_emitter_lanes(
+                    scene,
+                    v3x8(l.map(|x| x.0)),
+                    F32x8(l.map(|x| x.1)),
+                    l.map(|x| x.2).into(),
+                    mask,
+                );
+                std::array::from_fn(|k| s.lane(k))
+            }(&lights, &scene, l, mask))
+        };
+        let scalar = |(p, ui, u): Em| lights.sample(&scene, p, Vec3::Z, 0.0, ui, u);
+        each_level(
+            |b, i| inputs[b][i],
+            |lv, l| run(lv, l, Mask8::first(8)),
+            scalar,
+            same_light,
+            "sample_emitter_lanes",
+        );
+        // Lanes 5..8 masked off, holding garbage: not valid, and the live
+        // lanes keep their bits.
+        for level in SimdLevel::available() {
+            for l in &inputs {
+                let mut g = *l;
+                for x in &mut g[5..] {
+                    *x = (Vec3::splat(f32::NAN), f32::NAN, Vec2::splat(1e30));
+                }
+                let (a, b) = (
+                    run(level, *l, Mask8::first(5)),
+                    run(level, g, Mask8::first(5)),
+                );
+                for k in 0..8 {
+                    assert!(same_light(&a[k], &b[k]));
+                    if k >= 5 {
+                        assert!(a[k].is_none());
+                    }
+                }
+            }
+        }
+        // Both ways of picking the point were exercised.
+        for l in &inputs {
+            for &(p, ui, u) in l {
+                valid += usize::from(lights.sample(&scene, p, Vec3::Z, 0.0, ui, u).is_some());
+                by_angle += usize::from(
+                    sampling == LightSampling::SolidAngle && {
+                        let e = &lights.emitters[0];
+                        let v = scene.triangles[e.tri as usize].vertices();
+                        glint_cpu::lights::spherical_sampling_angle(v, e, p).is_some()
+                    },
+                );
+            }
+        }
+    }
+    assert!(
+        valid > 3000 && by_angle > 300,
+        "{valid} valid, {by_angle} by solid angle"
+    );
 }

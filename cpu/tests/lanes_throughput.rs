@@ -9,7 +9,8 @@
 //! on all alike.
 //! The glTF coated non-metal: the coat at wo, eval, pdf and a sample.
 //! The sampler: a bounce's eight Sobol numbers for 2^16 paths, one call
-//! per path against eight paths per call. Speeds are printed, never
+//! per path against eight paths per call. The emitter light sample on the
+//! bundled Cornell box, one point per call against eight. Speeds are printed, never
 //! asserted; what is asserted is that every variant gives the same
 //! valid-sample count (BSDFs) or the same bits (sampler).
 
@@ -315,4 +316,51 @@ fn compare(
             secs[0] / secs[k + 1]
         );
     }
+}
+
+/// Emitter light samples (the power CDF, the far test, the solid angle
+/// and Arvo's sample where near, the emission and density) on the bundled
+/// Cornell box from 2^16 random points inside it: one call per point
+/// against eight points per call.
+#[test]
+#[ignore = "a benchmark: run with --ignored --nocapture in release"]
+fn emitter_lanes_throughput() {
+    use glint_cpu::lights::Lights;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell.gltf");
+    let scene = glint_cpu::loader::load(&path).unwrap();
+    let lights = Lights::new(&scene);
+    let inp = inputs();
+    let p: Vec<Vec3> = (0..N)
+        .map(|i| {
+            let (a, b) = (inp.u[i], inp.u[(i + 7) % N]);
+            Vec3::new(2.0 * a.x - 1.0, 2.0 * a.y, 2.0 * b.x - 1.0)
+        })
+        .collect();
+    let scalar = || {
+        let mut n = 0;
+        for (i, &p) in p.iter().enumerate() {
+            let u = inp.u[(i + 3) % N];
+            if let Some(s) = lights.sample(&scene, p, Vec3::Z, 0.0, inp.u[i].y, u) {
+                n += 1;
+                std::hint::black_box(s);
+            }
+        }
+        n
+    };
+    compare("M emitter samples/s", 1, scalar, |l| {
+        simd_at!(l, fn(lights: &Lights, scene: &glint_cpu::scene::Scene, p: &[Vec3], inp: &Inputs) -> usize {
+                let mut n = 0;
+                for i in (0..N).step_by(8) {
+                    let u = V2 {
+                        x: F32x8(std::array::from_fn(|k| inp.u[(i + k + 3) % N].x)),
+                        y: F32x8(std::array::from_fn(|k| inp.u[(i + k + 3) % N].y)),
+                    };
+                    let ui = F32x8(std::array::from_fn(|k| inp.u[i + k].y));
+                    let s = lights.sample_emitter_lanes(scene, pack3(&p[i..i + 8]), ui, u, Mask8::first(8));
+                    n += (0..8).filter(|&k| s.valid.test(k)).count();
+                    std::hint::black_box(s);
+                }
+                n
+            }(&lights, &scene, &p, &inp))
+    });
 }
