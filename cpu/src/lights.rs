@@ -137,6 +137,33 @@ pub mod lanes {
     }
 }
 
+/// The radiance each lane's emitter (`ems`) sends from barycentrics `b`
+/// toward -`wi`, lane by lane ([`emitted`]) where `valid`: where it sends
+/// any, and that radiance.
+#[inline(always)]
+fn emission_lanes<L: Lane>(
+    scene: &Scene,
+    ems: &[GpuEmitter; 8],
+    valid: L::Mask,
+    b: V2<L>,
+    wi: V3<L>,
+) -> (L::Mask, V3<L>) {
+    let mut le = [Vec3::ZERO; 8];
+    let emits = L::from_fn(|l| {
+        let e = L::mask_lane(valid, l)
+            .then(|| emitted(scene, ems[l].tri, b.x.lane(l), b.y.lane(l), -wi.lane(l)))
+            .flatten();
+        le[l] = e.unwrap_or(Vec3::ZERO);
+        if e.is_some() { 1.0 } else { 0.0 }
+    });
+    let le = V3::new(
+        L::from_fn(|l| le[l].x),
+        L::from_fn(|l| le[l].y),
+        L::from_fn(|l| le[l].z),
+    );
+    (valid & emits.gt(L::zero()), le)
+}
+
 /// Emitter light samples in lanes ([`Lights::sample_emitter_lanes`]):
 /// where each is valid, its direction, distance, Le / pdf and density.
 #[derive(Clone, Copy, Debug)]
@@ -374,6 +401,7 @@ impl Lights {
         u: V2<L>,
         live: L::Mask,
     ) -> EmitterSamples<L> {
+        const { assert!(L::LANES <= 8) };
         let pr = self.probs;
         let n = self.emitters.len() as u32;
         let mut idx = [0u32; 8];
@@ -411,57 +439,18 @@ impl Lights {
         ];
         let e_area = L::from_fn(|l| em(l).area);
         let pmf = L::from_fn(|l| em(l).pmf);
-        // By solid angle where it pays (`spherical_sampling_angle`).
-        let no = L::zero().lt(L::zero());
-        let (solid, omega) = if self.sampling == LightSampling::Area {
-            (no, L::zero())
-        } else {
-            let far = lanes::far(
-                gather(|_, e| e.center),
-                L::from_fn(|l| em(l).radius),
-                e_area,
-                p,
-            );
-            let near = live & !far;
-            if L::none(near) {
-                (no, L::zero())
-            } else {
-                let (ok, omega) = lanes::near_angle(v, p);
-                (ok & near, omega)
-            }
+        let far = || {
+            let center = gather(|_, e| e.center);
+            lanes::far(center, L::from_fn(|l| em(l).radius), e_area, p)
         };
-        let (found, by_angle) = if L::none(solid) {
-            (
-                no,
-                V2 {
-                    x: L::zero(),
-                    y: L::zero(),
-                },
-            )
-        } else {
-            crate::spherical::lanes::sample_spherical_triangle(v, p, omega, u)
-        };
-        let by_area = crate::sampling::lanes::square_to_uniform_triangle(u);
-        let b = V2 {
-            x: L::select(solid, by_angle.x, by_area.x),
-            y: L::select(solid, by_angle.y, by_area.y),
-        };
+        let (found, b, solid, omega) = self.emitter_point(v, far, p, u, live);
         let q = v[0].scale(L::one() - b.x - b.y) + v[1].scale(b.x) + v[2].scale(b.y);
         let d = q - p;
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();
         let wi = d / dist;
-        let mut valid = live & L::select_mask(solid, found, !no) & dist.gt(L::zero());
-        // The emission toward p, lane by lane where the sample stands.
-        let mut le = [Vec3::ZERO; 8];
-        let emits = L::from_fn(|l| {
-            let e = L::mask_lane(valid, l)
-                .then(|| emitted(scene, em(l).tri, b.x.lane(l), b.y.lane(l), -wi.lane(l)))
-                .flatten();
-            le[l] = e.unwrap_or(Vec3::ZERO);
-            if e.is_some() { 1.0 } else { 0.0 }
-        });
-        valid = valid & emits.gt(L::zero());
+        let (emits, le) = emission_lanes(scene, &ems, found & dist.gt(L::zero()), b, wi);
+        let mut valid = emits;
         let area_p = L::splat(pr.area);
         let pdf_by_area = || {
             let ng = (v[1] - v[0]).cross(v[2] - v[0]);
@@ -476,11 +465,6 @@ impl Lights {
             L::select(solid, area_p * pmf / omega, pdf_by_area())
         };
         valid = valid & pdf.gt(L::zero()) & pdf.abs().lt(L::splat(f32::INFINITY));
-        let le = V3::new(
-            L::from_fn(|l| le[l].x),
-            L::from_fn(|l| le[l].y),
-            L::from_fn(|l| le[l].z),
-        );
         EmitterSamples {
             valid,
             wi,
@@ -488,6 +472,44 @@ impl Lights {
             weight: le / pdf,
             pdf,
         }
+    }
+
+    /// The point of each lane's emitter sample on triangle `v`
+    /// ([`Self::sample_emitter_lanes`]): by solid angle where it pays
+    /// ([`spherical_sampling_angle`], `far` its first exit), else uniformly
+    /// by area. Where the point stands (among `live`), its barycentrics,
+    /// and where it went by solid angle, with the solid angle.
+    #[inline(always)]
+    fn emitter_point<L: Lane>(
+        &self,
+        v: [V3<L>; 3],
+        far: impl FnOnce() -> L::Mask,
+        p: V3<L>,
+        u: V2<L>,
+        live: L::Mask,
+    ) -> (L::Mask, V2<L>, L::Mask, L) {
+        let no = L::zero().lt(L::zero());
+        let (solid, omega) = if self.sampling == LightSampling::Area {
+            (no, L::zero())
+        } else {
+            let near = live & !far();
+            if L::none(near) {
+                (no, L::zero())
+            } else {
+                let (ok, omega) = lanes::near_angle(v, p);
+                (ok & near, omega)
+            }
+        };
+        let by_area = crate::sampling::lanes::square_to_uniform_triangle(u);
+        if L::none(solid) {
+            return (live, by_area, solid, omega);
+        }
+        let (found, by_angle) = crate::spherical::lanes::sample_spherical_triangle(v, p, omega, u);
+        let b = V2 {
+            x: L::select(solid, by_angle.x, by_area.x),
+            y: L::select(solid, by_angle.y, by_area.y),
+        };
+        (live & L::select_mask(solid, found, !no), b, solid, omega)
     }
 
     /// A punctual light, uniformly (`u_idx`).
