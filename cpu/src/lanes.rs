@@ -10,8 +10,9 @@
 //!   sides; a lane whose inputs make NaN or infinity on the side not taken
 //!   is harmless, since the select drops it.
 //! - `f32` implements it with the plain scalar operations (its mask is a
-//!   `bool`), so the one-lane instantiation computes what the scalar code
-//!   always did, bit for bit (the BSDF tests and the GPU twins pin it).
+//!   `bool`; `sin_cos` is the polynomial below, not libm's), so the
+//!   one-lane instantiation is the scalar code (the BSDF tests and the GPU
+//!   twins pin it).
 //! - [`F32x8`] is eight `f32` in an array, every operation a loop over the
 //!   lanes that LLVM turns into SIMD instructions of the function it is
 //!   compiled in: callers run the wide code in a function compiled for
@@ -267,10 +268,11 @@ const PIO2_3: f32 = 7.549_79e-8;
 const SIN_C: [f32; 3] = [-1.666_665_5e-1, 8.332_161e-3, -1.951_529_6e-4];
 const COS_C: [f32; 3] = [4.166_664_6e-2, -1.388_731_6e-3, 2.443_315_7e-5];
 
-/// `(sin x, cos x)` of one lane by the wide polynomial (what every lane of
-/// [`F32x8::sin_cos`] computes; scalar and branch-free so the loop over the
-/// lanes vectorises: SSE2 has no rounding instruction, so the quadrant
-/// rounds half away from zero through a truncating conversion).
+/// `(sin x, cos x)` of one lane by the polynomial (what `f32`'s and every
+/// lane of [`F32x8`]'s `sin_cos` compute; scalar and branch-free so the
+/// loop over the lanes vectorises: SSE2 has no rounding instruction, so
+/// the quadrant rounds half away from zero through a truncating
+/// conversion).
 #[inline(always)]
 fn sin_cos_poly(x: f32) -> (f32, f32) {
     let t = x * std::f32::consts::FRAC_2_PI;

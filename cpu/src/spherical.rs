@@ -57,9 +57,8 @@ pub fn sample_spherical_triangle(v: [Vec3; 3], p: Vec3, omega: f32, u: Vec2) -> 
 /// The spherical triangle's functions over any [`crate::lanes::Lane`]
 /// type: one source with the scalar forms above (their one-lane
 /// instantiation, bit for bit), each branch a select and each early
-/// return a lane left invalid. Eight lanes take their sines from the
-/// lanes' polynomial, so their samples differ from the scalar ones within
-/// its error.
+/// return a lane left invalid. Eight lanes compute what eight one-lane
+/// calls compute, bit for bit (both lane types take one polynomial sine).
 pub mod lanes {
     use std::f32::consts::{FRAC_PI_2, FRAC_PI_4, PI};
 
