@@ -323,7 +323,7 @@ fn compare(
 /// Cornell box from 2^16 random points inside it: one call per point
 /// against eight points per call.
 #[test]
-#[ignore = "a benchmark: run with --ignored --nocapture in release"]
+#[ignore = "benchmark: cargo test --release -p glint-cpu --test lanes_throughput -- --ignored --nocapture --test-threads 1"]
 fn emitter_lanes_throughput() {
     use glint_cpu::lights::Lights;
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell.gltf");

@@ -179,13 +179,8 @@ pub fn encode_table(tag: &[u8; 4], dims: [usize; 3], v: &[f32]) -> Vec<u8> {
 /// The square root crowds the nodes towards eta = 1, where the Fresnel
 /// term's rise at grazing angles narrows to nothing (E is discontinuous at
 /// eta = 1: F = 0 there, F -> 1 at grazing for any eta > 1).
-pub fn coat_eta_coord(eta: f32) -> f32 {
-    ((eta - 1.0) / (eta + 1.0)).clamp(0.0, 1.0).sqrt()
-}
-
-/// [`coat_eta_coord`] in every lane.
 #[inline(always)]
-fn coat_eta_coord_lanes<L: Lane>(eta: L) -> L {
+pub fn coat_eta_coord<L: Lane>(eta: L) -> L {
     ((eta - L::one()) / (eta + L::one())).clamp(0.0, 1.0).sqrt()
 }
 
@@ -196,13 +191,8 @@ pub fn coat_eta_of(t: f32) -> f32 {
 }
 
 /// Table coordinate of mu: mu^(1/4).
-pub fn coat_mu_coord(mu: f32) -> f32 {
-    mu.clamp(0.0, 1.0).sqrt().sqrt()
-}
-
-/// [`coat_mu_coord`] in every lane.
 #[inline(always)]
-fn coat_mu_coord_lanes<L: Lane>(mu: L) -> L {
+pub fn coat_mu_coord<L: Lane>(mu: L) -> L {
     mu.clamp(0.0, 1.0).sqrt().sqrt()
 }
 
@@ -212,7 +202,8 @@ pub fn coat_mu_value(t: f32) -> f32 {
 }
 
 /// Table coordinate of alpha: its square root (glTF's roughness).
-pub fn coat_alpha_coord(alpha: f32) -> f32 {
+#[inline(always)]
+pub fn coat_alpha_coord<L: Lane>(alpha: L) -> L {
     alpha.clamp(0.0, 1.0).sqrt()
 }
 
@@ -222,11 +213,42 @@ pub fn coat_alpha_value(t: f32) -> f32 {
 }
 
 /// Grid position of t in [0, 1] on an n-point grid: the lower index and
-/// the fraction towards the next.
+/// the fraction towards the next ([`lanes::cell`] in one lane).
 pub(crate) fn cell(t: f32, n: usize) -> (usize, f32) {
-    let y = t.clamp(0.0, 1.0) * (n - 1) as f32;
-    let i = (y as usize).min(n - 2);
-    (i, y - i as f32)
+    let (i, f) = lanes::cell(t, n);
+    (i as usize, f)
+}
+
+/// The trilinear interpolation of a table `t[k][j][i]` (`nx` nodes along
+/// i, `ny` along j) from its corners, `at(o)` the entry `o` past the lower
+/// corner, at the fractions `fx`, `fy`, `fz` (i fastest): the lookups of
+/// [`trilinear`] and of the coat's lanes.
+#[inline(always)]
+pub(crate) fn trilerp<L: Lane>(
+    at: impl Fn(usize) -> L,
+    (nx, ny): (usize, usize),
+    fx: L,
+    fy: L,
+    fz: L,
+) -> L {
+    let plane = |o: usize| {
+        let (a0, a1, b0, b1) = (at(o), at(o + 1), at(o + nx), at(o + nx + 1));
+        let a = a0 + (a1 - a0) * fx;
+        let b = b0 + (b1 - b0) * fx;
+        a + (b - a) * fy
+    };
+    let p0 = plane(0);
+    p0 + (plane(ny * nx) - p0) * fz
+}
+
+/// The bilinear interpolation of a table `t[k][j]` (`ny` nodes along j)
+/// from its corners, `at(o)` the entry `o` past the lower corner.
+#[inline(always)]
+pub(crate) fn bilerp<L: Lane>(at: impl Fn(usize) -> L, ny: usize, fy: L, fz: L) -> L {
+    let (a0, a1, b0, b1) = (at(0), at(1), at(ny), at(ny + 1));
+    let a = a0 + (a1 - a0) * fy;
+    let b = b0 + (b1 - b0) * fy;
+    a + (b - a) * fz
 }
 
 /// Trilinear lookup in `t[k][j][i]` (`nx` nodes along i, `ny` along j) at
@@ -239,22 +261,14 @@ pub(crate) fn trilinear(
     (j, fy): (usize, f32),
     (k, fz): (usize, f32),
 ) -> f32 {
-    let at = |i: usize, j: usize, k: usize| t[(k * ny + j) * nx + i];
-    let plane = |k: usize| {
-        let a = at(i, j, k) + (at(i + 1, j, k) - at(i, j, k)) * fx;
-        let b = at(i, j + 1, k) + (at(i + 1, j + 1, k) - at(i, j + 1, k)) * fx;
-        a + (b - a) * fy
-    };
-    let p0 = plane(k);
-    p0 + (plane(k + 1) - p0) * fz
+    let base = (k * ny + j) * nx + i;
+    trilerp(|o| t[base + o], (nx, ny), fx, fy, fz)
 }
 
 /// Bilinear lookup in `t[k][j]` (`ny` nodes along j).
 pub(crate) fn bilinear(t: &[f32], ny: usize, (j, fy): (usize, f32), (k, fz): (usize, f32)) -> f32 {
-    let at = |j: usize, k: usize| t[k * ny + j];
-    let a = at(j, k) + (at(j + 1, k) - at(j, k)) * fy;
-    let b = at(j, k + 1) + (at(j + 1, k + 1) - at(j, k + 1)) * fy;
-    a + (b - a) * fz
+    let base = k * ny + j;
+    bilerp(|o| t[base + o], ny, fy, fz)
 }
 
 /// E(mu, alpha, eta) of the coat with s = 1: trilinear in the tables, and
@@ -669,7 +683,7 @@ pub mod lanes {
     /// [`super::cell`] in every lane: the lower node (a float) and the
     /// fraction towards the next.
     #[inline(always)]
-    fn cell<L: Lane>(t: L, n: usize) -> (L, L) {
+    pub(crate) fn cell<L: Lane>(t: L, n: usize) -> (L, L) {
         let y = t.clamp(0.0, 1.0) * L::splat((n - 1) as f32);
         let i = y.trunc_i32().min(L::splat((n - 2) as f32));
         (i, y - i)
@@ -679,19 +693,10 @@ pub mod lanes {
     /// being `g`'s: lane by lane only the loads.
     #[inline(always)]
     fn table_e<L: Lane>(g: &Grid<L>, mu: L) -> L {
-        let (i, fx) = cell(super::coat_mu_coord_lanes(mu), COAT_N_MU);
+        let (i, fx) = cell(super::coat_mu_coord(mu), COAT_N_MU);
         let t = super::coat_tables();
-        let (nx, ny) = (COAT_N_MU, COAT_N_ALPHA);
         let at = |o: usize| L::from_fn(|l| t[g.row.lane(l) as usize + i.lane(l) as usize + o]);
-        let plane = |k: usize| {
-            let o = k * ny * nx;
-            let (a0, a1, b0, b1) = (at(o), at(o + 1), at(o + nx), at(o + nx + 1));
-            let a = a0 + (a1 - a0) * fx;
-            let b = b0 + (b1 - b0) * fx;
-            a + (b - a) * g.fa
-        };
-        let p0 = plane(0);
-        p0 + (plane(1) - p0) * g.fe
+        super::trilerp(at, (COAT_N_MU, COAT_N_ALPHA), fx, g.fa, g.fe)
     }
 
     /// E(mu) of each lane's coat with s = 1 ([`super::coat_albedo`]): the
@@ -715,8 +720,8 @@ pub mod lanes {
         // The tables' alpha: a smooth coat's E_avg is the alpha = 0 row
         // (its E is Fresnel's, no row at all).
         let table_alpha = L::select(c.smooth, L::zero(), alpha);
-        let (j, fa) = cell(table_alpha.clamp(0.0, 1.0).sqrt(), COAT_N_ALPHA);
-        let (k, fe) = cell(super::coat_eta_coord_lanes(c.eta), COAT_N_ETA);
+        let (j, fa) = cell(super::coat_alpha_coord(table_alpha), COAT_N_ALPHA);
+        let (k, fe) = cell(super::coat_eta_coord(c.eta), COAT_N_ETA);
         let avg_row = k * L::splat(COAT_N_ALPHA as f32) + j;
         let grid = Grid {
             row: avg_row * L::splat(COAT_N_MU as f32),
@@ -724,14 +729,10 @@ pub mod lanes {
             fe,
         };
         let eo = c.specular.scale(albedo(c, &grid, mu_o));
-        // [`super::bilinear`] in the E_avg table.
+        // E_avg, bilinear in its table.
         let t = &super::coat_tables()[COAT_E_LEN..];
         let at = |o: usize| L::from_fn(|l| t[avg_row.lane(l) as usize + o]);
-        let ny = COAT_N_ALPHA;
-        let (a0, a1, b0, b1) = (at(0), at(1), at(ny), at(ny + 1));
-        let a = a0 + (a1 - a0) * fa;
-        let b = b0 + (b1 - b0) * fa;
-        let e_avg = c.specular.scale(a + (b - a) * fe);
+        let e_avg = c.specular.scale(super::bilerp(at, COAT_N_ALPHA, fa, fe));
         let spec = mean(eo);
         let diff = mean(c.base * (splat3(1.0) - eo));
         let total = spec + diff;
