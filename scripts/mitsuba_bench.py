@@ -22,7 +22,7 @@ from PyPI, and Debian's libllvm19 (Dr.Jit's LLVM backend needs LLVM >= 16;
 bookworm's default 14/15 fail to select `fminimum`) installed with apt from
 the machine's own sources where it is missing.
 
-Usage: python3 scripts/mitsuba_bench.py [SPP] [WIDTH] [REF_SPP] [ROUNDS] [SCENES]
+Usage: [GLINT_BIN=target/pgo/release/glint] python3 scripts/mitsuba_bench.py [SPP] [WIDTH] [REF_SPP] [ROUNDS] [SCENES]
   defaults: 256 spp, 128 px, 4096 reference spp, 3 rounds, every assets/*.gltf
 Output: target/mitsuba-bench/ (scenes, images, table.md); the table on stdout.
 """
@@ -40,7 +40,9 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "target", "mitsuba-bench")
 VENV = os.path.join(ROOT, "target", "mitsuba-venv")
-GLINT = os.path.join(ROOT, "target", "release", "glint")
+# GLINT_BIN: the glint binary to time (say scripts/build.sh's PGO build),
+# used as it is; by default the plain release build, built here.
+GLINT = os.environ.get("GLINT_BIN") or os.path.join(ROOT, "target", "release", "glint")
 MITSUBA_VERSION = "3.9.1"
 
 
@@ -162,7 +164,8 @@ def main():
     scenes = (args[4].split(",") if len(args) > 4
               else sorted(glob.glob(os.path.join(ROOT, "assets", "*.gltf"))))
     os.makedirs(OUT, exist_ok=True)
-    run(["cargo", "build", "--release", "--locked", "--quiet"], cwd=ROOT)
+    if not os.environ.get("GLINT_BIN"):
+        run(["cargo", "build", "--release", "--locked", "--quiet"], cwd=ROOT)
     py = python()
     env = dict(os.environ, DRJIT_LIBLLVM_PATH=libllvm())
     started = time.strftime("%Y-%m-%d")
@@ -202,8 +205,9 @@ def main():
                      ms / gs, me / ge, (me * ms) / (ge * gs)))
         print(f"{name}: glint {gs:.3f} s relMSE {ge:.3e}; mitsuba {ms:.3f} s relMSE {me:.3e}",
               file=sys.stderr)
+    binary = (f"GLINT_BIN={os.path.relpath(GLINT, ROOT)} " if os.environ.get("GLINT_BIN") else "")
     lines = [
-        f"`python3 scripts/mitsuba_bench.py {spp} {width} {ref_spp} {rounds}` on {started}, "
+        f"`{binary}python3 scripts/mitsuba_bench.py {spp} {width} {ref_spp} {rounds}` on {started}, "
         f"{os.cpu_count()} cores: glint CPU backend (all cores, Sobol) against Mitsuba "
         f"{MITSUBA_VERSION} `llvm_ad_rgb` (all cores, independent sampler), {width} px wide, "
         f"{spp} spp, medians of {rounds} renders; references {ref_spp} spp, each renderer its own.",
