@@ -17,7 +17,9 @@
 #
 # Usage: scripts/before_after.sh BEFORE_REV [SPP] [WIDTH] [ROUNDS] [REF_SPP]
 #   defaults: 64 spp, 64 px wide, 3 rounds, reference 4096 spp; BACKENDS="cpu"
-#   (environment) times one backend only (default "gpu cpu").
+#   (environment) times one backend only (default "gpu cpu"); AFTER_BIN
+#   (environment) times that binary as the after side, as it is (say
+#   scripts/build.sh's PGO build of this tree), in place of a plain release build.
 # Output: target/before-after/ (images, stats, table.md). The earlier commit is
 # built in a git worktree under target/before-after/src with its own target dir.
 set -euo pipefail
@@ -28,8 +30,12 @@ spp=${2:-64}; width=${3:-64}; rounds=${4:-3}; ref_spp=${5:-4096}
 out=target/before-after
 mkdir -p "$out"
 
-cargo build --release --locked
-after="$root/target/release/glint"
+if [ -n "${AFTER_BIN:-}" ]; then
+  after=$(cd "$(dirname "$AFTER_BIN")" && pwd)/$(basename "$AFTER_BIN")
+else
+  cargo build --release --locked
+  after="$root/target/release/glint"
+fi
 src="$out/src"
 if [ ! -d "$src" ] || [ "$(git -C "$src" rev-parse HEAD 2>/dev/null)" != "$(git rev-parse "$rev^{commit}")" ]; then
   git worktree remove --force "$src" 2>/dev/null || rm -rf "$src"
@@ -43,7 +49,7 @@ before="$root/$out/target/release/glint"
 table="$out/table.md"
 summary="$out/summary.tsv"
 : > "$summary"
-header="\`scripts/before_after.sh $rev $spp $width $rounds $ref_spp\`: before = $(git rev-parse --short "$rev"), after = $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo ' with uncommitted changes'), $(date -u +%Y-%m-%d), $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg) at the start."
+header="\`${AFTER_BIN:+AFTER_BIN=$AFTER_BIN }scripts/before_after.sh $rev $spp $width $rounds $ref_spp\`: before = $(git rev-parse --short "$rev"), after = $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo ' with uncommitted changes'), $(date -u +%Y-%m-%d), $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg) at the start."
 
 for scene in assets/*.gltf assets/*.glb; do
   [ -e "$src/$scene" ] || continue
