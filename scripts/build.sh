@@ -15,7 +15,8 @@
 # so it is never stale and always matches the toolchain. It needs
 # llvm-profdata of the toolchain's LLVM (rustup's llvm-tools component, which
 # this script adds where rustup can); without it, a plain release build goes
-# to the same path, with a warning.
+# to the same path, with a warning. GLINT_PGO=off (environment) asks for that
+# plain build.
 # Usage: scripts/build.sh        (prints the binary's path last)
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -27,11 +28,14 @@ flags=${RUSTFLAGS:-}
 
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$(rustc --print sysroot)/lib/rustlib/$host/bin/llvm-profdata"
-if [ ! -x "$profdata" ] && command -v rustup >/dev/null 2>&1; then
+if [ "${GLINT_PGO:-on}" = off ]; then
+  profdata=/nonexistent
+elif [ ! -x "$profdata" ] && command -v rustup >/dev/null 2>&1; then
   rustup component add llvm-tools >&2 || true
 fi
 if [ ! -x "$profdata" ]; then
-  echo "glint: warning: llvm-profdata not found (rustup component llvm-tools): building without PGO" >&2
+  [ "${GLINT_PGO:-on}" = off ] ||
+    echo "glint: warning: llvm-profdata not found (rustup component llvm-tools): building without PGO" >&2
   RUSTFLAGS="$flags" CARGO_TARGET_DIR=$out cargo build --release --bin glint >&2
   echo "$bin"
   exit 0
