@@ -24,25 +24,33 @@ root=$PWD
 out=target/pgo
 train=target/pgo-train
 bin=$out/release/glint
-flags=${RUSTFLAGS:-}
+# The caller's RUSTFLAGS and one flag of ours, as cargo's unit-separated list
+# (so that a checkout path with spaces stays one argument).
+flags_with() {
+  local words=() out="" w
+  read -ra words <<< "${RUSTFLAGS:-}"
+  for w in "${words[@]}" "$@"; do out+="${out:+$'\x1f'}$w"; done
+  printf '%s' "$out"
+}
 
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$(rustc --print sysroot)/lib/rustlib/$host/bin/llvm-profdata"
 if [ "${GLINT_PGO:-on}" = off ]; then
   profdata=/nonexistent
 elif [ ! -x "$profdata" ] && command -v rustup >/dev/null 2>&1; then
-  rustup component add llvm-tools >&2 || true
+  # (The component's name before Rust 1.72: llvm-tools-preview.)
+  rustup component add llvm-tools >&2 || rustup component add llvm-tools-preview >&2 || true
 fi
 if [ ! -x "$profdata" ]; then
   [ "${GLINT_PGO:-on}" = off ] ||
     echo "glint: warning: llvm-profdata not found (rustup component llvm-tools): building without PGO" >&2
-  RUSTFLAGS="$flags" CARGO_TARGET_DIR=$out cargo build --release --bin glint >&2
+  CARGO_ENCODED_RUSTFLAGS=$(flags_with) CARGO_TARGET_DIR=$out cargo build --release --bin glint >&2
   echo "$bin"
   exit 0
 fi
 
 echo "build.sh: instrumented build ($train)" >&2
-RUSTFLAGS="$flags -Cprofile-generate=$root/$train/raw" CARGO_TARGET_DIR=$train \
+CARGO_ENCODED_RUSTFLAGS=$(flags_with "-Cprofile-generate=$root/$train/raw") CARGO_TARGET_DIR=$train \
   cargo build --release --bin glint >&2
 
 sum=$(sha256sum "$train/release/glint" | cut -c1-16)
@@ -63,6 +71,6 @@ fi
 # The profile's digest is in its path, so a new profile is a new flag and
 # cargo rebuilds what it optimises.
 echo "build.sh: optimised build ($bin)" >&2
-RUSTFLAGS="$flags -Cprofile-use=$root/$profile" CARGO_TARGET_DIR=$out \
+CARGO_ENCODED_RUSTFLAGS=$(flags_with "-Cprofile-use=$root/$profile") CARGO_TARGET_DIR=$out \
   cargo build --release --bin glint >&2
 echo "$bin"
