@@ -62,12 +62,17 @@ out="$root/target/shaderc"
 lib=/usr/lib/$(gcc -print-multiarch 2>/dev/null || echo x86_64-linux-gnu)
 if [ ! -f "$out/libshaderc_combined.a" ]; then
   mkdir -p "$out"
-  script="create $out/libshaderc_combined.a.tmp"
+  # ar's MRI script cannot quote a path with spaces: the archive is made in
+  # a fresh temporary folder and moved into the checkout.
+  tmp=$(mktemp -d)
+  script="create $tmp/libshaderc_combined.a"
   for a in shaderc_combined glslang MachineIndependent GenericCodeGen OSDependent OGLCompiler SPIRV HLSL SPIRV-Tools-opt SPIRV-Tools; do
     [ -f "$lib/lib$a.a" ] && script+=$'\n'"addlib $lib/lib$a.a"
   done
   script+=$'\nsave\nend'
   ar -M <<<"$script"
+  mv "$tmp/libshaderc_combined.a" "$out/libshaderc_combined.a.tmp"
   mv "$out/libshaderc_combined.a.tmp" "$out/libshaderc_combined.a"
+  rm -rf "$tmp"
 fi
 echo "setup: ok ($(dpkg-query -W -f='${Version}' mesa-vulkan-drivers) lavapipe)" >&2
