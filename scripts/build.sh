@@ -2,7 +2,7 @@
 # The release binary, built with profile-guided optimisation (PGO): the same
 # source and the same floating-point operations as `cargo build --release`
 # (PGO changes code layout, inlining and branch order, never arithmetic, so
-# the images are the same bits), 1-14% more samples per second on the CPU
+# the images are the same bits), 5-12% more samples per second on the CPU
 # backend (docs/benchmarks.md, "Profile-guided optimisation").
 #
 #  1. an instrumented build (target/pgo-train);
