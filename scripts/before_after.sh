@@ -31,7 +31,7 @@ out=target/before-after
 mkdir -p "$out"
 
 if [ -n "${AFTER_BIN:-}" ]; then
-  after=$(cd "$(dirname "$AFTER_BIN")" && pwd)/$(basename "$AFTER_BIN")
+  after=$(realpath "$AFTER_BIN")
 else
   cargo build --release --locked
   after="$root/target/release/glint"

@@ -35,15 +35,16 @@ flags_with() {
 
 host=$(rustc -vV | sed -n 's/^host: //p')
 profdata="$(rustc --print sysroot)/lib/rustlib/$host/bin/llvm-profdata"
-if [ "${GLINT_PGO:-on}" = off ]; then
-  profdata=/nonexistent
-elif [ ! -x "$profdata" ] && command -v rustup >/dev/null 2>&1; then
+pgo=${GLINT_PGO:-on}
+if [ "$pgo" != off ] && [ ! -x "$profdata" ] && command -v rustup >/dev/null 2>&1; then
   # (The component's name before Rust 1.72: llvm-tools-preview.)
   rustup component add llvm-tools >&2 || rustup component add llvm-tools-preview >&2 || true
 fi
-if [ ! -x "$profdata" ]; then
-  [ "${GLINT_PGO:-on}" = off ] ||
-    echo "glint: warning: llvm-profdata not found (rustup component llvm-tools): building without PGO" >&2
+if [ "$pgo" != off ] && [ ! -x "$profdata" ]; then
+  echo "glint: warning: llvm-profdata not found (rustup component llvm-tools): building without PGO" >&2
+  pgo=off
+fi
+if [ "$pgo" = off ]; then
   CARGO_ENCODED_RUSTFLAGS=$(flags_with) CARGO_TARGET_DIR=$out cargo build --release --bin glint >&2
   echo "$bin"
   exit 0

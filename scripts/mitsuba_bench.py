@@ -42,7 +42,8 @@ OUT = os.path.join(ROOT, "target", "mitsuba-bench")
 VENV = os.path.join(ROOT, "target", "mitsuba-venv")
 # GLINT_BIN: the glint binary to time (say scripts/build.sh's PGO build),
 # used as it is; by default the plain release build, built here.
-GLINT = os.environ.get("GLINT_BIN") or os.path.join(ROOT, "target", "release", "glint")
+GLINT_BIN = os.environ.get("GLINT_BIN")
+GLINT = GLINT_BIN or os.path.join(ROOT, "target", "release", "glint")
 MITSUBA_VERSION = "3.9.1"
 
 
@@ -164,7 +165,7 @@ def main():
     scenes = (args[4].split(",") if len(args) > 4
               else sorted(glob.glob(os.path.join(ROOT, "assets", "*.gltf"))))
     os.makedirs(OUT, exist_ok=True)
-    if not os.environ.get("GLINT_BIN"):
+    if not GLINT_BIN:
         run(["cargo", "build", "--release", "--locked", "--quiet"], cwd=ROOT)
     py = python()
     env = dict(os.environ, DRJIT_LIBLLVM_PATH=libllvm())
@@ -205,7 +206,7 @@ def main():
                      ms / gs, me / ge, (me * ms) / (ge * gs)))
         print(f"{name}: glint {gs:.3f} s relMSE {ge:.3e}; mitsuba {ms:.3f} s relMSE {me:.3e}",
               file=sys.stderr)
-    binary = (f"GLINT_BIN={os.path.relpath(GLINT, ROOT)} " if os.environ.get("GLINT_BIN") else "")
+    binary = f"GLINT_BIN={os.path.relpath(GLINT, ROOT)} " if GLINT_BIN else ""
     lines = [
         f"`{binary}python3 scripts/mitsuba_bench.py {spp} {width} {ref_spp} {rounds}` on {started}, "
         f"{os.cpu_count()} cores: glint CPU backend (all cores, Sobol) against Mitsuba "
