@@ -487,10 +487,11 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// A textured material at a hit seen from `wo`: the normal map tilts
-    /// the shading frame (adapted so `wo`'s mirror direction stays above
-    /// the surface, [`crate::texture::valid_reflection_normal`]), the other
-    /// textures set the BSDF's parameters.
+    /// A textured material (untextured BSDF `base`) at a hit seen from
+    /// `wo`: the normal map tilts the shading frame (adapted so `wo`'s
+    /// mirror direction stays above the surface,
+    /// [`crate::texture::valid_reflection_normal`]), the other textures set
+    /// the BSDF's parameters.
     #[allow(clippy::too_many_arguments)]
     fn apply_textures(
         &self,
@@ -500,8 +501,8 @@ impl<'a> PathTracer<'a> {
         v: f32,
         wo: Vec3,
         sf: &mut SurfaceFrame,
-        bsdf: &mut Bsdf,
-    ) {
+        base: &Bsdf,
+    ) -> Bsdf {
         let st = &self.scene.textures;
         let unmapped = sf.frame;
         let ns = normal_mapped(st, mt, tri, u, v, sf.ng, wo, &sf.frame);
@@ -509,28 +510,40 @@ impl<'a> PathTracer<'a> {
             sf.frame = Frame::from_normal_tangent(ns, sf.frame.s);
             sf.ns = ns;
         }
-        *bsdf = textured_bsdf(st, mt, bsdf, tri, u, v);
+        let mut bsdf = textured_bsdf(st, mt, base, tri, u, v);
         sf.folds = mt.normal.is_some() && !bsdf.has_transmission();
         // The clear coat's own normal (clearcoatNormalTexture, else the
         // unmapped one), where a normal map tilts either.
-        if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = bsdf
+        if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = &mut bsdf
             && coat.clearcoat > 0.0
             && (mt.normal.is_some() || mt.clearcoat_normal.is_some())
         {
             coat.clearcoat_normal =
                 clearcoat_normal(st, mt, tri, u, v, sf.ng, &unmapped, &sf.frame);
         }
+        bsdf
     }
 
     /// The shading frame and the BSDF of material `material` at a hit on
-    /// triangle `tri` seen from `wo`, its textures applied.
+    /// triangle `tri` seen from `wo`, its textures applied: the material's
+    /// own BSDF, borrowed, where it has no textures, else the textured one,
+    /// made in `textured`.
     #[inline(always)]
-    fn shade(&self, material: u32, tri: u32, u: f32, v: f32, wo: Vec3) -> (SurfaceFrame, Bsdf) {
+    fn shade<'s>(
+        &'s self,
+        material: u32,
+        tri: u32,
+        u: f32,
+        v: f32,
+        wo: Vec3,
+        textured: &'s mut Option<Bsdf>,
+    ) -> (SurfaceFrame, &'s Bsdf) {
         let mut sf = self.surface(tri, u, v);
-        let mut bsdf = self.scene.materials[material as usize].bsdf;
-        if let Some(mt) = self.scene.textures.material(material) {
-            self.apply_textures(mt, tri, u, v, wo, &mut sf, &mut bsdf);
-        }
+        let base = &self.scene.materials[material as usize].bsdf;
+        let bsdf = match self.scene.textures.material(material) {
+            Some(mt) => &*textured.insert(self.apply_textures(mt, tri, u, v, wo, &mut sf, base)),
+            None => base,
+        };
         (sf, bsdf)
     }
 
@@ -673,8 +686,9 @@ impl<'a> PathTracer<'a> {
         depth: u32,
         rays: &mut u64,
     ) -> bool {
-        let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo);
-        let mut v = self.begin(at, &sf, &bsdf, u, rays);
+        let mut textured = None;
+        let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo, &mut textured);
+        let mut v = self.begin(at, &sf, bsdf, u, rays);
         if let Some(ne) = &mut v.nee {
             self.test_shadow(ne);
         }

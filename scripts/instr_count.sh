@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# Instructions per sample of the CPU backend, counted by valgrind's callgrind:
+# a deterministic measure of the sampling work, for changes too small for
+# wall-clock timing to see (scripts/speed_ab.sh's run-to-run noise is 2-5%).
+# On this project's machines the CPU path runs at 2.5-3.4 instructions per
+# cycle, so its time follows its instruction count (docs/benchmarks.md,
+# "Instructions per sample"): a change that removes instructions is a change
+# that saves time, and speed_ab.sh confirms the larger ones.
+#
+# Only what runs inside `trace_wave` is counted (camera rays, traversal,
+# shading, light and BSDF sampling, the Sobol numbers: every sample's work);
+# set-up, BVH build, film accumulation and image output are not. One thread,
+# the same seed and sample count for every binary, so two binaries that make
+# the same image count the same paths.
+#
+# Usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE...
+#   WIDTH (default 32) and SPP (default 16) set the render; prints a markdown
+#   table of instructions per sample and B / A.
+set -euo pipefail
+command -v valgrind > /dev/null || { echo "instr_count.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
+bins=()
+while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$(realpath "$1")"); shift; done
+[ "${1:-}" = "--" ] && shift
+[ ${#bins[@]} -ge 1 ] && [ $# -ge 1 ] || { echo "usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE..." >&2; exit 2; }
+width=${WIDTH:-32}; spp=${SPP:-16}
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+
+count() { # binary scene -> instructions per sample
+  local out="$tmp/cg.out" stats="$tmp/stats.json"
+  RAYON_NUM_THREADS=1 valgrind --tool=callgrind --toggle-collect='*trace_wave*' \
+    --callgrind-out-file="$out" "$1" render "$2" -o "$tmp/img.exr" --backend cpu \
+    --width "$width" --spp "$spp" --quiet --stats "$stats" 2> /dev/null
+  python3 - "$out" "$stats" << 'EOF'
+import json, sys
+ir = next(int(l.split()[1]) for l in open(sys.argv[1]) if l.startswith(("summary:", "totals:")))
+print(f"{ir / json.load(open(sys.argv[2]))['samples']:.0f}")
+EOF
+}
+
+echo "\`WIDTH=$width SPP=$spp scripts/instr_count.sh ${bins[*]##*/target/} -- ...\` (instructions per sample inside trace_wave, one thread)"
+echo
+if [ ${#bins[@]} -eq 2 ]; then
+  echo "| scene | A | B | B / A |"; echo "|---|---:|---:|---:|"
+else
+  echo "| scene | instructions per sample |"; echo "|---|---:|"
+fi
+for scene in "$@"; do
+  name=$(basename "${scene%.*}")
+  a=$(count "${bins[0]}" "$scene")
+  if [ ${#bins[@]} -eq 2 ]; then
+    b=$(count "${bins[1]}" "$scene")
+    echo "| $name | $a | $b | $(python3 -c "print(f'{$b / $a:.3f}')") |"
+  else
+    echo "| $name | $a |"
+  fi
+done
