@@ -380,37 +380,6 @@ struct Arrival {
     wo: Vec3,
 }
 
-/// A light sample's work before and after its shadow ray
-/// ([`PathTracer::next_event`]).
-#[derive(Clone, Copy, Debug)]
-struct NextEvent {
-    /// Where f |cos| > 0: the shadow ray.
-    shadow: Option<Ray>,
-    /// The shadow ray was traced and found nothing in the way.
-    clear: bool,
-    /// f |cos| (the fold's where it folds).
-    f: Vec3,
-    /// The light sample's Le / pdf, density (for MIS) and delta flag.
-    weight: Vec3,
-    light_pdf: f32,
-    delta: bool,
-    /// The fold's density, which it finds with f.
-    folded_pdf: Option<f32>,
-    wi_local: Vec3,
-}
-
-/// A path vertex between its light sample and its BSDF sample
-/// ([`PathTracer::begin`]).
-#[derive(Clone, Copy, Debug)]
-struct Vertex<'a> {
-    bsdf: BsdfAt<'a>,
-    fold: Option<Fold>,
-    bg_normal: Vec3,
-    sample_lights: bool,
-    /// The light sample, where one was drawn.
-    nee: Option<NextEvent>,
-}
-
 /// The interpolated shading frame at a hit, with the geometric normal.
 #[derive(Clone, Copy, Debug)]
 struct SurfaceFrame {
@@ -570,13 +539,15 @@ impl<'a> PathTracer<'a> {
         }
     }
 
-    /// Next-event estimation at a hit up to its shadow ray: the light
-    /// sample `ls`'s f |cos| and, where that is not zero, the shadow ray
-    /// from `p` (error bound `p_err`) toward it ([`Self::test_shadow`]
-    /// traces it, [`Self::next_event_radiance`] weighs the sample).
-    /// Directions on different sides of the geometric and shading normals
-    /// are discarded (the light-leak rule), except that a folded BSDF
-    /// (`fold`) takes every direction above the geometric surface.
+    /// Next-event estimation at a hit: the light sample `ls`'s
+    /// f |cos| Le / pdf, MIS-weighted, where the shadow ray from `p` (error
+    /// bound `p_err`) toward it finds nothing in the way; zero where it is
+    /// blocked or f |cos| is zero (then no shadow ray is traced). Directions
+    /// on different sides of the geometric and shading normals are
+    /// discarded (the light-leak rule), except that a folded BSDF (`fold`)
+    /// takes every direction above the geometric surface. The BSDF's
+    /// density for MIS is found only for a clear shadow ray (the fold finds
+    /// it with f).
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn next_event(
@@ -588,10 +559,8 @@ impl<'a> PathTracer<'a> {
         bsdf: &BsdfAt,
         fold: Option<Fold>,
         rays: &mut u64,
-    ) -> NextEvent {
+    ) -> Vec3 {
         let wi_local = sf.frame.to_local(ls.wi);
-        // f |cos| and the BSDF's density for MIS (deferred until the
-        // shadow ray is clear, except where the fold has both).
         let (f, folded_pdf) = match fold {
             Some(fd) => {
                 let (f, pdf) = fd.eval_pdf(bsdf, wi_local);
@@ -602,44 +571,21 @@ impl<'a> PathTracer<'a> {
             }
             None => (Vec3::ZERO, None),
         };
-        let shadow = (f.max_element() > 0.0).then(|| {
-            *rays += 1;
-            self.shadow_ray(p, p_err, sf.ng, ls)
-        });
-        NextEvent {
-            shadow,
-            clear: false,
-            f,
-            weight: ls.weight,
-            light_pdf: ls.pdf,
-            delta: ls.delta,
-            folded_pdf,
-            wi_local,
-        }
-    }
-
-    /// Trace a light sample's shadow ray.
-    #[inline(always)]
-    fn test_shadow(&self, ne: &mut NextEvent) {
-        if let Some(shadow) = &ne.shadow {
-            ne.clear = shadow.tmax > 0.0 && !self.scene.occluded_with(shadow, self.masks);
-        }
-    }
-
-    /// A traced light sample's f |cos| Le / pdf, MIS-weighted; zero where
-    /// its shadow ray was blocked.
-    #[inline(always)]
-    fn next_event_radiance(&self, ne: &NextEvent, bsdf: &BsdfAt) -> Vec3 {
-        if !ne.clear {
+        if !(f.max_element() > 0.0) {
             return Vec3::ZERO;
         }
-        let w = if ne.delta {
+        *rays += 1;
+        let shadow = self.shadow_ray(p, p_err, sf.ng, ls);
+        if !(shadow.tmax > 0.0) || self.scene.occluded_with(&shadow, self.masks) {
+            return Vec3::ZERO;
+        }
+        let w = if ls.delta {
             1.0
         } else {
-            let pdf = ne.folded_pdf.unwrap_or_else(|| bsdf.pdf(ne.wi_local));
-            mis_light(self.mis, ne.light_pdf, pdf)
+            let pdf = folded_pdf.unwrap_or_else(|| bsdf.pdf(wi_local));
+            mis_light(self.mis, ls.pdf, pdf)
         };
-        ne.f * ne.weight * w
+        f * ls.weight * w
     }
 
     /// One radiance sample for pixel (x, y), sample index `s`; `rays`
@@ -674,9 +620,11 @@ impl<'a> PathTracer<'a> {
     }
 
     /// The path's vertex at the hit `at`, bounce `depth`, with the
-    /// bounce's numbers `u`: shade it, trace its light sample's shadow ray,
-    /// add the light sample and draw the next ray. False where the path
-    /// ends.
+    /// bounce's numbers `u`: shade it; where it samples lights, draw the
+    /// light sample, trace its shadow ray and add it; then the BSDF's
+    /// sample as the path's next ray, and Russian roulette. False where the
+    /// path ends. (Its pieces stay locals of one body: a struct carrying
+    /// them between steps was copied at every vertex.)
     #[inline(always)]
     fn vertex(
         &self,
@@ -688,11 +636,35 @@ impl<'a> PathTracer<'a> {
     ) -> bool {
         let mut textured = None;
         let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo, &mut textured);
-        let mut v = self.begin(at, &sf, bsdf, u, rays);
-        if let Some(ne) = &mut v.nee {
-            self.test_shadow(ne);
+        let (p, wo) = (at.p, at.wo);
+        let wo_local = sf.frame.to_local(wo);
+        let bsdf_at = bsdf.at(wo_local);
+        let fold = sf.fold_for(wo_local);
+        let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
+        let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
+        if sample_lights
+            && let Some(ls) = (self.lights)
+                .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
+        {
+            path.radiance +=
+                path.throughput * self.next_event(&ls, p, at.p_err, &sf, &bsdf_at, fold, rays);
         }
-        self.scatter(path, at, &sf, &v, u, depth)
+        // BSDF sampling: the next ray.
+        let Some((bs, wi)) = next_direction(&bsdf_at, &sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
+            return false;
+        };
+        path.throughput *= bs.weight;
+        path.eta *= bs.eta;
+        path.prev_mis = sample_lights && !bs.delta;
+        path.prev_bsdf_pdf = bs.pdf;
+        path.prev_bg_normal = bg_normal;
+        path.prev_p = p;
+        path.ray = Ray {
+            o: offset_origin(p, at.p_err, sf.ng, wi),
+            d: wi,
+            tmax: f32::MAX,
+        };
+        self.roulette(path, depth + 1, u.rr)
     }
 
     /// Trace the path's ray: what it finds (the background or an emitter,
@@ -750,74 +722,6 @@ impl<'a> PathTracer<'a> {
             p_err,
             wo,
         })
-    }
-
-    /// The vertex at the hit `at` (shading frame `sf`, BSDF `bsdf`) with
-    /// the bounce's numbers `u`: the BSDF seen from wo and, where it
-    /// samples lights, the light sample up to its shadow ray.
-    #[inline(always)]
-    fn begin<'b>(
-        &self,
-        at: &Arrival,
-        sf: &SurfaceFrame,
-        bsdf: &'b Bsdf,
-        u: &crate::sobol::BounceSamples,
-        rays: &mut u64,
-    ) -> Vertex<'b> {
-        let (p, wo) = (at.p, at.wo);
-        let wo_local = sf.frame.to_local(wo);
-        let bsdf_at = bsdf.at(wo_local);
-        let fold = sf.fold_for(wo_local);
-        let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
-        let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
-        let nee = if sample_lights {
-            self.lights
-                .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
-                .map(|ls| self.next_event(&ls, p, at.p_err, sf, &bsdf_at, fold, rays))
-        } else {
-            None
-        };
-        Vertex {
-            bsdf: bsdf_at,
-            fold,
-            bg_normal,
-            sample_lights,
-            nee,
-        }
-    }
-
-    /// The vertex `v` (its shadow ray traced) at bounce `depth`: its light
-    /// sample's radiance, then the BSDF's sample as the path's next ray and
-    /// Russian roulette. False where the path ends.
-    #[inline(always)]
-    fn scatter(
-        &self,
-        path: &mut PathState,
-        at: &Arrival,
-        sf: &SurfaceFrame,
-        v: &Vertex,
-        u: &crate::sobol::BounceSamples,
-        depth: u32,
-    ) -> bool {
-        if let Some(ne) = &v.nee {
-            path.radiance += path.throughput * self.next_event_radiance(ne, &v.bsdf);
-        }
-        // BSDF sampling: the next ray.
-        let Some((bs, wi)) = next_direction(&v.bsdf, sf, at.wo, v.fold, u.bsdf_lobe, u.bsdf) else {
-            return false;
-        };
-        path.throughput *= bs.weight;
-        path.eta *= bs.eta;
-        path.prev_mis = v.sample_lights && !bs.delta;
-        path.prev_bsdf_pdf = bs.pdf;
-        path.prev_bg_normal = v.bg_normal;
-        path.prev_p = at.p;
-        path.ray = Ray {
-            o: offset_origin(at.p, at.p_err, sf.ng, wi),
-            d: wi,
-            tmax: f32::MAX,
-        };
-        self.roulette(path, depth + 1, u.rr)
     }
 
     /// Russian roulette after `depth` bounces, with the bounce's number

@@ -48,9 +48,18 @@ impl WaveSampler<'_> {
     }
 }
 
-/// The lanes of `live` (bit k: lane k), lowest first.
+/// The lanes of `live` (bit k: lane k), lowest first: one step per set
+/// bit, not a test of all eight.
+#[inline(always)]
 fn lanes_of(live: u8) -> impl Iterator<Item = usize> {
-    (0..8).filter(move |k| live & (1 << k) != 0)
+    let mut rest = live;
+    std::iter::from_fn(move || {
+        (rest != 0).then(|| {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            k
+        })
+    })
 }
 
 impl PathTracer<'_> {
