@@ -628,6 +628,7 @@ impl Lights {
 /// its emission on the front face (the side the geometric normal points to)
 /// or on both faces when double-sided; `None` when it sends nothing.
 /// Times the emissive texture at barycentrics (u, v), when there is one.
+#[inline]
 pub fn emitted(scene: &Scene, tri: u32, u: f32, v: f32, w: Vec3) -> Option<Vec3> {
     let t = &scene.triangles[tri as usize];
     let m = &scene.materials[t.material as usize];

@@ -5,15 +5,18 @@ use glam::{Vec2, Vec3};
 use super::BsdfSample;
 
 /// f = rho / pi when wo and wi are on the same side, else 0.
+#[inline]
 pub fn diffuse_eval(rho: Vec3, wo: Vec3, wi: Vec3) -> Vec3 {
     lanes::diffuse_eval(rho.into(), wo.into(), wi.into()).into()
 }
 
 /// Cosine-weighted density on wo's side.
+#[inline]
 pub fn diffuse_pdf(wo: Vec3, wi: Vec3) -> f32 {
     lanes::diffuse_pdf(wo.into(), wi.into())
 }
 
+#[inline]
 pub fn diffuse_sample(rho: Vec3, wo: Vec3, u: Vec2) -> Option<BsdfSample> {
     lanes::diffuse_sample(rho.into(), wo.into(), u.into()).single()
 }

@@ -412,7 +412,17 @@ impl<'a> BsdfAt<'a> {
     }
 
     /// [`Bsdf::eval`] at (wo, wi).
+    /// (Lambertian inline: the most common case pays no call.)
+    #[inline]
     pub fn eval(&self, wi: Vec3) -> Vec3 {
+        if let Bsdf::Diffuse { reflectance } = self.bsdf {
+            return diffuse_eval(*reflectance, self.wo, wi);
+        }
+        self.eval_any(wi)
+    }
+
+    /// [`Self::eval`] for every model.
+    fn eval_any(&self, wi: Vec3) -> Vec3 {
         let wo = self.wo;
         match (self.bsdf, &self.coat) {
             (
@@ -437,7 +447,17 @@ impl<'a> BsdfAt<'a> {
     }
 
     /// [`Bsdf::pdf`] at (wo, wi).
+    /// (Lambertian inline: the most common case pays no call.)
+    #[inline]
     pub fn pdf(&self, wi: Vec3) -> f32 {
+        if let Bsdf::Diffuse { .. } = self.bsdf {
+            return diffuse_pdf(self.wo, wi);
+        }
+        self.pdf_any(wi)
+    }
+
+    /// [`Self::pdf`] for every model.
+    fn pdf_any(&self, wi: Vec3) -> f32 {
         let wo = self.wo;
         match (self.bsdf, &self.coat) {
             (
@@ -460,7 +480,17 @@ impl<'a> BsdfAt<'a> {
     }
 
     /// [`Bsdf::sample`] at wo.
+    /// (Lambertian inline: the most common case pays no call.)
+    #[inline]
     pub fn sample(&self, uc: f32, u: Vec2) -> Option<BsdfSample> {
+        if let Bsdf::Diffuse { reflectance } = self.bsdf {
+            return diffuse_sample(*reflectance, self.wo, u);
+        }
+        self.sample_any(uc, u)
+    }
+
+    /// [`Self::sample`] for every model.
+    fn sample_any(&self, uc: f32, u: Vec2) -> Option<BsdfSample> {
         let wo = self.wo;
         match (self.bsdf, &self.coat) {
             (
