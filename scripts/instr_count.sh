@@ -14,7 +14,8 @@
 # the same image count the same paths.
 #
 # Usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE...
-#   WIDTH (default 32) and SPP (default 16) set the render; prints a markdown
+#   WIDTH (default 16) and SPP (default 64) set the render (64 spp: the
+#   per-pixel work, such as the Sobol keys, shares out as in a real render); prints a markdown
 #   table of instructions per sample and B / A.
 set -euo pipefail
 command -v valgrind > /dev/null || { echo "instr_count.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
@@ -22,7 +23,7 @@ bins=()
 while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$(realpath "$1")"); shift; done
 [ "${1:-}" = "--" ] && shift
 [ ${#bins[@]} -ge 1 ] && [ $# -ge 1 ] || { echo "usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE..." >&2; exit 2; }
-width=${WIDTH:-32}; spp=${SPP:-16}
+width=${WIDTH:-16}; spp=${SPP:-64}
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
 
 count() { # binary scene -> instructions per sample
