@@ -407,6 +407,13 @@ device_constants! { LIGHT_CONSTANTS;
     /// graze it and f32 misplaces the points they hit (a chi-square test
     /// failed at 0.5% height, `cpu/tests/light_sampling.rs`).
     SPHERICAL_SAMPLING_HEIGHT: f32 = 0.05;
+    /// The solid angle is not computed where a bound puts it below
+    /// `SPHERICAL_SAMPLING_MIN` by this fraction or more
+    /// (`lights::lanes::near_angle`: omega <= height / (2 d_min^3)): the
+    /// formula's own rounding (about 1e-6 relative at that size) cannot
+    /// carry it back over the minimum, so the decisions are those of the
+    /// solid angle itself.
+    SOLID_ANGLE_BOUND_MARGIN: f32 = 1e-3;
     /// `spherical::atan2_nonneg` (Cephes' `atanf`, which both backends run
     /// instead of the library's `atan`): the range-reduction bounds
     /// tan(3 pi / 8) and tan(pi / 8) and the odd polynomial's coefficients

@@ -49,8 +49,8 @@ pub fn luminance(c: Vec3) -> f32 {
 
 use crate::abi;
 pub use crate::abi::{
-    GpuEmitter, GpuLight, SPHERICAL_SAMPLING_HEIGHT, SPHERICAL_SAMPLING_MAX,
-    SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
+    GpuEmitter, GpuLight, SOLID_ANGLE_BOUND_MARGIN, SPHERICAL_SAMPLING_HEIGHT,
+    SPHERICAL_SAMPLING_MAX, SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
 };
 
 impl GpuEmitter {
@@ -82,10 +82,12 @@ impl GpuEmitter {
 #[inline]
 pub fn spherical_sampling_angle(v: [Vec3; 3], e: &GpuEmitter, p: Vec3) -> Option<f32> {
     let p = V3::from(p);
-    if lanes::far(Vec3::from(e.center).into(), e.radius, e.area, p) {
+    let (far, d_min) = lanes::far(Vec3::from(e.center).into(), e.radius, e.area, p);
+    if far {
         return None;
     }
-    let (ok, omega) = lanes::near_angle(v.map(V3::from), p);
+    let n = (v[1] - v[0]).cross(v[2] - v[0]);
+    let (ok, omega) = lanes::near_angle(v.map(V3::from), n.into(), p, d_min);
     ok.then_some(omega)
 }
 
@@ -95,8 +97,8 @@ pub fn spherical_sampling_angle(v: [Vec3; 3], e: &GpuEmitter, p: Vec3) -> Option
 /// bit.
 pub mod lanes {
     use super::{
-        SPHERICAL_SAMPLING_HEIGHT, SPHERICAL_SAMPLING_MAX, SPHERICAL_SAMPLING_MIN,
-        SPHERICAL_SAMPLING_SHAPE,
+        SOLID_ANGLE_BOUND_MARGIN, SPHERICAL_SAMPLING_HEIGHT, SPHERICAL_SAMPLING_MAX,
+        SPHERICAL_SAMPLING_MIN, SPHERICAL_SAMPLING_SHAPE,
     };
     use crate::lanes::{Lane, V3};
     use crate::spherical::lanes::spherical_triangle_shape;
@@ -105,31 +107,50 @@ pub mod lanes {
     /// (centroid `center`, bounding radius `radius`, area `area`) is far
     /// for its size from `p`: omega <= area / d_min^2, and d_min >= the
     /// distance to the centroid less the bounding radius. Exact as a
-    /// bound, it spares most light samples the solid angle.
+    /// bound, it spares most light samples the solid angle. Returns the
+    /// mask and that d_min (for [`near_angle`]'s tighter bound).
     #[inline(always)]
-    pub fn far<L: Lane>(center: V3<L>, radius: L, area: L, p: V3<L>) -> L::Mask {
+    pub fn far<L: Lane>(center: V3<L>, radius: L, area: L, p: V3<L>) -> (L::Mask, L) {
         let d2 = (p - center).length_squared();
         let d_min = d2.sqrt() - radius;
-        d2.gt(radius * radius) & area.lt(L::splat(SPHERICAL_SAMPLING_MIN) * d_min * d_min)
+        let far = d2.gt(radius * radius) & area.lt(L::splat(SPHERICAL_SAMPLING_MIN) * d_min * d_min);
+        (far, d_min)
     }
 
     /// The rest of [`super::spherical_sampling_angle`] for an emitter
-    /// that is not [`far`]: whether it is sampled by solid angle from `p`,
-    /// and the solid angle.
+    /// that is not [`far`] (`n`: (v1 - v0) x (v2 - v0), the triangle's
+    /// geometric normal; `d_min`: [`far`]'s bound on the distance to it):
+    /// whether it is sampled by solid angle from `p`, and the solid
+    /// angle where it is.
     #[inline(always)]
-    pub fn near_angle<L: Lane>(v: [V3<L>; 3], p: V3<L>) -> (L::Mask, L) {
+    pub fn near_angle<L: Lane>(v: [V3<L>; 3], n: V3<L>, p: V3<L>, d_min: L) -> (L::Mask, L) {
         // Nearly in the triangle's plane (height over the farthest
         // vertex's distance): the sampled directions graze the plane, where
         // f32 loses the point they hit.
-        let n = (v[1] - v[0]).cross(v[2] - v[0]);
         let far2 = (v[0] - p)
             .length_squared()
             .max((v[1] - p).length_squared())
             .max((v[2] - p).length_squared());
         let height = n.dot(p - v[0]).abs();
         let high = height.ge(L::splat(SPHERICAL_SAMPLING_HEIGHT) * n.length() * far2.sqrt());
+        // Too small for its height: every point of the plane at distance
+        // r >= d_min subtends cos / r^2 = h / r^3 per area, so
+        // omega <= h area / d_min^3 = height / (2 d_min^3) (`height` is
+        // h |n| and area |n| / 2). Where that is under the minimum, with
+        // SOLID_ANGLE_BOUND_MARGIN for the rounding of omega's own
+        // formula, the test below would fail: the same decisions without
+        // the solid angle.
+        let small = d_min.gt(L::zero())
+            & height.lt(
+                L::splat(2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN))
+                    * (d_min * d_min * d_min),
+            );
+        let want = high & !small;
+        if L::none(want) {
+            return (want, L::zero());
+        }
         let (omega, shape) = spherical_triangle_shape(v, p);
-        let ok = high
+        let ok = want
             & omega.ge(L::splat(SPHERICAL_SAMPLING_MIN))
             & omega.le(L::splat(SPHERICAL_SAMPLING_MAX))
             & shape.ge(L::splat(SPHERICAL_SAMPLING_SHAPE));
@@ -137,21 +158,26 @@ pub mod lanes {
     }
 }
 
-/// The radiance each lane's emitter (`ems`) sends from barycentrics `b`
-/// toward -`wi`, lane by lane ([`emitted`]) where `valid`: where it sends
-/// any, and that radiance.
+/// The radiance each lane's emitter (`ems`, geometric normals `ng`) sends
+/// from barycentrics `b` toward -`wi`, lane by lane ([`emitted`]) where
+/// `valid`: where it sends any, and that radiance.
 #[inline(always)]
 fn emission_lanes<L: Lane>(
     scene: &Scene,
     ems: &[GpuEmitter; 8],
+    ng: V3<L>,
     valid: L::Mask,
     b: V2<L>,
     wi: V3<L>,
 ) -> (L::Mask, V3<L>) {
     let mut le = [Vec3::ZERO; 8];
+    let front = ng.dot(-wi).gt(L::zero());
     let emits = L::from_fn(|l| {
         let e = L::mask_lane(valid, l)
-            .then(|| emitted(scene, ems[l].tri, b.x.lane(l), b.y.lane(l), -wi.lane(l)))
+            .then(|| {
+                let front = L::mask_lane(front, l);
+                emitted_facing(scene, ems[l].tri, b.x.lane(l), b.y.lane(l), front)
+            })
             .flatten();
         le[l] = e.unwrap_or(Vec3::ZERO);
         if e.is_some() { 1.0 } else { 0.0 }
@@ -437,23 +463,25 @@ impl Lights {
             gather(|t, _| t.p1),
             gather(|t, _| t.p2),
         ];
+        // The geometric normal, once for the solid angle's test, the
+        // emitting side and the density by area.
+        let ng = (v[1] - v[0]).cross(v[2] - v[0]);
         let e_area = L::from_fn(|l| em(l).area);
         let pmf = L::from_fn(|l| em(l).pmf);
         let far = || {
             let center = gather(|_, e| e.center);
             lanes::far(center, L::from_fn(|l| em(l).radius), e_area, p)
         };
-        let (found, b, solid, omega) = self.emitter_point(v, far, p, u, live);
+        let (found, b, solid, omega) = self.emitter_point(v, ng, far, p, u, live);
         let q = v[0].scale(L::one() - b.x - b.y) + v[1].scale(b.x) + v[2].scale(b.y);
         let d = q - p;
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();
         let wi = d / dist;
-        let (emits, le) = emission_lanes(scene, &ems, found & dist.gt(L::zero()), b, wi);
+        let (emits, le) = emission_lanes(scene, &ems, ng, found & dist.gt(L::zero()), b, wi);
         let mut valid = emits;
         let area_p = L::splat(pr.area);
         let pdf_by_area = || {
-            let ng = (v[1] - v[0]).cross(v[2] - v[0]);
             let cos_l = ng.normalize().dot(-wi).abs();
             area_p * pmf / e_area * dist2 / cos_l
         };
@@ -474,16 +502,18 @@ impl Lights {
         }
     }
 
-    /// The point of each lane's emitter sample on triangle `v`
-    /// ([`Self::sample_emitter_lanes`]): by solid angle where it pays
+    /// The point of each lane's emitter sample on triangle `v` (geometric
+    /// normal `ng`) ([`Self::sample_emitter_lanes`]): by solid angle where it pays
     /// ([`spherical_sampling_angle`], `far` its first exit), else uniformly
     /// by area. Where the point stands (among `live`), its barycentrics,
     /// and where it went by solid angle, with the solid angle.
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn emitter_point<L: Lane>(
         &self,
         v: [V3<L>; 3],
-        far: impl FnOnce() -> L::Mask,
+        ng: V3<L>,
+        far: impl FnOnce() -> (L::Mask, L),
         p: V3<L>,
         u: V2<L>,
         live: L::Mask,
@@ -492,11 +522,12 @@ impl Lights {
         let (solid, omega) = if self.sampling == LightSampling::Area {
             (no, L::zero())
         } else {
-            let near = live & !far();
+            let (far, d_min) = far();
+            let near = live & !far;
             if L::none(near) {
                 (no, L::zero())
             } else {
-                let (ok, omega) = lanes::near_angle(v, p);
+                let (ok, omega) = lanes::near_angle(v, ng, p, d_min);
                 (ok & near, omega)
             }
         };
@@ -630,12 +661,19 @@ impl Lights {
 /// Times the emissive texture at barycentrics (u, v), when there is one.
 #[inline]
 pub fn emitted(scene: &Scene, tri: u32, u: f32, v: f32, w: Vec3) -> Option<Vec3> {
+    let front = scene.triangles[tri as usize].geometric_normal().dot(w) > 0.0;
+    emitted_facing(scene, tri, u, v, front)
+}
+
+/// [`emitted`] with the side known: `front` is whether `w` leaves the
+/// front face (a light sample has the triangle's normal at hand).
+#[inline]
+fn emitted_facing(scene: &Scene, tri: u32, u: f32, v: f32, front: bool) -> Option<Vec3> {
     let t = &scene.triangles[tri as usize];
     let m = &scene.materials[t.material as usize];
     if !m.is_emissive() {
         return None;
     }
-    let front = t.geometric_normal().dot(w) > 0.0;
     if front || t.flags & TRI_DOUBLE_SIDED != 0 {
         Some(m.emission * emission_factor(&scene.textures, t.material, tri, u, v))
     } else {

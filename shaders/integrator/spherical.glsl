@@ -121,11 +121,9 @@ float spherical_sampling_angle(vec3 v0, vec3 v1, vec3 v2, vec3 center, float rad
     // Far for its size (omega <= area / d_min^2): by area, no solid angle.
     vec3 pc = p - center;
     float d2 = dot(pc, pc);
-    if (d2 > radius * radius) {
-        float d_min = sqrt(d2) - radius;
-        if (area < SPHERICAL_SAMPLING_MIN * d_min * d_min) {
-            return 0.0;
-        }
+    float d_min = sqrt(d2) - radius;
+    if (d2 > radius * radius && area < SPHERICAL_SAMPLING_MIN * d_min * d_min) {
+        return 0.0;
     }
     // Nearly in the triangle's plane: by area (grazing directions).
     vec3 n = cross(v1 - v0, v2 - v0);
@@ -135,6 +133,13 @@ float spherical_sampling_angle(vec3 v0, vec3 v1, vec3 v2, vec3 center, float rad
     float far2 = max(dot(f0, f0), max(dot(f1, f1), dot(f2, f2)));
     float height = abs(dot(n, p - v0));
     if (!(height >= SPHERICAL_SAMPLING_HEIGHT * length(n) * sqrt(far2))) {
+        return 0.0;
+    }
+    // Too small for its height (omega <= height / (2 d_min^3), lights.rs
+    // near_angle): by area, no solid angle.
+    if (d_min > 0.0
+        && height < 2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN)
+                        * (d_min * d_min * d_min)) {
         return 0.0;
     }
     vec2 s = spherical_triangle_shape(v0, v1, v2, p);
