@@ -409,7 +409,8 @@ device_constants! { LIGHT_CONSTANTS;
     SPHERICAL_SAMPLING_HEIGHT: f32 = 0.05;
     /// The solid angle is not computed where a bound puts it below
     /// `SPHERICAL_SAMPLING_MIN` by this fraction or more
-    /// (`lights::lanes::near_angle`: omega <= height / (2 d_min^3)): the
+    /// (`lights::lanes::near_angle`: omega <= height / (2 d^3), d a lower
+    /// bound on the distance to the triangle): the
     /// formula's own rounding (about 1e-6 relative at that size) cannot
     /// carry it back over the minimum, so the decisions are those of the
     /// solid angle itself.

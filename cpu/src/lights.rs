@@ -132,18 +132,22 @@ pub mod lanes {
             .max((v[1] - p).length_squared())
             .max((v[2] - p).length_squared());
         let height = n.dot(p - v[0]).abs();
-        let high = height.ge(L::splat(SPHERICAL_SAMPLING_HEIGHT) * n.length() * far2.sqrt());
+        let n_len = n.length();
+        let high = height.ge(L::splat(SPHERICAL_SAMPLING_HEIGHT) * n_len * far2.sqrt());
         // Too small for its height: every point of the plane at distance
-        // r >= d_min subtends cos / r^2 = h / r^3 per area, so
-        // omega <= h area / d_min^3 = height / (2 d_min^3) (`height` is
-        // h |n| and area |n| / 2). Where that is under the minimum, with
-        // SOLID_ANGLE_BOUND_MARGIN for the rounding of omega's own
-        // formula, the test below would fail: the same decisions without
-        // the solid angle.
-        let small = d_min.gt(L::zero())
+        // r subtends cos / r^2 = h / r^3 per area, so
+        // omega <= h area / d^3 = height / (2 d^3) for any d <= r over the
+        // triangle (`height` is h |n| and area |n| / 2): here the larger of
+        // the plane's distance h and `d_min`. Where that is under the
+        // minimum, with SOLID_ANGLE_BOUND_MARGIN for the rounding of
+        // omega's own formula, the test below would fail: the same
+        // decisions without the solid angle.
+        let h = L::select(n_len.gt(L::zero()), height / n_len, L::zero());
+        let d = h.max(d_min);
+        let small = d.gt(L::zero())
             & height.lt(
                 L::splat(2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN))
-                    * (d_min * d_min * d_min),
+                    * (d * d * d),
             );
         let want = high & !small;
         if L::none(want) {

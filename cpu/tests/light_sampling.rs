@@ -478,8 +478,9 @@ fn the_f32_sampler_follows_an_f64_reference() {
 
 #[test]
 fn the_solid_angle_bound_keeps_the_solid_angle_s_decisions() {
-    // `near_angle` skips the solid angle where omega <= height / (2 d_min^3)
-    // puts it under the minimum. The decisions must be those of the rule
+    // `near_angle` skips the solid angle where omega <= height / (2 d^3)
+    // (d: the larger of the plane's distance and d_min) puts it under the
+    // minimum. The decisions must be those of the rule
     // without that exit (the far test, the height, the solid angle's range,
     // the shape), the solid angle the same bits, and the bound must be an
     // upper bound of the exact (f64) solid angle wherever it fires.
@@ -519,13 +520,14 @@ fn the_solid_angle_bound_keeps_the_solid_angle_s_decisions() {
         }
         near += 1;
         solid += want.is_some() as u32;
-        let bound_fires = d_min > 0.0
-            && height
-                < 2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN) * d_min.powi(3);
+        // The bound's distance: the plane's, or d_min where that is more.
+        let d = (height / n.length()).max(d_min);
+        let bound_fires = d > 0.0
+            && height < 2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN) * d.powi(3);
         if bound_fires {
             fired += 1;
             let exact = solid_angle_f64(v.map(|x| x.as_dvec3()), p.as_dvec3());
-            let bound = height as f64 / (2.0 * (d_min as f64).powi(3));
+            let bound = height as f64 / (2.0 * (d as f64).powi(3));
             assert!(exact <= bound * (1.0 + 1e-4), "{k}: {exact} > {bound}");
         }
     }

@@ -132,14 +132,16 @@ float spherical_sampling_angle(vec3 v0, vec3 v1, vec3 v2, vec3 center, float rad
     vec3 f2 = v2 - p;
     float far2 = max(dot(f0, f0), max(dot(f1, f1), dot(f2, f2)));
     float height = abs(dot(n, p - v0));
-    if (!(height >= SPHERICAL_SAMPLING_HEIGHT * length(n) * sqrt(far2))) {
+    float n_len = length(n);
+    if (!(height >= SPHERICAL_SAMPLING_HEIGHT * n_len * sqrt(far2))) {
         return 0.0;
     }
-    // Too small for its height (omega <= height / (2 d_min^3), lights.rs
-    // near_angle): by area, no solid angle.
-    if (d_min > 0.0
-        && height < 2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN)
-                        * (d_min * d_min * d_min)) {
+    // Too small for its height (omega <= height / (2 d^3), d the larger of
+    // the plane's distance and d_min; lights.rs near_angle): by area, no
+    // solid angle.
+    float d = max(n_len > 0.0 ? height / n_len : 0.0, d_min);
+    if (d > 0.0
+        && height < 2.0 * SPHERICAL_SAMPLING_MIN * (1.0 - SOLID_ANGLE_BOUND_MARGIN) * (d * d * d)) {
         return 0.0;
     }
     vec2 s = spherical_triangle_shape(v0, v1, v2, p);
