@@ -19,8 +19,8 @@
 #   table of instructions per sample and B / A.
 set -euo pipefail
 command -v valgrind > /dev/null || { echo "instr_count.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
-bins=()
-while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$(realpath "$1")"); shift; done
+bins=() names=()
+while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$(realpath "$1")"); names+=("$1"); shift; done
 [ "${1:-}" = "--" ] && shift
 [ ${#bins[@]} -ge 1 ] && [ $# -ge 1 ] || { echo "usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE..." >&2; exit 2; }
 width=${WIDTH:-16}; spp=${SPP:-64}
@@ -38,7 +38,7 @@ print(f"{ir / json.load(open(sys.argv[2]))['samples']:.0f}")
 EOF
 }
 
-echo "\`WIDTH=$width SPP=$spp scripts/instr_count.sh ${bins[*]##*/target/} -- ...\` (instructions per sample inside trace_wave, one thread)"
+echo "\`WIDTH=$width SPP=$spp scripts/instr_count.sh ${names[*]} -- $*\` (instructions per sample inside trace_wave, one thread)"
 echo
 if [ ${#bins[@]} -eq 2 ]; then
   echo "| scene | A | B | B / A |"; echo "|---|---:|---:|---:|"
