@@ -18,6 +18,7 @@
 #   per-pixel work, such as the Sobol keys, shares out as in a real render); prints a markdown
 #   table of instructions per sample and B / A.
 set -euo pipefail
+shopt -s inherit_errexit
 command -v valgrind > /dev/null || { echo "instr_count.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
 bins=() names=()
 while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$(realpath "$1")"); names+=("$1"); shift; done
@@ -30,7 +31,8 @@ count() { # binary scene -> instructions per sample
   local out="$tmp/cg.out" stats="$tmp/stats.json"
   RAYON_NUM_THREADS=1 valgrind --tool=callgrind --toggle-collect='*trace_wave*' \
     --callgrind-out-file="$out" "$1" render "$2" -o "$tmp/img.exr" --backend cpu \
-    --width "$width" --spp "$spp" --quiet --stats "$stats" 2> /dev/null
+    --width "$width" --spp "$spp" --quiet --stats "$stats" 2> "$tmp/err" \
+    || { echo "instr_count.sh: $1 did not render $2: $(grep -v '^==' "$tmp/err" | tail -1)" >&2; return 1; }
   python3 - "$out" "$stats" << 'EOF'
 import json, sys
 ir = next(int(l.split()[1]) for l in open(sys.argv[1]) if l.startswith(("summary:", "totals:")))
