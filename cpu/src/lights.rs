@@ -113,7 +113,8 @@ pub mod lanes {
     pub fn far<L: Lane>(center: V3<L>, radius: L, area: L, p: V3<L>) -> (L::Mask, L) {
         let d2 = (p - center).length_squared();
         let d_min = d2.sqrt() - radius;
-        let far = d2.gt(radius * radius) & area.lt(L::splat(SPHERICAL_SAMPLING_MIN) * d_min * d_min);
+        let far =
+            d2.gt(radius * radius) & area.lt(L::splat(SPHERICAL_SAMPLING_MIN) * d_min * d_min);
         (far, d_min)
     }
 

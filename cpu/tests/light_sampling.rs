@@ -501,7 +501,10 @@ fn the_solid_angle_bound_keeps_the_solid_angle_s_decisions() {
         let d_min = d2.sqrt() - r;
         let far = d2 > r * r && e.area < SPHERICAL_SAMPLING_MIN * d_min * d_min;
         let n = (v[1] - v[0]).cross(v[2] - v[0]);
-        let far2 = v.iter().map(|x| (*x - p).length_squared()).fold(0.0f32, f32::max);
+        let far2 = v
+            .iter()
+            .map(|x| (*x - p).length_squared())
+            .fold(0.0f32, f32::max);
         let height = n.dot(p - v[0]).abs();
         let high = height >= SPHERICAL_SAMPLING_HEIGHT * n.length() * far2.sqrt();
         let (omega, shape) = spherical_triangle_shape(v, p);
@@ -534,5 +537,8 @@ fn the_solid_angle_bound_keeps_the_solid_angle_s_decisions() {
     // The exit is taken often and the solid angle still used often, so the
     // comparison above covers both sides.
     // (Seed 77: 3,774 near, the bound fired on 387, 1,847 by solid angle.)
-    assert!(fired > near / 20 && solid > near / 10, "near {near}, fired {fired}, solid {solid}");
+    assert!(
+        fired > near / 20 && solid > near / 10,
+        "near {near}, fired {fired}, solid {solid}"
+    );
 }

@@ -635,7 +635,14 @@ impl<'a> PathTracer<'a> {
         rays: &mut u64,
     ) -> bool {
         let mut textured = None;
-        let (sf, bsdf) = self.shade(at.material, at.hit.tri, at.hit.u, at.hit.v, at.wo, &mut textured);
+        let (sf, bsdf) = self.shade(
+            at.material,
+            at.hit.tri,
+            at.hit.u,
+            at.hit.v,
+            at.wo,
+            &mut textured,
+        );
         let (p, wo) = (at.p, at.wo);
         let wo_local = sf.frame.to_local(wo);
         let bsdf_at = bsdf.at(wo_local);
@@ -643,8 +650,9 @@ impl<'a> PathTracer<'a> {
         let bg_normal = background_direction_frame(sf.ns, wo, bsdf.has_transmission());
         let sample_lights = self.nee && !self.lights.is_empty() && !bsdf.is_delta();
         if sample_lights
-            && let Some(ls) = (self.lights)
-                .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
+            && let Some(ls) =
+                self.lights
+                    .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
         {
             path.radiance +=
                 path.throughput * self.next_event(&ls, p, at.p_err, &sf, &bsdf_at, fold, rays);
