@@ -2,10 +2,11 @@
 # Instructions per sample of the CPU backend, counted by valgrind's callgrind:
 # a deterministic measure of the sampling work, for changes too small for
 # wall-clock timing to see (scripts/speed_ab.sh's run-to-run noise is 2-5%).
-# On this project's machines the CPU path runs at 2.5-3.4 instructions per
-# cycle, so its time follows its instruction count (docs/benchmarks.md,
-# "Instructions per sample"): a change that removes instructions is a change
-# that saves time, and speed_ab.sh confirms the larger ones.
+# On this project's machines the CPU path runs at about 3 instructions per
+# cycle, so its time follows its instruction count, though not one for one:
+# the instructions the eighth session removed (mostly moves and predictable
+# branches) saved about half as much time (docs/benchmarks.md, "Instructions
+# per sample"). speed_ab.sh confirms the larger changes.
 #
 # Only what runs inside `trace_wave` is counted (camera rays, traversal,
 # shading, light and BSDF sampling, the Sobol numbers: every sample's work);
@@ -15,8 +16,8 @@
 #
 # Usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE...
 #   WIDTH (default 16) and SPP (default 64) set the render (64 spp: the
-#   per-pixel work, such as the Sobol keys, shares out as in a real render); prints a markdown
-#   table of instructions per sample and B / A.
+#   per-pixel work, such as the Sobol keys, shares out as in a real render);
+#   prints a markdown table of instructions per sample and B / A.
 set -euo pipefail
 shopt -s inherit_errexit
 command -v valgrind > /dev/null || { echo "instr_count.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
