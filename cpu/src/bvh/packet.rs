@@ -59,7 +59,7 @@ mod x86 {
     use super::super::traverse::{PreparedRay, SLAB_PAD};
     use super::super::wide::{is_leaf_ref, leaf_range};
     use super::super::wide_traverse::order_hits;
-    use super::super::wide_traverse::x86::{PLANES8, block_closest, hits8, ray4, slab_end8};
+    use super::super::wide_traverse::x86::{PLANES8, block_closest, hits8, leaf_ray, slab_end8};
     use super::super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE};
     use super::{Hit, PACKET, Ray};
 
@@ -351,7 +351,7 @@ mod x86 {
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    block_closest(&ray4(&p.ray(k)), block, &mut best[k], &|_, _, _| true);
+                    block_closest(&leaf_ray(&p.ray(k)), block, &mut best[k], &|_, _, _| true);
                     best_t[k] = best[k].t;
                 }
                 far = farthest(&best_t);

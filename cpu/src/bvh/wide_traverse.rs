@@ -508,6 +508,38 @@ pub(super) mod x86 {
         }
     }
 
+    /// The triangle test's constants for a leaf block, broadcast to four
+    /// lanes: the origin's coordinates in the ray's axis order (kx, ky,
+    /// kz), the shear, and the byte offsets of the kx, ky, kz rows in a
+    /// block vertex (`LeafBlock::v[k]`), so no array of the ray is indexed
+    /// by an axis at run time.
+    pub(in crate::bvh) struct LeafRay {
+        o: [__m128; 3],
+        shear: [__m128; 3],
+        rows: [usize; 3],
+    }
+
+    /// A row of a block vertex is four `f32`.
+    const ROW_BYTES: usize = std::mem::size_of::<[f32; 4]>();
+
+    #[inline(always)]
+    pub(in crate::bvh) fn leaf_ray(r: &PreparedRay) -> LeafRay {
+        let (o, k) = (r.o.to_array(), [r.kx, r.ky, r.kz]);
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        #[allow(unused_unsafe)]
+        unsafe {
+            LeafRay {
+                o: k.map(|a| _mm_set1_ps(o[a])),
+                shear: [
+                    _mm_set1_ps(r.shear.x),
+                    _mm_set1_ps(r.shear.y),
+                    _mm_set1_ps(r.shear.z),
+                ],
+                rows: k.map(|a| a * ROW_BYTES),
+            }
+        }
+    }
+
     /// [`super::intersect_aabb4_scalar`], four boxes per instruction:
     /// the same slab distances, min/max and pad, lane by lane.
     #[inline(always)]
@@ -622,7 +654,14 @@ pub(super) mod x86 {
             let (a, b, c) = (vertex(0), vertex(4), vertex(8));
             let [kx, ky, kz] = r.k;
             let permuted = |v: [__m128; 3]| [v[kx], v[ky], v[kz]];
-            triangles4_sheared(r, permuted(a), permuted(b), permuted(c), tris.len(), tmax)
+            triangles4_sheared(
+                &r.shear,
+                permuted(a),
+                permuted(b),
+                permuted(c),
+                tris.len(),
+                tmax,
+            )
         }
     }
 
@@ -631,19 +670,20 @@ pub(super) mod x86 {
     /// transposes, each coordinate loaded in the ray's axis order. The same
     /// operations on the same values, so the same hits bit for bit.
     #[inline(always)]
-    fn triangles4_block(r: &Ray4, block: &LeafBlock, tmax: f32) -> (u32, [[f32; 4]; 3]) {
+    fn triangles4_block(r: &LeafRay, block: &LeafBlock, tmax: f32) -> (u32, [[f32; 4]; 3]) {
         // SAFETY: SSE2 is part of the x86_64 baseline; the loads read
-        // 16-byte aligned `[f32; 4]` rows of an align(16) block.
+        // 16-byte aligned `[f32; 4]` rows of an align(16) block, at the
+        // offsets of rows 0..3 (`leaf_ray`).
         #[allow(unused_unsafe)]
         unsafe {
-            let [kx, ky, kz] = r.k;
             let vertex = |k: usize| -> [__m128; 3] {
+                let base = block.v[k].as_ptr().cast::<u8>();
                 let row =
-                    |axis: usize| _mm_sub_ps(_mm_load_ps(block.v[k][axis].as_ptr()), r.o[axis]);
-                [row(kx), row(ky), row(kz)]
+                    |i: usize| _mm_sub_ps(_mm_load_ps(base.add(r.rows[i]).cast::<f32>()), r.o[i]);
+                [row(0), row(1), row(2)]
             };
             triangles4_sheared(
-                r,
+                &r.shear,
                 vertex(0),
                 vertex(1),
                 vertex(2),
@@ -658,7 +698,7 @@ pub(super) mod x86 {
     /// `lanes` of them are real.
     #[inline(always)]
     fn triangles4_sheared(
-        r: &Ray4,
+        shear: &[__m128; 3],
         a: [__m128; 3],
         b: [__m128; 3],
         c: [__m128; 3],
@@ -668,7 +708,7 @@ pub(super) mod x86 {
         // SAFETY: SSE2 is part of the x86_64 baseline.
         #[allow(unused_unsafe)]
         unsafe {
-            let [sx, sy, sz] = r.shear;
+            let [sx, sy, sz] = *shear;
             let ax = _mm_sub_ps(a[0], _mm_mul_ps(sx, a[2]));
             let ay = _mm_sub_ps(a[1], _mm_mul_ps(sy, a[2]));
             let bx = _mm_sub_ps(b[0], _mm_mul_ps(sx, b[2]));
@@ -818,7 +858,7 @@ pub(super) mod x86 {
     /// with the hook accepts.
     #[inline(always)]
     pub(in crate::bvh) fn block_closest(
-        r: &Ray4,
+        r: &LeafRay,
         block: &LeafBlock,
         best: &mut Hit,
         present: &impl Fn(u32, f32, f32) -> bool,
@@ -980,47 +1020,97 @@ pub(super) mod x86 {
     struct Ray8 {
         o: [__m256; 3],
         inv_d: [__m256; 3],
-        zero_d: [bool; 3],
+        /// Bit a: d's component a is exactly zero (either sign).
+        zero_d: u32,
         near: [usize; 3],
         far: [usize; 3],
     }
 
+    /// Per dominant axis kz (0..3) and whether d[kz] is negative, the
+    /// triangle test's axis order (kx, ky, kz): kx, ky follow kz
+    /// cyclically, swapped when d[kz] < 0 ([`PreparedRay::new`]).
+    const AXES: [[usize; 3]; 6] = [
+        [1, 2, 0],
+        [2, 1, 0],
+        [2, 0, 1],
+        [0, 2, 1],
+        [0, 1, 2],
+        [1, 0, 2],
+    ];
+
+    /// What [`PreparedRay::new`], then `Ray8`'s and [`leaf_ray`]'s
+    /// broadcasts, give, the same values bit for bit, made in registers:
+    /// the inverse direction by one division of four lanes, the shear by
+    /// another, the permuted origin read from the ray's own fields. (A
+    /// prepared ray built first and then read into both sets of constants
+    /// took 175 instructions before the first node, most of them stores
+    /// and reloads.)
     #[inline(always)]
-    fn ray8(r: &PreparedRay) -> Ray8 {
+    fn prepare8(ray: &Ray) -> (Ray8, LeafRay) {
+        let (o, d) = (ray.o.to_array(), ray.d.to_array());
+        let a = ray.d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let k = AXES[2 * kz + usize::from(d[kz] < 0.0)];
         let arrays = PLANES8;
-        let inv = r.inv_d.to_array();
-        let near = std::array::from_fn(|a| {
-            if inv[a] >= 0.0 {
-                arrays[a].0
-            } else {
-                arrays[a].1
-            }
-        });
-        let far = std::array::from_fn(|a| {
-            if inv[a] >= 0.0 {
-                arrays[a].1
-            } else {
-                arrays[a].0
-            }
-        });
         // SAFETY: called only from the AVX2 entry points below.
         #[allow(unused_unsafe)]
         unsafe {
-            Ray8 {
-                o: [
-                    _mm256_set1_ps(r.o.x),
-                    _mm256_set1_ps(r.o.y),
-                    _mm256_set1_ps(r.o.z),
-                ],
-                inv_d: [
-                    _mm256_set1_ps(r.inv_d.x),
-                    _mm256_set1_ps(r.inv_d.y),
-                    _mm256_set1_ps(r.inv_d.z),
-                ],
-                zero_d: [r.zero_d.x, r.zero_d.y, r.zero_d.z],
-                near,
-                far,
-            }
+            let dv = _mm_setr_ps(d[0], d[1], d[2], 1.0);
+            let sign = _mm_set1_ps(-0.0);
+            // safe_rcp per lane: NaN and |d| < 1e-30 take +-1e30.
+            let inv = _mm_blendv_ps(
+                _mm_or_ps(_mm_and_ps(sign, dv), _mm_set1_ps(1e30)),
+                _mm_div_ps(_mm_set1_ps(1.0), dv),
+                _mm_cmpge_ps(_mm_andnot_ps(sign, dv), _mm_set1_ps(1e-30)),
+            );
+            let zero = _mm_setzero_ps();
+            let zero_d = _mm_movemask_ps(_mm_cmpeq_ps(dv, zero)) as u32 & 7;
+            let positive = _mm_movemask_ps(_mm_cmpge_ps(inv, zero)) as u32;
+            let near = std::array::from_fn(|a| {
+                if positive & (1 << a) != 0 {
+                    arrays[a].0
+                } else {
+                    arrays[a].1
+                }
+            });
+            let far = std::array::from_fn(|a| {
+                if positive & (1 << a) != 0 {
+                    arrays[a].1
+                } else {
+                    arrays[a].0
+                }
+            });
+            let shear = _mm_div_ps(
+                _mm_setr_ps(d[k[0]], d[k[1]], 1.0, 1.0),
+                _mm_set1_ps(d[k[2]]),
+            );
+            let lane = |v: __m128, i: usize| -> __m128 {
+                match i {
+                    0 => _mm_shuffle_ps::<0x00>(v, v),
+                    1 => _mm_shuffle_ps::<0x55>(v, v),
+                    _ => _mm_shuffle_ps::<0xaa>(v, v),
+                }
+            };
+            (
+                Ray8 {
+                    o: o.map(|x| _mm256_set1_ps(x)),
+                    inv_d: [0, 1, 2].map(|i| _mm256_broadcastss_ps(lane(inv, i))),
+                    zero_d,
+                    near,
+                    far,
+                },
+                LeafRay {
+                    o: k.map(|a| _mm_set1_ps(o[a])),
+                    shear: [0, 1, 2].map(|i| lane(shear, i)),
+                    rows: k.map(|a| a * ROW_BYTES),
+                },
+            )
         }
     }
 
@@ -1050,9 +1140,9 @@ pub(super) mod x86 {
             // when the origin is inside it (faces included), none of it
             // otherwise; see `intersect_aabb`.
             let mut outside = _mm256_setzero_ps();
-            if r.zero_d[0] | r.zero_d[1] | r.zero_d[2] {
+            if r.zero_d != 0 {
                 for a in 0..3 {
-                    if r.zero_d[a] {
+                    if r.zero_d & (1 << a) != 0 {
                         // Each axis's lo array precedes its hi array.
                         let (lo, hi) = (
                             plane(r.near[a].min(r.far[a])),
@@ -1090,13 +1180,12 @@ pub(super) mod x86 {
         // Prepared here, not by the caller: its fields then stay in
         // registers (a prepared ray passed by reference was read back in
         // pieces other than those written, a store-forwarding stall).
-        let (r, tmax) = (PreparedRay::new(ray.o, ray.d), ray.tmax);
-        let (r4, r8) = (ray4(&r), ray8(&r));
+        let ((r8, leaf), tmax) = (prepare8(ray), ray.tmax);
         closest(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
-            |block, _, best| block_closest(&r4, &blocks[block], best, &present),
+            |block, _, best| block_closest(&leaf, &blocks[block], best, &present),
         )
     }
 
@@ -1110,15 +1199,14 @@ pub(super) mod x86 {
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
         // Prepared here: see `intersect_avx2`.
-        let (r, tmax) = (PreparedRay::new(ray.o, ray.d), ray.tmax);
-        let (r4, r8) = (ray4(&r), ray8(&r));
+        let ((r8, leaf), tmax) = (prepare8(ray), ray.tmax);
         occluded(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
             |block, _| {
                 let b = &blocks[block];
-                let (mut mask, [_, u, v]) = triangles4_block(&r4, b, tmax);
+                let (mut mask, [_, u, v]) = triangles4_block(&leaf, b, tmax);
                 while mask != 0 {
                     let j = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -1141,6 +1229,79 @@ pub(super) mod x86 {
         tmax: f32,
     ) -> bool {
         occluded_impl(nodes, tris, r, tmax)
+    }
+
+    #[cfg(test)]
+    mod tests {
+        use super::*;
+        use glam::Vec3;
+
+        /// `prepare8` gives what `PreparedRay::new` then the broadcasts
+        /// give, bit for bit, on rays of every axis order and sign, with
+        /// zero (either sign), tiny, huge and NaN components.
+        #[test]
+        fn prepare8_is_the_prepared_ray() {
+            if !std::arch::is_x86_feature_detected!("avx2") {
+                return;
+            }
+            let values = [
+                0.7f32,
+                -0.7,
+                0.0,
+                -0.0,
+                0.3,
+                -0.3,
+                1e-31,
+                -1e-31,
+                2.0,
+                -5.0,
+                1e30,
+                f32::NAN,
+            ];
+            let bits4 = |v: __m128| {
+                let mut a = [0f32; 4];
+                // SAFETY: SSE2 is part of the x86_64 baseline.
+                unsafe { _mm_storeu_ps(a.as_mut_ptr(), v) };
+                a.map(f32::to_bits)
+            };
+            let bits8 = |v: __m256| {
+                let mut a = [0f32; 8];
+                // SAFETY: AVX2 was detected above.
+                unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) };
+                a.map(f32::to_bits)
+            };
+            let mut checked = 0;
+            for &x in &values {
+                for &y in &values {
+                    for &z in &values {
+                        let d = Vec3::new(x, y, z);
+                        let o = Vec3::new(0.25 - z, 1.5 + x, -3.0 * y);
+                        let ray = Ray { o, d, tmax: 1.0 };
+                        let p = PreparedRay::new(o, d);
+                        let (r8, leaf) = prepare8(&ray);
+                        let k = [p.kx, p.ky, p.kz];
+                        let (inv, ov, shear) =
+                            (p.inv_d.to_array(), o.to_array(), p.shear.to_array());
+                        for a in 0..3 {
+                            assert_eq!(bits8(r8.o[a]), [ov[a].to_bits(); 8], "{d}");
+                            assert_eq!(bits8(r8.inv_d[a]), [inv[a].to_bits(); 8], "{d}");
+                            let (lo, hi) = PLANES8[a];
+                            let (near, far) = if inv[a] >= 0.0 { (lo, hi) } else { (hi, lo) };
+                            assert_eq!((r8.near[a], r8.far[a]), (near, far), "{d}");
+                            assert_eq!(bits4(leaf.o[a]), [ov[k[a]].to_bits(); 4], "{d}");
+                            assert_eq!(bits4(leaf.shear[a]), [shear[a].to_bits(); 4], "{d}");
+                            assert_eq!(leaf.rows[a], k[a] * ROW_BYTES, "{d}");
+                        }
+                        let zero = p.zero_d;
+                        let zero_bits =
+                            u32::from(zero.x) | u32::from(zero.y) << 1 | u32::from(zero.z) << 2;
+                        assert_eq!(r8.zero_d, zero_bits, "{d}");
+                        checked += 1;
+                    }
+                }
+            }
+            assert_eq!(checked, values.len().pow(3));
+        }
     }
 }
 
