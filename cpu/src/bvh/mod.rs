@@ -36,6 +36,7 @@ pub use traverse::{PreparedRay, SLAB_PAD, intersect_aabb, intersect_triangle};
 pub use wide::{
     Bvh4Node, LEAF_BIT, MAX_WIDE_DEPTH, SLOT_EMPTY, WIDE_STACK_SIZE, WIDTH, is_leaf_ref, leaf_range,
 };
+use wide_traverse::Avx2;
 pub use wide_traverse::Kernel;
 pub use wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE, WIDTH8};
 
@@ -129,6 +130,9 @@ pub struct Bvh4 {
     pub nodes8: Vec<Bvh8Node>,
     /// The 8-wide tree's leaves: each leaf's triangles side by side.
     pub blocks: Vec<LeafBlock>,
+    /// Where the CPU has AVX2 (detected once, when the tree is made): the
+    /// default queries then take the 8-wide tree with no test per ray.
+    avx2: Option<Avx2>,
 }
 
 impl Bvh4 {
@@ -156,6 +160,7 @@ impl Bvh4 {
             nodes: wide::collapse(&bvh.nodes),
             nodes8,
             blocks,
+            avx2: Avx2::detect(),
         };
         (wide, order)
     }
@@ -171,13 +176,19 @@ impl Bvh4 {
             nodes: wide::collapse(&bvh.nodes),
             nodes8,
             blocks,
+            avx2: Avx2::detect(),
         }
     }
 
     /// Closest hit in (0, ray.tmax), the binary traversal's answer
     /// ([`Bvh::intersect`]) with the fastest box test this CPU has.
     pub fn intersect(&self, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        self.intersect_with(Kernel::best(), tris, ray)
+        match self.avx2 {
+            Some(avx2) => {
+                wide_traverse::intersect8(avx2, &self.nodes8, &self.blocks, ray, |_, _, _| true)
+            }
+            None => self.intersect_with(Kernel::best(), tris, ray),
+        }
     }
 
     /// [`Bvh4::intersect`] of the rays in `live` (bit k: `rays[k]`; the
@@ -210,7 +221,12 @@ impl Bvh4 {
 
     /// Any hit in (0, ray.tmax).
     pub fn occluded(&self, tris: &[Triangle], ray: &Ray) -> bool {
-        self.occluded_with(Kernel::best(), tris, ray)
+        match self.avx2 {
+            Some(avx2) => {
+                wide_traverse::any_hit8(avx2, &self.nodes8, &self.blocks, ray, |_, _, _| true)
+            }
+            None => self.occluded_with(Kernel::best(), tris, ray),
+        }
     }
 
     /// [`Bvh4::intersect`] skipping hits where `present(tri, u, v)` is
@@ -221,7 +237,10 @@ impl Bvh4 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
-        self.intersect_masked_with(Kernel::best(), tris, ray, present)
+        match self.avx2 {
+            Some(avx2) => wide_traverse::intersect8(avx2, &self.nodes8, &self.blocks, ray, present),
+            None => self.intersect_masked_with(Kernel::best(), tris, ray, present),
+        }
     }
 
     /// [`Bvh4::intersect_masked`] with a given kernel: the 8-wide tree
@@ -233,9 +252,9 @@ impl Bvh4 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> Option<Hit> {
-        match kernel {
-            Kernel::Avx2x8 if Kernel::has_avx2() => {
-                wide_traverse::intersect8(&self.nodes8, &self.blocks, ray, present)
+        match (kernel, Avx2::detect()) {
+            (Kernel::Avx2x8, Some(avx2)) => {
+                wide_traverse::intersect8(avx2, &self.nodes8, &self.blocks, ray, present)
             }
             _ => wide_traverse::intersect_masked(&self.nodes, tris, ray, present),
         }
@@ -248,7 +267,10 @@ impl Bvh4 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        self.occluded_masked_with(Kernel::best(), tris, ray, present)
+        match self.avx2 {
+            Some(avx2) => wide_traverse::any_hit8(avx2, &self.nodes8, &self.blocks, ray, present),
+            None => self.occluded_masked_with(Kernel::best(), tris, ray, present),
+        }
     }
 
     /// [`Bvh4::occluded_masked`] with a given kernel.
@@ -259,9 +281,9 @@ impl Bvh4 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        match kernel {
-            Kernel::Avx2x8 if Kernel::has_avx2() => {
-                wide_traverse::any_hit8(&self.nodes8, &self.blocks, ray, present)
+        match (kernel, Avx2::detect()) {
+            (Kernel::Avx2x8, Some(avx2)) => {
+                wide_traverse::any_hit8(avx2, &self.nodes8, &self.blocks, ray, present)
             }
             _ => wide_traverse::occluded_masked(&self.nodes, tris, ray, present),
         }
@@ -270,9 +292,9 @@ impl Bvh4 {
     /// [`Bvh4::intersect`] with a given box-test kernel (for tests and
     /// benchmarks; an unsupported one falls back to one the CPU has).
     pub fn intersect_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> Option<Hit> {
-        match kernel {
-            Kernel::Avx2x8 if Kernel::has_avx2() => {
-                wide_traverse::intersect8(&self.nodes8, &self.blocks, ray, |_, _, _| true)
+        match (kernel, Avx2::detect()) {
+            (Kernel::Avx2x8, Some(avx2)) => {
+                wide_traverse::intersect8(avx2, &self.nodes8, &self.blocks, ray, |_, _, _| true)
             }
             _ => wide_traverse::intersect(&self.nodes, tris, ray, kernel),
         }
@@ -280,9 +302,9 @@ impl Bvh4 {
 
     /// [`Bvh4::occluded`] with a given box-test kernel.
     pub fn occluded_with(&self, kernel: Kernel, tris: &[Triangle], ray: &Ray) -> bool {
-        match kernel {
-            Kernel::Avx2x8 if Kernel::has_avx2() => {
-                wide_traverse::any_hit8(&self.nodes8, &self.blocks, ray, |_, _, _| true)
+        match (kernel, Avx2::detect()) {
+            (Kernel::Avx2x8, Some(avx2)) => {
+                wide_traverse::any_hit8(avx2, &self.nodes8, &self.blocks, ray, |_, _, _| true)
             }
             _ => wide_traverse::any_hit(&self.nodes, tris, ray, kernel),
         }

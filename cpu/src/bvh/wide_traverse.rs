@@ -334,11 +334,25 @@ where
     }
 }
 
+/// Proof that this CPU has AVX2, made only by [`Avx2::detect`]: a tree
+/// that holds one ([`super::Bvh4`]) traverses its 8-wide nodes with no
+/// feature test per ray (three such tests and the calls between them were
+/// about 40 instructions of every ray).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Avx2(());
+
+impl Avx2 {
+    /// `Some` where the CPU has AVX2.
+    pub(super) fn detect() -> Option<Avx2> {
+        Kernel::has_avx2().then_some(Avx2(()))
+    }
+}
+
 /// Closest hit on the 8-wide tree (AVX2), skipping hits where
-/// `present(tri, u, v)` is false (`|_, _, _| true` compiles away). None of
-/// it runs on a CPU without AVX2: [`Kernel::Avx2x8`] and the masked
-/// queries come here only where it has it.
+/// `present(tri, u, v)` is false (`|_, _, _| true` compiles away).
+#[inline]
 pub(super) fn intersect8(
+    avx2: Avx2,
     nodes: &[Bvh8Node],
     blocks: &[LeafBlock],
     ray: &Ray,
@@ -347,18 +361,24 @@ pub(super) fn intersect8(
     if nodes.is_empty() {
         return None;
     }
+    let _ = avx2;
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::intersect_avx2(nodes, blocks, ray, present) };
+    {
+        // SAFETY: `avx2` says the CPU has AVX2.
+        unsafe { x86::intersect_avx2(nodes, blocks, ray, present) }
     }
-    let _ = (blocks, present);
-    unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (blocks, ray, present);
+        unreachable!("no AVX2 token is made off x86_64")
+    }
 }
 
 /// Any hit on the 8-wide tree (AVX2), skipping hits where `present` is
 /// false.
+#[inline]
 pub(super) fn any_hit8(
+    avx2: Avx2,
     nodes: &[Bvh8Node],
     blocks: &[LeafBlock],
     ray: &Ray,
@@ -367,13 +387,17 @@ pub(super) fn any_hit8(
     if nodes.is_empty() {
         return false;
     }
+    let _ = avx2;
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::occluded_avx2(nodes, blocks, ray, present) };
+    {
+        // SAFETY: `avx2` says the CPU has AVX2.
+        unsafe { x86::occluded_avx2(nodes, blocks, ray, present) }
     }
-    let _ = (blocks, present);
-    unreachable!("the 8-wide tree is traversed only where the CPU has AVX2")
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (blocks, ray, present);
+        unreachable!("no AVX2 token is made off x86_64")
+    }
 }
 
 pub(super) fn intersect(
