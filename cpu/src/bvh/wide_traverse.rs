@@ -296,11 +296,11 @@ where
 /// traversal: ordering costs more than it finds blockers sooner, measured
 /// with `bench/embree`).
 #[inline(always)]
-fn occluded<N, const W: usize, F, L>(nodes: &[N], tmax: f32, boxes: F, leaf: L) -> bool
+fn occluded<N, const W: usize, F, L>(nodes: &[N], tmax: f32, boxes: F, mut leaf: L) -> bool
 where
     N: WideNode,
     F: Fn(&N, f32) -> (u32, [f32; W]),
-    L: Fn(usize, usize) -> bool,
+    L: FnMut(usize, usize) -> bool,
 {
     let mut stack = [MaybeUninit::<u32>::uninit(); STACK];
     let mut sp = 0;
@@ -1063,24 +1063,20 @@ pub(super) mod x86 {
     ];
 
     /// What [`PreparedRay::new`], then `Ray8`'s and [`leaf_ray`]'s
-    /// broadcasts, give, the same values bit for bit, made in registers:
-    /// the inverse direction by one division of four lanes, the shear by
-    /// another, the permuted origin read from the ray's own fields. (A
-    /// prepared ray built first and then read into both sets of constants
-    /// took 175 instructions before the first node, most of them stores
-    /// and reloads.)
+    /// broadcasts, give, the same values bit for bit, made in registers
+    /// ([`ray8`], [`leaf8`]). (A prepared ray built first and then read into
+    /// both sets of constants took 175 instructions before the first node,
+    /// most of them stores and reloads.)
     #[inline(always)]
     fn prepare8(ray: &Ray) -> (Ray8, LeafRay) {
+        (ray8(ray), leaf8(ray))
+    }
+
+    /// The box test's constants: the inverse direction by one division of
+    /// four lanes, the near and far planes from its signs.
+    #[inline(always)]
+    fn ray8(ray: &Ray) -> Ray8 {
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
-        let a = ray.d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let k = AXES[2 * kz + usize::from(d[kz] < 0.0)];
         let arrays = PLANES8;
         // SAFETY: called only from the AVX2 entry points below.
         #[allow(unused_unsafe)]
@@ -1110,31 +1106,56 @@ pub(super) mod x86 {
                     arrays[a].0
                 }
             });
+            Ray8 {
+                o: o.map(|x| _mm256_set1_ps(x)),
+                inv_d: [0, 1, 2].map(|i| _mm256_broadcastss_ps(lane(inv, i))),
+                zero_d,
+                near,
+                far,
+            }
+        }
+    }
+
+    /// The triangle test's constants: the axis order, the permuted origin
+    /// read from the ray's own fields, the shear by one division.
+    #[inline(always)]
+    fn leaf8(ray: &Ray) -> LeafRay {
+        let (o, d) = (ray.o.to_array(), ray.d.to_array());
+        let a = ray.d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let k = AXES[2 * kz + usize::from(d[kz] < 0.0)];
+        // SAFETY: SSE is part of the x86_64 baseline.
+        #[allow(unused_unsafe)]
+        unsafe {
             let shear = _mm_div_ps(
                 _mm_setr_ps(d[k[0]], d[k[1]], 1.0, 1.0),
                 _mm_set1_ps(d[k[2]]),
             );
-            let lane = |v: __m128, i: usize| -> __m128 {
-                match i {
-                    0 => _mm_shuffle_ps::<0x00>(v, v),
-                    1 => _mm_shuffle_ps::<0x55>(v, v),
-                    _ => _mm_shuffle_ps::<0xaa>(v, v),
-                }
-            };
-            (
-                Ray8 {
-                    o: o.map(|x| _mm256_set1_ps(x)),
-                    inv_d: [0, 1, 2].map(|i| _mm256_broadcastss_ps(lane(inv, i))),
-                    zero_d,
-                    near,
-                    far,
-                },
-                LeafRay {
-                    o: k.map(|a| _mm_set1_ps(o[a])),
-                    shear: [0, 1, 2].map(|i| lane(shear, i)),
-                    rows: k.map(|a| a * ROW_BYTES),
-                },
-            )
+            LeafRay {
+                o: k.map(|a| _mm_set1_ps(o[a])),
+                shear: [0, 1, 2].map(|i| lane(shear, i)),
+                rows: k.map(|a| a * ROW_BYTES),
+            }
+        }
+    }
+
+    /// Lane `i` (0..3) of `v` in every lane.
+    #[inline(always)]
+    fn lane(v: __m128, i: usize) -> __m128 {
+        // SAFETY: SSE is part of the x86_64 baseline.
+        #[allow(unused_unsafe)]
+        unsafe {
+            match i {
+                0 => _mm_shuffle_ps::<0x00>(v, v),
+                1 => _mm_shuffle_ps::<0x55>(v, v),
+                _ => _mm_shuffle_ps::<0xaa>(v, v),
+            }
         }
     }
 
@@ -1222,15 +1243,18 @@ pub(super) mod x86 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        // Prepared here: see `intersect_avx2`.
-        let ((r8, leaf), tmax) = (prepare8(ray), ray.tmax);
+        // Prepared here: see `intersect_avx2`. The leaf test's constants
+        // wait for the first leaf, which most shadow rays never reach.
+        let (r8, tmax) = (ray8(ray), ray.tmax);
+        let mut leaf = None;
         occluded(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
             |block, _| {
                 let b = &blocks[block];
-                let (mut mask, [_, u, v]) = triangles4_block(&leaf, b, tmax);
+                let leaf = leaf.get_or_insert_with(|| leaf8(ray));
+                let (mut mask, [_, u, v]) = triangles4_block(leaf, b, tmax);
                 while mask != 0 {
                     let j = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
