@@ -17,7 +17,11 @@
 # Usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE...
 #   WIDTH (default 16) and SPP (default 64) set the render (64 spp: the
 #   per-pixel work, such as the Sobol keys, shares out as in a real render);
-#   prints a markdown table of instructions per sample and B / A.
+#   prints a markdown table of instructions per sample and B / A. PARTS=1
+#   (environment) adds, per scene, where a sample's instructions go
+#   (scripts/instr_parts.py: traversal by query, light sampling, the Sobol
+#   numbers, the BSDFs kept out of line, the shading frame, textures, and
+#   the rest of trace_wave).
 set -euo pipefail
 shopt -s inherit_errexit
 command -v valgrind > /dev/null || { echo "instr_count.sh: valgrind is not installed (apt-get install valgrind)" >&2; exit 1; }
@@ -27,9 +31,11 @@ while [ $# -gt 0 ] && [ "$1" != "--" ]; do bins+=("$(realpath "$1")"); names+=("
 [ ${#bins[@]} -ge 1 ] && [ $# -ge 1 ] || { echo "usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE..." >&2; exit 2; }
 width=${WIDTH:-16}; spp=${SPP:-64}
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+profile() { echo "$tmp/cg${1//\//_}-$(basename "$2").out"; }
 
-count() { # binary scene -> instructions per sample
-  local out="$tmp/cg.out" stats="$tmp/stats.json"
+count() { # binary scene -> instructions per sample (the profile kept for PARTS)
+  local out stats
+  out=$(profile "$1" "$2") stats="$tmp/stats-$(basename "$2").json"
   RAYON_NUM_THREADS=1 valgrind --tool=callgrind --toggle-collect='*trace_wave*' \
     --callgrind-out-file="$out" "$1" render "$2" -o "$tmp/img.exr" --backend cpu \
     --width "$width" --spp "$spp" --quiet --stats "$stats" 2> "$tmp/err" \
@@ -58,3 +64,21 @@ for scene in "$@"; do
     echo "| $name | $a |"
   fi
 done
+
+if [ "${PARTS:-0}" = 1 ]; then
+  here=$(dirname "$0")
+  for scene in "$@"; do
+    stats="$tmp/stats-$(basename "$scene").json"
+    printf '\n%s, instructions per sample by part:\n\n' "$(basename "${scene%.*}")"
+    if [ ${#bins[@]} -eq 2 ]; then
+      echo "| part | A | B |"; echo "|---|---:|---:|"
+      paste <(python3 "$here/instr_parts.py" "$(profile "${bins[0]}" "$scene")" "$stats") \
+        <(python3 "$here/instr_parts.py" "$(profile "${bins[1]}" "$scene")" "$stats" | cut -f2) \
+        | awk -F'\t' '{print "| " $1 " | " $2 " | " $3 " |"}'
+    else
+      echo "| part | instructions per sample |"; echo "|---|---:|"
+      python3 "$here/instr_parts.py" "$(profile "${bins[0]}" "$scene")" "$stats" \
+        | awk -F'\t' '{print "| " $1 " | " $2 " |"}'
+    fi
+  done
+fi
