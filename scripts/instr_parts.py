@@ -58,7 +58,8 @@ def inclusive(path):
 
 def main():
     if len(sys.argv) != 3:
-        sys.exit(__doc__.split("\n\n")[1])
+        print("usage: scripts/instr_parts.py CALLGRIND_OUT STATS_JSON", file=sys.stderr)
+        sys.exit(2)
     cost, total = inclusive(sys.argv[1])
     samples = json.load(open(sys.argv[2]))["samples"]
     # A function's name ends before its " [binary]" or "'2" suffixes.
