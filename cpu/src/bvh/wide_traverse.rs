@@ -222,11 +222,11 @@ pub(super) fn order_hits<const W: usize>(mask: u32, dist: &[f32; W]) -> ([u8; W]
 /// tmax x SLAB_PAD misses). `leaf(first, count, best)` tests a leaf
 /// reference's range.
 #[inline(always)]
-fn closest<N, const W: usize, F, L>(nodes: &[N], tmax: f32, boxes: F, leaf: L) -> Option<Hit>
+fn closest<N, const W: usize, F, L>(nodes: &[N], tmax: f32, boxes: F, mut leaf: L) -> Option<Hit>
 where
     N: WideNode,
     F: Fn(&N, f32) -> (u32, [f32; W]),
-    L: Fn(usize, usize, &mut Hit),
+    L: FnMut(usize, usize, &mut Hit),
 {
     let mut best = Hit {
         t: tmax,
@@ -1062,18 +1062,13 @@ pub(super) mod x86 {
         [1, 0, 2],
     ];
 
-    /// What [`PreparedRay::new`], then `Ray8`'s and [`leaf_ray`]'s
-    /// broadcasts, give, the same values bit for bit, made in registers
-    /// ([`ray8`], [`leaf8`]). (A prepared ray built first and then read into
-    /// both sets of constants took 175 instructions before the first node,
-    /// most of them stores and reloads.)
-    #[inline(always)]
-    fn prepare8(ray: &Ray) -> (Ray8, LeafRay) {
-        (ray8(ray), leaf8(ray))
-    }
-
     /// The box test's constants: the inverse direction by one division of
-    /// four lanes, the near and far planes from its signs.
+    /// four lanes, the near and far planes from its signs. With [`leaf8`],
+    /// what [`PreparedRay::new`] then `Ray8`'s and [`leaf_ray`]'s broadcasts
+    /// give, bit for bit, made in registers straight from the ray (a
+    /// prepared ray built first and then read into both sets of constants
+    /// took 175 instructions before the first node, most of them stores and
+    /// reloads).
     #[inline(always)]
     fn ray8(ray: &Ray) -> Ray8 {
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
@@ -1117,7 +1112,9 @@ pub(super) mod x86 {
     }
 
     /// The triangle test's constants: the axis order, the permuted origin
-    /// read from the ray's own fields, the shear by one division.
+    /// read from the ray's own fields, the shear by one division. The
+    /// queries make them at their first leaf, which rays that escape the
+    /// scene and most shadow rays never reach.
     #[inline(always)]
     fn leaf8(ray: &Ray) -> LeafRay {
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
@@ -1224,13 +1221,18 @@ pub(super) mod x86 {
     ) -> Option<Hit> {
         // Prepared here, not by the caller: its fields then stay in
         // registers (a prepared ray passed by reference was read back in
-        // pieces other than those written, a store-forwarding stall).
-        let ((r8, leaf), tmax) = (prepare8(ray), ray.tmax);
+        // pieces other than those written, a store-forwarding stall). The
+        // leaf test's constants wait for the first leaf.
+        let (r8, tmax) = (ray8(ray), ray.tmax);
+        let mut leaf = None;
         closest(
             nodes,
             tmax,
             |n, t| intersect_aabb8(&r8, n, t),
-            |block, _, best| block_closest(&leaf, &blocks[block], best, &present),
+            |block, _, best| {
+                let leaf = leaf.get_or_insert_with(|| leaf8(ray));
+                block_closest(leaf, &blocks[block], best, &present)
+            },
         )
     }
 
@@ -1243,8 +1245,7 @@ pub(super) mod x86 {
         ray: &Ray,
         present: impl Fn(u32, f32, f32) -> bool,
     ) -> bool {
-        // Prepared here: see `intersect_avx2`. The leaf test's constants
-        // wait for the first leaf, which most shadow rays never reach.
+        // Prepared here: see `intersect_avx2`.
         let (r8, tmax) = (ray8(ray), ray.tmax);
         let mut leaf = None;
         occluded(
@@ -1284,11 +1285,11 @@ pub(super) mod x86 {
         use super::*;
         use glam::Vec3;
 
-        /// `prepare8` gives what `PreparedRay::new` then the broadcasts
-        /// give, bit for bit, on rays of every axis order and sign, with
+        /// `ray8` and `leaf8` give what `PreparedRay::new` then the
+        /// broadcasts give, bit for bit, on rays of every axis order and sign, with
         /// zero (either sign), tiny, huge and NaN components.
         #[test]
-        fn prepare8_is_the_prepared_ray() {
+        fn ray8_and_leaf8_are_the_prepared_ray() {
             if !std::arch::is_x86_feature_detected!("avx2") {
                 return;
             }
@@ -1326,7 +1327,7 @@ pub(super) mod x86 {
                         let o = Vec3::new(0.25 - z, 1.5 + x, -3.0 * y);
                         let ray = Ray { o, d, tmax: 1.0 };
                         let p = PreparedRay::new(o, d);
-                        let (r8, leaf) = prepare8(&ray);
+                        let (r8, leaf) = (ray8(&ray), leaf8(&ray));
                         let k = [p.kx, p.ky, p.kz];
                         let (inv, ov, shear) =
                             (p.inv_d.to_array(), o.to_array(), p.shear.to_array());
