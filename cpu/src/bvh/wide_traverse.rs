@@ -247,11 +247,15 @@ where
             let node = &nodes[cur as usize];
             let (mask, dist) = boxes(node, best.t);
             if mask != 0 {
-                if mask.is_power_of_two() {
+                // One or two hits, told by clearing the lowest set bit
+                // (x86-64's baseline has no POPCNT: `count_ones` would be a
+                // multiply-and-shift sequence).
+                let rest = mask & (mask - 1);
+                if rest == 0 {
                     cur = node.child(mask.trailing_zeros() as usize);
                     continue;
                 }
-                if mask.count_ones() == 2 {
+                if rest & (rest - 1) == 0 {
                     // The order of two hits, with one comparison.
                     let (near, far) = (
                         mask.trailing_zeros() as usize,
