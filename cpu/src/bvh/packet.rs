@@ -56,7 +56,7 @@ mod x86 {
 
     use glam::{BVec3, Vec3};
 
-    use super::super::traverse::{PreparedRay, SLAB_PAD};
+    use super::super::traverse::{PreparedRay, SLAB_PAD, axes, permutation};
     use super::super::wide::{is_leaf_ref, leaf_range};
     use super::super::wide_traverse::order_hits;
     use super::super::wide_traverse::x86::{PLANES8, block_closest, hits8, leaf_ray, slab_end8};
@@ -87,35 +87,6 @@ mod x86 {
         /// The smallest and largest inverse direction (one sign).
         inv_lo: [__m256; 3],
         inv_hi: [__m256; 3],
-    }
-
-    /// The triangle test's permutation for direction `d`, as
-    /// [`PreparedRay::new`] picks it, as a code: 2 kz + (whether kx and
-    /// ky swap), compared as one byte.
-    #[inline(always)]
-    fn permutation(d: [f32; 3]) -> u8 {
-        let a = d.map(f32::abs);
-        let kz = if a[0] >= a[1] && a[0] >= a[2] {
-            0
-        } else if a[1] >= a[2] {
-            1
-        } else {
-            2
-        };
-        2 * kz as u8 + (d[kz] < 0.0) as u8
-    }
-
-    /// (kx, ky, kz) of a [`permutation`] code.
-    #[inline(always)]
-    fn axes(code: u8) -> [usize; 3] {
-        const NEXT: [(usize, usize); 3] = [(1, 2), (2, 0), (0, 1)];
-        let kz = (code / 2) as usize;
-        let (kx, ky) = NEXT[kz];
-        if code & 1 != 0 {
-            [ky, kx, kz]
-        } else {
-            [kx, ky, kz]
-        }
     }
 
     /// The smallest and largest of the lanes in `live`.

@@ -497,10 +497,13 @@ pub(super) fn any_hit(nodes: &[Bvh4Node], tris: &[Triangle], ray: &Ray, kernel: 
 pub(super) mod x86 {
     use std::arch::x86_64::*;
 
-    use super::super::traverse::{PreparedRay, SLAB_PAD, refine_edge};
+    use super::super::traverse::{
+        PreparedRay, SLAB_PAD, axes, permutation, refine_edge, safe_inv, shear,
+    };
     use super::super::wide::Bvh4Node;
     use super::super::wide8::{Bvh8Node, LeafBlock};
     use super::{Hit, Ray, Triangle, closest, occluded};
+    use glam::Vec3A;
 
     /// The ray's constants broadcast to all four lanes, for the box test
     /// and the triangle test.
@@ -1054,18 +1057,6 @@ pub(super) mod x86 {
         far: [usize; 3],
     }
 
-    /// Per dominant axis kz (0..3) and whether d[kz] is negative, the
-    /// triangle test's axis order (kx, ky, kz): kx, ky follow kz
-    /// cyclically, swapped when d[kz] < 0 ([`PreparedRay::new`]).
-    const AXES: [[usize; 3]; 6] = [
-        [1, 2, 0],
-        [2, 1, 0],
-        [2, 0, 1],
-        [0, 2, 1],
-        [0, 1, 2],
-        [1, 0, 2],
-    ];
-
     /// The box test's constants: the inverse direction by one division of
     /// four lanes, the near and far planes from its signs. With [`leaf8`],
     /// what [`PreparedRay::new`] then `Ray8`'s and [`leaf_ray`]'s broadcasts
@@ -1075,21 +1066,14 @@ pub(super) mod x86 {
     /// reloads).
     #[inline(always)]
     fn ray8(ray: &Ray) -> Ray8 {
-        let (o, d) = (ray.o.to_array(), ray.d.to_array());
+        let dv = Vec3A::from(ray.d);
         let arrays = PLANES8;
         // SAFETY: called only from the AVX2 entry points below.
         #[allow(unused_unsafe)]
         unsafe {
-            let dv = _mm_setr_ps(d[0], d[1], d[2], 1.0);
-            let sign = _mm_set1_ps(-0.0);
-            // safe_rcp per lane: NaN and |d| < 1e-30 take +-1e30.
-            let inv = _mm_blendv_ps(
-                _mm_or_ps(_mm_and_ps(sign, dv), _mm_set1_ps(1e30)),
-                _mm_div_ps(_mm_set1_ps(1.0), dv),
-                _mm_cmpge_ps(_mm_andnot_ps(sign, dv), _mm_set1_ps(1e-30)),
-            );
+            let inv: __m128 = safe_inv(dv).into();
             let zero = _mm_setzero_ps();
-            let zero_d = _mm_movemask_ps(_mm_cmpeq_ps(dv, zero)) as u32 & 7;
+            let zero_d = _mm_movemask_ps(_mm_cmpeq_ps(dv.into(), zero)) as u32 & 7;
             let positive = _mm_movemask_ps(_mm_cmpge_ps(inv, zero)) as u32;
             let near = std::array::from_fn(|a| {
                 if positive & (1 << a) != 0 {
@@ -1106,7 +1090,7 @@ pub(super) mod x86 {
                 }
             });
             Ray8 {
-                o: o.map(|x| _mm256_set1_ps(x)),
+                o: ray.o.to_array().map(|x| _mm256_set1_ps(x)),
                 inv_d: [0, 1, 2].map(|i| _mm256_broadcastss_ps(lane(inv, i))),
                 zero_d,
                 near,
@@ -1122,22 +1106,11 @@ pub(super) mod x86 {
     #[inline(always)]
     fn leaf8(ray: &Ray) -> LeafRay {
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
-        let a = ray.d.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let k = AXES[2 * kz + usize::from(d[kz] < 0.0)];
+        let k = axes(permutation(d));
+        let shear: __m128 = shear(d, k).into();
         // SAFETY: SSE is part of the x86_64 baseline.
         #[allow(unused_unsafe)]
         unsafe {
-            let shear = _mm_div_ps(
-                _mm_setr_ps(d[k[0]], d[k[1]], 1.0, 1.0),
-                _mm_set1_ps(d[k[2]]),
-            );
             LeafRay {
                 o: k.map(|a| _mm_set1_ps(o[a])),
                 shear: [0, 1, 2].map(|i| lane(shear, i)),
