@@ -437,19 +437,26 @@ impl Scene {
     }
 
     /// [`Scene::intersect_with`] of the rays in `live` (bit k: `rays[k]`),
-    /// in one packet traversal where they are alike
+    /// into `hits` (which starts all None; the other lanes stay so), in
+    /// one packet traversal where they are alike
     /// ([`crate::bvh::Bvh4::intersect_packet`]); alpha-masked scenes trace
-    /// them one at a time.
+    /// them one at a time. (Written in place: the array returned was
+    /// copied twice on its way.)
+    #[inline]
     pub fn intersect_packet(
         &self,
         rays: &[crate::bvh::Ray; crate::bvh::PACKET],
         live: u8,
         masks: bool,
-    ) -> [Option<crate::bvh::Hit>; crate::bvh::PACKET] {
+        hits: &mut [Option<crate::bvh::Hit>; crate::bvh::PACKET],
+    ) {
         if masks {
-            return crate::bvh::each_live(live, |k| self.intersect_with(&rays[k], true));
+            for k in (0..crate::bvh::PACKET).filter(|k| live & (1 << k) != 0) {
+                hits[k] = self.intersect_with(&rays[k], true);
+            }
+            return;
         }
-        self.bvh.intersect_packet(&self.triangles, rays, live)
+        self.bvh.intersect_packet(&self.triangles, rays, live, hits)
     }
 
     /// [`Scene::occluded`] with `has_masks()` answered by the caller.

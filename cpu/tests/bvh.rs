@@ -1230,7 +1230,8 @@ fn packets_find_each_ray_s_closest_hit() {
             } else {
                 0xff
             };
-            let got = wide.intersect_packet(&tris, &rays, live);
+            let mut got = [None; 8];
+            wide.intersect_packet(&tris, &rays, live, &mut got);
             let only = wide.intersect_packet_only(&rays, live);
             if let Some(only) = only {
                 assert_eq!(only, got, "{name}: ray {i}");

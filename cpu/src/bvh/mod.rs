@@ -110,12 +110,6 @@ impl Bvh {
     }
 }
 
-/// `hit(k)` for each lane k in `live` (bit k), None for the others: a
-/// packet's rays traced one at a time.
-pub fn each_live(live: u8, hit: impl Fn(usize) -> Option<Hit>) -> [Option<Hit>; PACKET] {
-    std::array::from_fn(|k| if live & (1 << k) != 0 { hit(k) } else { None })
-}
-
 /// The trees the renderers traverse: the 4-wide one (see `wide.rs`), a
 /// binary tree's leaves and boxes regrouped four to a node, which the GPU
 /// and CPUs without AVX2 read; and the 8-wide one. Node 0 is the root;
@@ -191,21 +185,26 @@ impl Bvh4 {
         }
     }
 
-    /// [`Bvh4::intersect`] of the rays in `live` (bit k: `rays[k]`; the
-    /// others give None): in one packet traversal (`packet.rs`) where the
-    /// CPU has AVX2 and the rays' directions agree in sign on every axis,
-    /// else one ray at a time. Each ray's closest distance is
-    /// [`Bvh4::intersect`]'s (an exact tie may pick the other triangle).
+    /// [`Bvh4::intersect`] of the rays in `live` (bit k: `rays[k]`), into
+    /// `hits` (which starts all None; the other lanes stay so): in one
+    /// packet traversal (`packet.rs`) where the CPU has AVX2 and the rays'
+    /// directions agree in sign on every axis, else one ray at a time.
+    /// Each ray's closest distance is [`Bvh4::intersect`]'s (an exact tie
+    /// may pick the other triangle).
+    #[inline]
     pub fn intersect_packet(
         &self,
         tris: &[Triangle],
         rays: &[Ray; PACKET],
         live: u8,
-    ) -> [Option<Hit>; PACKET] {
-        if let Some(hits) = self.intersect_packet_only(rays, live) {
-            return hits;
+        hits: &mut [Option<Hit>; PACKET],
+    ) {
+        let (nodes, blocks) = (&self.nodes8, &self.blocks);
+        if !packet::intersect_packet8(self.avx2, nodes, blocks, rays, live, hits) {
+            for k in (0..PACKET).filter(|k| live & (1 << k) != 0) {
+                hits[k] = self.intersect(tris, &rays[k]);
+            }
         }
-        each_live(live, |k| self.intersect(tris, &rays[k]))
     }
 
     /// The packet traversal of [`Bvh4::intersect_packet`] alone: None
@@ -216,7 +215,9 @@ impl Bvh4 {
         rays: &[Ray; PACKET],
         live: u8,
     ) -> Option<[Option<Hit>; PACKET]> {
-        packet::intersect_packet8(&self.nodes8, &self.blocks, rays, live)
+        let mut hits = [None; PACKET];
+        packet::intersect_packet8(self.avx2, &self.nodes8, &self.blocks, rays, live, &mut hits)
+            .then_some(hits)
     }
 
     /// Any hit in (0, ray.tmax).

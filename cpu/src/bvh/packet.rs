@@ -22,31 +22,42 @@
 //! component, have no such bound; [`super::Bvh4::intersect_packet`] traces
 //! them one at a time.
 
+use super::wide_traverse::Avx2;
 use super::wide8::{Bvh8Node, LeafBlock};
 use super::{Hit, Ray};
 
 /// Rays per packet.
 pub const PACKET: usize = 8;
 
-/// The packet's closest hits, or None where the rays have no interval
-/// bound or the CPU no AVX2 (then the caller traces them one at a time).
+/// The packet's closest hits, written into `hits` (which starts all
+/// None); false where the rays have no interval bound or the CPU no AVX2
+/// (`avx2`, the tree's token: then the caller traces them one at a time).
 /// Lanes outside `live` (bit k: ray k) are not traced and stay None.
+/// (Written in place: a returned `Option` of the array was copied.)
 pub(super) fn intersect_packet8(
+    avx2: Option<Avx2>,
     nodes: &[Bvh8Node],
     blocks: &[LeafBlock],
     rays: &[Ray; PACKET],
     live: u8,
-) -> Option<[Option<Hit>; PACKET]> {
+    hits: &mut [Option<Hit>; PACKET],
+) -> bool {
     if nodes.is_empty() || live == 0 {
-        return Some([None; PACKET]);
+        return true;
+    }
+    if avx2.is_none() {
+        return false;
     }
     #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2 (checked just above).
-        return unsafe { x86::intersect_packet_avx2(nodes, blocks, rays, live) };
+    {
+        // SAFETY: the token says the CPU has AVX2.
+        unsafe { x86::intersect_packet_avx2(nodes, blocks, rays, live, hits) }
     }
-    let _ = (blocks, rays);
-    None
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (blocks, rays, hits);
+        unreachable!("no AVX2 token is made off x86_64")
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -103,11 +114,13 @@ mod x86 {
         (lo, hi)
     }
 
-    /// The packet of `rays`, or None where two live rays' directions
-    /// differ in sign on an axis or in the triangle test's permutation, or
-    /// one has a zero component.
+    /// The packet of `rays`, written into `out`; false (and `out` left
+    /// as it was) where two live rays' directions differ in sign on an
+    /// axis or in the triangle test's permutation, or one has a zero
+    /// component. (Written in place: an `Option<Packet8>` returned was
+    /// copied, a kilobyte per packet.)
     #[inline(always)]
-    fn packet8(rays: &[Ray; PACKET], live: u8) -> Option<Packet8> {
+    fn packet8(rays: &[Ray; PACKET], live: u8, out: &mut MaybeUninit<Packet8>) -> bool {
         let first = rays[live.trailing_zeros() as usize].d.to_array();
         let code = permutation(first);
         let mut o = [[0f32; PACKET]; 3];
@@ -115,7 +128,7 @@ mod x86 {
         for (j, r) in rays.iter().enumerate() {
             let dj = r.d.to_array();
             if live & (1 << j) != 0 && permutation(dj) != code {
-                return None;
+                return false;
             }
             for a in 0..3 {
                 o[a][j] = r.o[a];
@@ -149,7 +162,7 @@ mod x86 {
                 let neg = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv, _mm256_setzero_ps()));
                 let (zero, neg) = (zero as u8 & live, neg as u8 & live);
                 if zero != 0 || (neg != 0 && neg != live) {
-                    return None;
+                    return false;
                 }
                 negative[a] = neg != 0;
                 inv_d[a] = store(inv);
@@ -163,7 +176,7 @@ mod x86 {
             ];
             let arrays = PLANES8;
             let splat = _mm256_set1_ps;
-            let mut p = Packet8 {
+            let p = out.write(Packet8 {
                 o,
                 d,
                 inv_d,
@@ -177,7 +190,7 @@ mod x86 {
                 o_far: [_mm256_setzero_ps(); 3],
                 inv_lo: [_mm256_setzero_ps(); 3],
                 inv_hi: [_mm256_setzero_ps(); 3],
-            };
+            });
             for a in 0..3 {
                 let (o_lo, o_hi) = extremes(&p.o[a], live);
                 let (i_lo, i_hi) = extremes(&p.inv_d[a], live);
@@ -196,7 +209,7 @@ mod x86 {
                 p.inv_lo[a] = splat(i_lo);
                 p.inv_hi[a] = splat(i_hi);
             }
-            Some(p)
+            true
         }
     }
 
@@ -282,7 +295,8 @@ mod x86 {
     /// bound, a waiting node dropped when the farthest of the rays' best
     /// hits has moved in front of it; a leaf is tested by the rays that
     /// hit its box (by their own box test when its node was visited).
-    /// None where the rays make no packet ([`packet8`]).
+    /// The hits go into `hits` (its live lanes None on entry); false
+    /// where the rays make no packet ([`packet8`]).
     ///
     /// # Safety
     /// The CPU must support AVX2.
@@ -292,8 +306,14 @@ mod x86 {
         blocks: &[LeafBlock],
         rays: &[Ray; PACKET],
         live: u8,
-    ) -> Option<[Option<Hit>; PACKET]> {
-        let p = packet8(rays, live)?;
+        hits: &mut [Option<Hit>; PACKET],
+    ) -> bool {
+        let mut packet = MaybeUninit::uninit();
+        if !packet8(rays, live, &mut packet) {
+            return false;
+        }
+        // SAFETY: packet8 wrote it (it returned true).
+        let p = unsafe { packet.assume_init_ref() };
         let mut best: [Hit; PACKET] = std::array::from_fn(|k| Hit {
             t: rays[k].tmax,
             tri: u32::MAX,
@@ -328,12 +348,12 @@ mod x86 {
                 far = farthest(&best_t);
             } else {
                 let node = &nodes[cur as usize];
-                let (mask, dist) = intersect_aabb8_packet(&p, node, far);
+                let (mask, dist) = intersect_aabb8_packet(p, node, far);
                 if mask != 0 {
                     let (order, n) = order_hits(mask, &dist);
                     let rays_of = |s: usize| {
                         if is_leaf_ref(node.child[s]) {
-                            rays_in_box(&p, node, s, &best_t)
+                            rays_in_box(p, node, s, &best_t)
                         } else {
                             live
                         }
@@ -356,9 +376,12 @@ mod x86 {
             }
             loop {
                 if sp == 0 {
-                    return Some(std::array::from_fn(|k| {
-                        (live & (1 << k) != 0 && best[k].tri != u32::MAX).then_some(best[k])
-                    }));
+                    for (k, hit) in hits.iter_mut().enumerate() {
+                        if live & (1 << k) != 0 && best[k].tri != u32::MAX {
+                            *hit = Some(best[k]);
+                        }
+                    }
+                    return true;
                 }
                 sp -= 1;
                 // SAFETY: every entry below the stack pointer was pushed.

@@ -337,10 +337,10 @@ fn next_direction(
 }
 
 /// A path between its bounces: what it has gathered, what it carries,
-/// its ray, and what MIS needs of the vertex it left.
+/// and what MIS needs of the vertex it left. (Its ray is kept beside it:
+/// a wave's rays in one array are its camera packet, not a copy.)
 #[derive(Clone, Copy, Debug)]
 struct PathState {
-    ray: Ray,
     radiance: Vec3,
     throughput: Vec3,
     /// The relative IORs crossed (Russian roulette undoes their scaling).
@@ -355,18 +355,15 @@ struct PathState {
 }
 
 impl PathState {
-    fn new(ray: Ray) -> Self {
-        Self {
-            ray,
-            radiance: Vec3::ZERO,
-            throughput: Vec3::ONE,
-            eta: 1.0,
-            prev_mis: false,
-            prev_bsdf_pdf: 0.0,
-            prev_bg_normal: Vec3::ZERO,
-            prev_p: Vec3::ZERO,
-        }
-    }
+    const START: Self = Self {
+        radiance: Vec3::ZERO,
+        throughput: Vec3::ONE,
+        eta: 1.0,
+        prev_mis: false,
+        prev_bsdf_pdf: 0.0,
+        prev_bg_normal: Vec3::ZERO,
+        prev_p: Vec3::ZERO,
+    };
 }
 
 /// Where a path's ray arrived: the hit, its material, the point (error
@@ -603,15 +600,16 @@ impl<'a> PathTracer<'a> {
     /// [`PathTracer::sample`] with its random numbers from `rng` (the
     /// sample's own, from whichever source).
     pub fn trace(&self, x: u32, y: u32, mut rng: PathSampler, rays: &mut u64) -> Vec3 {
-        let mut path = PathState::new(self.camera.ray(x, y, rng.pixel_2d()));
+        let mut path = PathState::START;
+        let mut ray = self.camera.ray(x, y, rng.pixel_2d());
         let mut depth = 0u32;
-        while let Some(at) = self.arrive(&mut path, rays) {
+        while let Some(at) = self.arrive(&mut path, &ray, rays) {
             if depth.saturating_add(1) >= self.max_depth {
                 break;
             }
             // The fixed per-bounce budget of random numbers.
             let u = rng.bounce();
-            if !self.vertex(&mut path, &at, &u, depth, rays) {
+            if !self.vertex(&mut path, &mut ray, &at, &u, depth, rays) {
                 break;
             }
             depth += 1;
@@ -622,13 +620,14 @@ impl<'a> PathTracer<'a> {
     /// The path's vertex at the hit `at`, bounce `depth`, with the
     /// bounce's numbers `u`: shade it; where it samples lights, draw the
     /// light sample, trace its shadow ray and add it; then the BSDF's
-    /// sample as the path's next ray, and Russian roulette. False where the
+    /// sample as the path's next ray (into `ray`), and Russian roulette. False where the
     /// path ends. (Its pieces stay locals of one body: a struct carrying
     /// them between steps was copied at every vertex.)
     #[inline(always)]
     fn vertex(
         &self,
         path: &mut PathState,
+        ray: &mut Ray,
         at: &Arrival,
         u: &crate::sobol::BounceSamples,
         depth: u32,
@@ -667,7 +666,7 @@ impl<'a> PathTracer<'a> {
         path.prev_bsdf_pdf = bs.pdf;
         path.prev_bg_normal = bg_normal;
         path.prev_p = p;
-        path.ray = Ray {
+        *ray = Ray {
             o: offset_origin(p, at.p_err, sf.ng, wi),
             d: wi,
             tmax: f32::MAX,
@@ -675,13 +674,13 @@ impl<'a> PathTracer<'a> {
         self.roulette(path, depth + 1, u.rr)
     }
 
-    /// Trace the path's ray: what it finds (the background or an emitter,
+    /// Trace the path's ray `ray`: what it finds (the background or an emitter,
     /// MIS-weighted, and the medium it crossed) added to the path, and the
     /// hit it arrives at; None where it escaped.
     #[inline(always)]
-    fn arrive(&self, path: &mut PathState, rays: &mut u64) -> Option<Arrival> {
-        let hit = self.scene.intersect_with(&path.ray, self.masks);
-        self.arrive_at(path, hit, rays)
+    fn arrive(&self, path: &mut PathState, ray: &Ray, rays: &mut u64) -> Option<Arrival> {
+        let hit = self.scene.intersect_with(ray, self.masks);
+        self.arrive_at(path, ray, hit, rays)
     }
 
     /// [`PathTracer::arrive`] with the path's ray already traced: `hit` is
@@ -690,11 +689,11 @@ impl<'a> PathTracer<'a> {
     fn arrive_at(
         &self,
         path: &mut PathState,
+        ray: &Ray,
         hit: Option<crate::bvh::Hit>,
         rays: &mut u64,
     ) -> Option<Arrival> {
         let scene = self.scene;
-        let ray = &path.ray;
         *rays += 1;
         let Some(hit) = hit else {
             if self.lights.probs.background > 0.0 {

@@ -37,13 +37,14 @@ impl WaveSampler<'_> {
     fn bounces(&mut self, bounce: u32, live: u8) -> [BounceSamples; 8] {
         match self {
             Self::Batch(batch) => batch.bounces(bounce, live),
-            Self::Paths(paths) => std::array::from_fn(|k| {
-                if live & (1 << k) != 0 {
-                    paths[k].bounce()
-                } else {
-                    BounceSamples::default()
+            Self::Paths(paths) => {
+                // A loop, not `array::from_fn`, whose array was copied out.
+                let mut u = [BounceSamples::default(); 8];
+                for k in lanes_of(live) {
+                    u[k] = paths[k].bounce();
                 }
-            }),
+                u
+            }
         }
     }
 }
@@ -75,22 +76,34 @@ impl PathTracer<'_> {
         rays: &mut u64,
     ) -> [Vec3; 8] {
         debug_assert!(n <= 8);
-        let mut paths: [PathState; 8] =
-            std::array::from_fn(|k| PathState::new(self.camera.ray(x, y, rng.pixel_2d(k))));
+        let mut paths = [PathState::START; 8];
+        // The paths' rays side by side: the camera packet reads them as
+        // they are.
+        let none = Ray {
+            o: Vec3::ZERO,
+            d: Vec3::ZERO,
+            tmax: 0.0,
+        };
+        let mut ray_of = [none; PACKET];
+        for (k, ray) in ray_of.iter_mut().enumerate() {
+            *ray = self.camera.ray(x, y, rng.pixel_2d(k));
+        }
         let mut live = ((1u16 << n) - 1) as u8;
         let mut arrivals = [None::<Arrival>; 8];
+        let mut camera_hits = [None; PACKET];
         let mut depth = 0u32;
         while live != 0 {
             // The camera rays in one packet; later bounces' rays, no longer
             // alike, one at a time (measured: docs/benchmarks.md).
-            let packet = (depth == 0).then(|| {
-                let rays: [Ray; PACKET] = std::array::from_fn(|k| paths[k].ray);
-                self.scene.intersect_packet(&rays, live, self.masks)
-            });
+            if depth == 0 {
+                self.scene
+                    .intersect_packet(&ray_of, live, self.masks, &mut camera_hits);
+            }
             for k in lanes_of(live) {
-                arrivals[k] = match &packet {
-                    Some(hits) => self.arrive_at(&mut paths[k], hits[k], rays),
-                    None => self.arrive(&mut paths[k], rays),
+                arrivals[k] = if depth == 0 {
+                    self.arrive_at(&mut paths[k], &ray_of[k], camera_hits[k], rays)
+                } else {
+                    self.arrive(&mut paths[k], &ray_of[k], rays)
                 };
                 if arrivals[k].is_none() {
                     live &= !(1 << k);
@@ -102,7 +115,7 @@ impl PathTracer<'_> {
             let bounce = rng.bounces(depth, live);
             for k in lanes_of(live) {
                 let Some(at) = &arrivals[k] else { continue };
-                if !self.vertex(&mut paths[k], at, &bounce[k], depth, rays) {
+                if !self.vertex(&mut paths[k], &mut ray_of[k], at, &bounce[k], depth, rays) {
                     live &= !(1 << k);
                 }
             }
