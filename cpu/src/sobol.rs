@@ -192,18 +192,23 @@ impl SampleBatch {
     /// zero.
     pub fn bounces(&mut self, bounce: u32, live: u8) -> [BounceSamples; 8] {
         if live.count_ones() < u32::from(self.level.break_even()) {
-            return std::array::from_fn(|lane| {
-                if live & (1 << lane) == 0 {
-                    return BounceSamples::default();
-                }
+            // A loop over the live lanes, not `array::from_fn`, whose
+            // array was copied out (a memcpy per call).
+            let mut u = [BounceSamples::default(); 8];
+            let mut rest = live;
+            while rest != 0 {
+                let lane = rest.trailing_zeros() as usize;
+                rest &= rest - 1;
                 let sample = self.first.wrapping_add(lane as u32);
-                if self.block.is_none() {
-                    return sobol_bounce(self.key, self.pixel, sample, bounce);
-                }
-                // One path, from the pixel's keys.
-                let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
-                lanes::bounce_keyed(self.bounce_keys(bounce), i).into()
-            });
+                u[lane] = if self.block.is_none() {
+                    sobol_bounce(self.key, self.pixel, sample, bounce)
+                } else {
+                    // One path, from the pixel's keys.
+                    let i = sample & ((1 << SOBOL_BLOCK_BITS) - 1);
+                    lanes::bounce_keyed(self.bounce_keys(bounce), i).into()
+                };
+            }
+            return u;
         }
         let (key, pixel, first) = (self.key, self.pixel, self.first);
         match self.block {
