@@ -65,29 +65,26 @@ mod x86 {
     use std::arch::x86_64::*;
     use std::mem::MaybeUninit;
 
-    use glam::{BVec3, Vec3};
-
-    use super::super::traverse::{PreparedRay, SLAB_PAD, axes, permutation};
+    use super::super::traverse::{SLAB_PAD, axes};
     use super::super::wide::{is_leaf_ref, leaf_range};
     use super::super::wide_traverse::order_hits;
-    use super::super::wide_traverse::x86::{PLANES8, block_closest, hits8, leaf_ray, slab_end8};
+    use super::super::wide_traverse::x86::{
+        LeafRay, PLANES8, block_closest, hits8, leaf_ray_parts, slab_end8,
+    };
     use super::super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE};
     use super::{Hit, PACKET, Ray};
 
-    /// The packet: its rays one per lane (what [`PreparedRay::new`]
-    /// computes for each), and per axis the bounds of the interval test
-    /// with the byte offsets in a [`Bvh8Node`] of the near and far
-    /// coordinate arrays.
+    /// The packet: its rays one per lane (what `PreparedRay::new`
+    /// computes for each: the origin, the inverse direction, the shear,
+    /// the axis order), and per axis the bounds of the interval test with
+    /// the byte offsets in a [`Bvh8Node`] of the near and far coordinate
+    /// arrays.
     struct Packet8 {
-        o: [[f32; PACKET]; 3],
-        d: [[f32; PACKET]; 3],
-        inv_d: [[f32; PACKET]; 3],
-        shear: [[f32; PACKET]; 3],
-        /// The triangle test's axis permutation, the same for every ray.
-        k: [usize; 3],
-        /// The rays' origins and inverse directions as lanes.
         o8: [__m256; 3],
         inv8: [__m256; 3],
+        shear8: [__m256; 3],
+        /// The triangle test's axis permutation, the same for every ray.
+        k: [usize; 3],
         near: [usize; 3],
         far: [usize; 3],
         /// The origin bound that gives the entry distances' lower bound
@@ -100,55 +97,117 @@ mod x86 {
         inv_hi: [__m256; 3],
     }
 
-    /// The smallest and largest of the lanes in `live`.
+    /// Lane `j` of `v`.
     #[inline(always)]
-    fn extremes(v: &[f32; PACKET], live: u8) -> (f32, f32) {
-        let mut lo = f32::INFINITY;
-        let mut hi = f32::NEG_INFINITY;
-        for (k, &x) in v.iter().enumerate() {
-            if live & (1 << k) != 0 {
-                lo = lo.min(x);
-                hi = hi.max(x);
-            }
+    fn lane(v: &__m256, j: usize) -> f32 {
+        // SAFETY: an `__m256` is eight `f32`s.
+        unsafe { (*(v as *const __m256).cast::<[f32; PACKET]>())[j] }
+    }
+
+    /// The smallest and largest of the lanes of `v` that `live` (all ones
+    /// in a live lane) selects, NaN lanes left out, as `f32::min` and
+    /// `f32::max` folded over them would find them, in every lane. (Equal
+    /// values of opposite zero signs may come out either way: the bounds'
+    /// zeros compare equal, so the interval test is the same.)
+    #[inline(always)]
+    fn extremes(v: __m256, live: __m256) -> (__m256, __m256) {
+        // SAFETY: called only from the AVX2 entry point below.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let keep = _mm256_and_ps(live, _mm256_cmp_ps::<_CMP_ORD_Q>(v, v));
+            let lo = _mm256_blendv_ps(_mm256_set1_ps(f32::INFINITY), v, keep);
+            let hi = _mm256_blendv_ps(_mm256_set1_ps(f32::NEG_INFINITY), v, keep);
+            let lo = _mm256_min_ps(lo, _mm256_permute2f128_ps::<1>(lo, lo));
+            let hi = _mm256_max_ps(hi, _mm256_permute2f128_ps::<1>(hi, hi));
+            let lo = _mm256_min_ps(lo, _mm256_permute_ps::<0b0100_1110>(lo));
+            let hi = _mm256_max_ps(hi, _mm256_permute_ps::<0b0100_1110>(hi));
+            let lo = _mm256_min_ps(lo, _mm256_permute_ps::<0b1011_0001>(lo));
+            let hi = _mm256_max_ps(hi, _mm256_permute_ps::<0b1011_0001>(hi));
+            (lo, hi)
         }
-        (lo, hi)
+    }
+
+    /// The rays' component `$c` of `$f` (o or d) as lanes.
+    macro_rules! lanes_of {
+        ($rays:ident, $f:ident, $c:ident) => {
+            _mm256_setr_ps(
+                $rays[0].$f.$c,
+                $rays[1].$f.$c,
+                $rays[2].$f.$c,
+                $rays[3].$f.$c,
+                $rays[4].$f.$c,
+                $rays[5].$f.$c,
+                $rays[6].$f.$c,
+                $rays[7].$f.$c,
+            )
+        };
     }
 
     /// The packet of `rays`, written into `out`; false (and `out` left
     /// as it was) where two live rays' directions differ in sign on an
     /// axis or in the triangle test's permutation, or one has a zero
-    /// component. (Written in place: an `Option<Packet8>` returned was
-    /// copied, a kilobyte per packet.)
+    /// component. Made in lanes: the rays' axis orders
+    /// ([`super::super::traverse::permutation`]) compared by their masks, the interval bounds by reductions across the lanes.
+    /// (Written in place: an `Option<Packet8>` returned was copied, a
+    /// kilobyte per packet; and the rays staged in arrays a float at a time
+    /// were read back eight at a time, each such load waiting for its
+    /// eight stores.)
     #[inline(always)]
     fn packet8(rays: &[Ray; PACKET], live: u8, out: &mut MaybeUninit<Packet8>) -> bool {
-        let first = rays[live.trailing_zeros() as usize].d.to_array();
-        let code = permutation(first);
-        let mut o = [[0f32; PACKET]; 3];
-        let mut d = [[0f32; PACKET]; 3];
-        for (j, r) in rays.iter().enumerate() {
-            let dj = r.d.to_array();
-            if live & (1 << j) != 0 && permutation(dj) != code {
-                return false;
-            }
-            for a in 0..3 {
-                o[a][j] = r.o[a];
-                d[a][j] = dj[a];
-            }
-        }
         // SAFETY: called only from the AVX2 entry point below.
         #[allow(unused_unsafe)]
         unsafe {
-            let load = |v: &[f32; PACKET]| _mm256_loadu_ps(v.as_ptr());
-            let store = |x: __m256| {
-                let mut v = [0f32; PACKET];
-                _mm256_storeu_ps(v.as_mut_ptr(), x);
-                v
-            };
+            let o8 = [
+                lanes_of!(rays, o, x),
+                lanes_of!(rays, o, y),
+                lanes_of!(rays, o, z),
+            ];
+            let d8 = [
+                lanes_of!(rays, d, x),
+                lanes_of!(rays, d, y),
+                lanes_of!(rays, d, z),
+            ];
+            let bits = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+            let live8 = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+                _mm256_and_si256(_mm256_set1_epi32(i32::from(live)), bits),
+                bits,
+            ));
+            let mask = |m: __m256| _mm256_movemask_ps(m) as u8 & live;
+            let uniform = |m: u8| m == 0 || m == live;
             let sign = _mm256_set1_ps(-0.0);
-            let mut inv_d = [[0f32; PACKET]; 3];
+            let zero = _mm256_setzero_ps();
+            // permutation(): the dominant axis (the first of equals), then
+            // whether d is negative along it, lane by lane.
+            let a8 = [
+                _mm256_andnot_ps(sign, d8[0]),
+                _mm256_andnot_ps(sign, d8[1]),
+                _mm256_andnot_ps(sign, d8[2]),
+            ];
+            let kz0 = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(a8[0], a8[1]),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(a8[0], a8[2]),
+            );
+            let kz1 = _mm256_andnot_ps(kz0, _mm256_cmp_ps::<_CMP_GE_OQ>(a8[1], a8[2]));
+            let (m0, m1) = (mask(kz0), mask(kz1));
+            if !uniform(m0) || !uniform(m1) {
+                return false;
+            }
+            let kz = if m0 != 0 {
+                0
+            } else if m1 != 0 {
+                1
+            } else {
+                2
+            };
+            let backward = mask(_mm256_cmp_ps::<_CMP_LT_OQ>(d8[kz], zero));
+            if !uniform(backward) {
+                return false;
+            }
+            let k = axes(2 * kz as u8 + u8::from(backward != 0));
+            let mut inv8 = [zero; 3];
             let mut negative = [false; 3];
             for a in 0..3 {
-                let da = load(&d[a]);
+                let da = d8[a];
                 // PreparedRay::new's safe reciprocal, lane by lane: the
                 // same quotient, and +-1e30 (d's sign) where |d| < 1e-30.
                 let big =
@@ -158,76 +217,60 @@ mod x86 {
                     _mm256_div_ps(_mm256_set1_ps(1.0), da),
                     big,
                 );
-                let zero = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(da, _mm256_setzero_ps()));
-                let neg = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LT_OQ>(inv, _mm256_setzero_ps()));
-                let (zero, neg) = (zero as u8 & live, neg as u8 & live);
-                if zero != 0 || (neg != 0 && neg != live) {
+                let neg = mask(_mm256_cmp_ps::<_CMP_LT_OQ>(inv, zero));
+                if mask(_mm256_cmp_ps::<_CMP_EQ_OQ>(da, zero)) != 0 || !uniform(neg) {
                     return false;
                 }
                 negative[a] = neg != 0;
-                inv_d[a] = store(inv);
+                inv8[a] = inv;
             }
-            let k = axes(code);
-            let dz = load(&d[k[2]]);
-            let shear = [
-                store(_mm256_div_ps(load(&d[k[0]]), dz)),
-                store(_mm256_div_ps(load(&d[k[1]]), dz)),
-                store(_mm256_div_ps(_mm256_set1_ps(1.0), dz)),
+            let dz = d8[k[2]];
+            let shear8 = [
+                _mm256_div_ps(d8[k[0]], dz),
+                _mm256_div_ps(d8[k[1]], dz),
+                _mm256_div_ps(_mm256_set1_ps(1.0), dz),
             ];
-            let arrays = PLANES8;
-            let splat = _mm256_set1_ps;
             let p = out.write(Packet8 {
-                o,
-                d,
-                inv_d,
-                shear,
+                o8,
+                inv8,
+                shear8,
                 k,
-                o8: [load(&o[0]), load(&o[1]), load(&o[2])],
-                inv8: [load(&inv_d[0]), load(&inv_d[1]), load(&inv_d[2])],
                 near: [0; 3],
                 far: [0; 3],
-                o_near: [_mm256_setzero_ps(); 3],
-                o_far: [_mm256_setzero_ps(); 3],
-                inv_lo: [_mm256_setzero_ps(); 3],
-                inv_hi: [_mm256_setzero_ps(); 3],
+                o_near: [zero; 3],
+                o_far: [zero; 3],
+                inv_lo: [zero; 3],
+                inv_hi: [zero; 3],
             });
             for a in 0..3 {
-                let (o_lo, o_hi) = extremes(&p.o[a], live);
-                let (i_lo, i_hi) = extremes(&p.inv_d[a], live);
+                let (o_lo, o_hi) = extremes(o8[a], live8);
+                let (i_lo, i_hi) = extremes(inv8[a], live8);
                 // Toward +axis the entry (lo - o) inv is smallest at the
                 // largest origin and the exit (hi - o) inv largest at the
                 // smallest; toward -axis the other way round.
                 let (near, far, o_near, o_far) = if negative[a] {
-                    (arrays[a].1, arrays[a].0, o_lo, o_hi)
+                    (PLANES8[a].1, PLANES8[a].0, o_lo, o_hi)
                 } else {
-                    (arrays[a].0, arrays[a].1, o_hi, o_lo)
+                    (PLANES8[a].0, PLANES8[a].1, o_hi, o_lo)
                 };
                 p.near[a] = near;
                 p.far[a] = far;
-                p.o_near[a] = splat(o_near);
-                p.o_far[a] = splat(o_far);
-                p.inv_lo[a] = splat(i_lo);
-                p.inv_hi[a] = splat(i_hi);
+                p.o_near[a] = o_near;
+                p.o_far[a] = o_far;
+                p.inv_lo[a] = i_lo;
+                p.inv_hi[a] = i_hi;
             }
             true
         }
     }
 
     impl Packet8 {
-        /// Ray `j` as [`PreparedRay::new`] makes it.
+        /// Ray `j`'s leaf constants, as the single-ray traversal makes them
+        /// from its prepared ray.
         #[inline(always)]
-        fn ray(&self, j: usize) -> PreparedRay {
-            let v = |a: &[[f32; PACKET]; 3]| Vec3::new(a[0][j], a[1][j], a[2][j]);
-            PreparedRay {
-                o: v(&self.o),
-                d: v(&self.d),
-                inv_d: v(&self.inv_d),
-                zero_d: BVec3::FALSE,
-                kx: self.k[0],
-                ky: self.k[1],
-                kz: self.k[2],
-                shear: v(&self.shear),
-            }
+        fn leaf(&self, j: usize) -> LeafRay {
+            let v = |a: &[__m256; 3]| [lane(&a[0], j), lane(&a[1], j), lane(&a[2], j)];
+            leaf_ray_parts(v(&self.o8), self.k, v(&self.shear8))
         }
     }
 
@@ -342,7 +385,7 @@ mod x86 {
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    block_closest(&leaf_ray(&p.ray(k)), block, &mut best[k], &|_, _, _| true);
+                    block_closest(&p.leaf(k), block, &mut best[k], &|_, _, _| true);
                     best_t[k] = best[k].t;
                 }
                 far = farthest(&best_t);

@@ -553,18 +553,20 @@ pub(super) mod x86 {
     /// A row of a block vertex is four `f32`.
     const ROW_BYTES: usize = std::mem::size_of::<[f32; 4]>();
 
+    /// The leaf constants of a ray from what [`PreparedRay::new`] makes of
+    /// it: its origin, its axis order (kx, ky, kz) and its shear (a packet
+    /// keeps them in lanes).
     #[inline(always)]
-    pub(in crate::bvh) fn leaf_ray(r: &PreparedRay) -> LeafRay {
-        let (o, k) = (r.o.to_array(), [r.kx, r.ky, r.kz]);
+    pub(in crate::bvh) fn leaf_ray_parts(o: [f32; 3], k: [usize; 3], shear: [f32; 3]) -> LeafRay {
         // SAFETY: SSE2 is part of the x86_64 baseline.
         #[allow(unused_unsafe)]
         unsafe {
             LeafRay {
                 o: k.map(|a| _mm_set1_ps(o[a])),
                 shear: [
-                    _mm_set1_ps(r.shear.x),
-                    _mm_set1_ps(r.shear.y),
-                    _mm_set1_ps(r.shear.z),
+                    _mm_set1_ps(shear[0]),
+                    _mm_set1_ps(shear[1]),
+                    _mm_set1_ps(shear[2]),
                 ],
                 rows: k.map(|a| a * ROW_BYTES),
             }
@@ -704,7 +706,7 @@ pub(super) mod x86 {
     fn triangles4_block(r: &LeafRay, block: &LeafBlock, tmax: f32) -> (u32, [[f32; 4]; 3]) {
         // SAFETY: SSE2 is part of the x86_64 baseline; the loads read
         // 16-byte aligned `[f32; 4]` rows of an align(16) block, at the
-        // offsets of rows 0..3 (`leaf_ray`).
+        // offsets of rows 0..3 (`leaf_ray_parts`).
         #[allow(unused_unsafe)]
         unsafe {
             let vertex = |k: usize| -> [__m128; 3] {
@@ -1059,7 +1061,7 @@ pub(super) mod x86 {
 
     /// The box test's constants: the inverse direction by one division of
     /// four lanes, the near and far planes from its signs. With [`leaf8`],
-    /// what [`PreparedRay::new`] then `Ray8`'s and [`leaf_ray`]'s broadcasts
+    /// what [`PreparedRay::new`] then `Ray8`'s and [`leaf_ray_parts`]' broadcasts
     /// give, bit for bit, made in registers straight from the ray (a
     /// prepared ray built first and then read into both sets of constants
     /// took 175 instructions before the first node, most of them stores and
