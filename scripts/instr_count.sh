@@ -16,7 +16,10 @@
 #
 # Usage: scripts/instr_count.sh BIN_A [BIN_B] -- SCENE...
 #   WIDTH (default 16) and SPP (default 64) set the render (64 spp: the
-#   per-pixel work, such as the Sobol keys, shares out as in a real render);
+#   per-pixel work, such as the Sobol keys, shares out as in a real render;
+#   at 16 px a pixel's camera rays are far less alike than at the 128 px
+#   that speed_ab.sh and before_after.sh time, so camera packets count up
+#   to three times their share there: WIDTH=128 SPP=8 counts them as timed);
 #   prints a markdown table of instructions per sample and B / A. PARTS=1
 #   (environment) adds, per scene, where a sample's instructions go
 #   (scripts/instr_parts.py: traversal by query, light sampling, the Sobol

@@ -176,34 +176,9 @@ mod x86 {
             let uniform = |m: u8| m == 0 || m == live;
             let sign = _mm256_set1_ps(-0.0);
             let zero = _mm256_setzero_ps();
-            // permutation(): the dominant axis (the first of equals), then
-            // whether d is negative along it, lane by lane.
-            let a8 = [
-                _mm256_andnot_ps(sign, d8[0]),
-                _mm256_andnot_ps(sign, d8[1]),
-                _mm256_andnot_ps(sign, d8[2]),
-            ];
-            let kz0 = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(a8[0], a8[1]),
-                _mm256_cmp_ps::<_CMP_GE_OQ>(a8[0], a8[2]),
-            );
-            let kz1 = _mm256_andnot_ps(kz0, _mm256_cmp_ps::<_CMP_GE_OQ>(a8[1], a8[2]));
-            let (m0, m1) = (mask(kz0), mask(kz1));
-            if !uniform(m0) || !uniform(m1) {
+            let Some(k) = common_axes(&d8, live) else {
                 return false;
-            }
-            let kz = if m0 != 0 {
-                0
-            } else if m1 != 0 {
-                1
-            } else {
-                2
             };
-            let backward = mask(_mm256_cmp_ps::<_CMP_LT_OQ>(d8[kz], zero));
-            if !uniform(backward) {
-                return false;
-            }
-            let k = axes(2 * kz as u8 + u8::from(backward != 0));
             let mut inv8 = [zero; 3];
             let mut negative = [false; 3];
             for a in 0..3 {
@@ -261,6 +236,44 @@ mod x86 {
                 p.inv_hi[a] = i_hi;
             }
             true
+        }
+    }
+
+    /// The live rays' common axis order for the triangle test
+    /// ([`super::super::traverse::permutation`]'s rule, lane by lane: the
+    /// dominant axis, the first of equals, then whether d is negative
+    /// along it), or None where two of them differ.
+    #[inline(always)]
+    fn common_axes(d8: &[__m256; 3], live: u8) -> Option<[usize; 3]> {
+        // SAFETY: called only from the AVX2 entry point below.
+        #[allow(unused_unsafe)]
+        unsafe {
+            let mask = |m: __m256| _mm256_movemask_ps(m) as u8 & live;
+            let uniform = |m: u8| m == 0 || m == live;
+            let sign = _mm256_set1_ps(-0.0);
+            let a8 = [
+                _mm256_andnot_ps(sign, d8[0]),
+                _mm256_andnot_ps(sign, d8[1]),
+                _mm256_andnot_ps(sign, d8[2]),
+            ];
+            let kz0 = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(a8[0], a8[1]),
+                _mm256_cmp_ps::<_CMP_GE_OQ>(a8[0], a8[2]),
+            );
+            let kz1 = _mm256_andnot_ps(kz0, _mm256_cmp_ps::<_CMP_GE_OQ>(a8[1], a8[2]));
+            let (m0, m1) = (mask(kz0), mask(kz1));
+            if !uniform(m0) || !uniform(m1) {
+                return None;
+            }
+            let kz = if m0 != 0 {
+                0
+            } else if m1 != 0 {
+                1
+            } else {
+                2
+            };
+            let backward = mask(_mm256_cmp_ps::<_CMP_LT_OQ>(d8[kz], _mm256_setzero_ps()));
+            uniform(backward).then(|| axes(2 * kz as u8 + u8::from(backward != 0)))
         }
     }
 
