@@ -384,7 +384,9 @@ pub fn perturb_normal(rgb: Vec3, scale: f32, n: Vec3, t: Vec3, b: Vec3) -> Vec3 
 /// the metal/non-metal blend, as `loader::material` maps the factors) from
 /// the textured base colour, metallic (B) and roughness (G); `MAP_EXTRAS`
 /// multiplies a diffuse reflectance or a conductor's specular reflectance
-/// by the base colour texture.
+/// by the base colour texture. (Inlined, so that its BSDF is made where
+/// the caller keeps it, not copied there.)
+#[inline(always)]
 pub fn textured_bsdf(
     st: &SceneTextures,
     mt: &MaterialTextures,

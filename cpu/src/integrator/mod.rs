@@ -457,9 +457,11 @@ impl<'a> PathTracer<'a> {
     /// `wo`: the normal map tilts the shading frame (adapted so `wo`'s
     /// mirror direction stays above the surface,
     /// [`crate::texture::valid_reflection_normal`]), the other textures set
-    /// the BSDF's parameters.
+    /// the BSDF's parameters; the BSDF is made in `textured` (returned
+    /// from here, it was copied into it, 100 bytes read back wider than
+    /// they were written).
     #[allow(clippy::too_many_arguments)]
-    fn apply_textures(
+    fn apply_textures<'s>(
         &self,
         mt: &MaterialTextures,
         tri: u32,
@@ -468,7 +470,8 @@ impl<'a> PathTracer<'a> {
         wo: Vec3,
         sf: &mut SurfaceFrame,
         base: &Bsdf,
-    ) -> Bsdf {
+        textured: &'s mut Option<Bsdf>,
+    ) -> &'s Bsdf {
         let st = &self.scene.textures;
         let unmapped = sf.frame;
         let ns = normal_mapped(st, mt, tri, u, v, sf.ng, wo, &sf.frame);
@@ -476,11 +479,11 @@ impl<'a> PathTracer<'a> {
             sf.frame = Frame::from_normal_tangent(ns, sf.frame.s);
             sf.ns = ns;
         }
-        let mut bsdf = textured_bsdf(st, mt, base, tri, u, v);
+        let bsdf = textured.insert(textured_bsdf(st, mt, base, tri, u, v));
         sf.folds = mt.normal.is_some() && !bsdf.has_transmission();
         // The clear coat's own normal (clearcoatNormalTexture, else the
         // unmapped one), where a normal map tilts either.
-        if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = &mut bsdf
+        if let Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } = bsdf
             && coat.clearcoat > 0.0
             && (mt.normal.is_some() || mt.clearcoat_normal.is_some())
         {
@@ -507,7 +510,7 @@ impl<'a> PathTracer<'a> {
         let mut sf = self.surface(tri, u, v);
         let base = &self.scene.materials[material as usize].bsdf;
         let bsdf = match self.scene.textures.material(material) {
-            Some(mt) => &*textured.insert(self.apply_textures(mt, tri, u, v, wo, &mut sf, base)),
+            Some(mt) => self.apply_textures(mt, tri, u, v, wo, &mut sf, base, textured),
             None => base,
         };
         (sf, bsdf)
