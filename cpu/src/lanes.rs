@@ -32,6 +32,20 @@ use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};
 
 use glam::{Vec2, Vec3};
 
+/// The lanes of `live` (bit k: lane k), lowest first: one step per set
+/// bit, not a test of all eight.
+#[inline(always)]
+pub fn live_lanes(live: u8) -> impl Iterator<Item = usize> {
+    let mut rest = live;
+    std::iter::from_fn(move || {
+        (rest != 0).then(|| {
+            let k = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            k
+        })
+    })
+}
+
 /// The arithmetic the lane-generic code uses (see the module notes).
 pub trait Lane:
     Copy

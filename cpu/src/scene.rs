@@ -451,7 +451,7 @@ impl Scene {
         hits: &mut [Option<crate::bvh::Hit>; crate::bvh::PACKET],
     ) {
         if masks {
-            for k in (0..crate::bvh::PACKET).filter(|k| live & (1 << k) != 0) {
+            for k in crate::lanes::live_lanes(live) {
                 hits[k] = self.intersect_with(&rays[k], true);
             }
             return;

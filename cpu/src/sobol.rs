@@ -195,10 +195,7 @@ impl SampleBatch {
             // A loop over the live lanes, not `array::from_fn`, whose
             // array was copied out (a memcpy per call).
             let mut u = [BounceSamples::default(); 8];
-            let mut rest = live;
-            while rest != 0 {
-                let lane = rest.trailing_zeros() as usize;
-                rest &= rest - 1;
+            for lane in crate::lanes::live_lanes(live) {
                 let sample = self.first.wrapping_add(lane as u32);
                 u[lane] = if self.block.is_none() {
                     sobol_bounce(self.key, self.pixel, sample, bounce)

@@ -201,7 +201,7 @@ impl Bvh4 {
     ) {
         let (nodes, blocks) = (&self.nodes8, &self.blocks);
         if !packet::intersect_packet8(self.avx2, nodes, blocks, rays, live, hits) {
-            for k in (0..PACKET).filter(|k| live & (1 << k) != 0) {
+            for k in crate::lanes::live_lanes(live) {
                 hits[k] = self.intersect(tris, &rays[k]);
             }
         }

@@ -12,6 +12,7 @@ use glam::Vec3;
 
 use super::{Arrival, PathState, PathTracer};
 use crate::bvh::{PACKET, Ray};
+use crate::lanes::live_lanes;
 use crate::sobol::{BounceSamples, PathSampler, SampleBatch};
 
 /// Where a wave's random numbers come from. (Made once per wave and moved
@@ -40,27 +41,13 @@ impl WaveSampler<'_> {
             Self::Paths(paths) => {
                 // A loop, not `array::from_fn`, whose array was copied out.
                 let mut u = [BounceSamples::default(); 8];
-                for k in lanes_of(live) {
+                for k in live_lanes(live) {
                     u[k] = paths[k].bounce();
                 }
                 u
             }
         }
     }
-}
-
-/// The lanes of `live` (bit k: lane k), lowest first: one step per set
-/// bit, not a test of all eight.
-#[inline(always)]
-fn lanes_of(live: u8) -> impl Iterator<Item = usize> {
-    let mut rest = live;
-    std::iter::from_fn(move || {
-        (rest != 0).then(|| {
-            let k = rest.trailing_zeros() as usize;
-            rest &= rest - 1;
-            k
-        })
-    })
 }
 
 impl PathTracer<'_> {
@@ -99,7 +86,7 @@ impl PathTracer<'_> {
                 self.scene
                     .intersect_packet(&ray_of, live, self.masks, &mut camera_hits);
             }
-            for k in lanes_of(live) {
+            for k in live_lanes(live) {
                 arrivals[k] = if depth == 0 {
                     self.arrive_at(&mut paths[k], &ray_of[k], camera_hits[k], rays)
                 } else {
@@ -113,7 +100,7 @@ impl PathTracer<'_> {
                 break;
             }
             let bounce = rng.bounces(depth, live);
-            for k in lanes_of(live) {
+            for k in live_lanes(live) {
                 let Some(at) = &arrivals[k] else { continue };
                 if !self.vertex(&mut paths[k], &mut ray_of[k], at, &bounce[k], depth, rays) {
                     live &= !(1 << k);
