@@ -1107,6 +1107,11 @@ pub(super) mod x86 {
     /// scene and most shadow rays never reach.
     #[inline(always)]
     fn leaf8(ray: &Ray) -> LeafRay {
+        // Built here, not through `leaf_ray_parts`: that route (the shear
+        // through an array, not broadcast from its register) left the
+        // traversal's instructions as they were but shifted LLVM's
+        // inlining in the render loop, 1.5-3% slower with the shipped
+        // profile-guided build (docs/benchmarks.md, tenth session).
         let (o, d) = (ray.o.to_array(), ray.d.to_array());
         let k = axes(permutation(d));
         let shear: __m128 = shear(d, k).into();
