@@ -694,9 +694,26 @@ pub mod lanes {
     #[inline(always)]
     fn table_e<L: Lane>(g: &Grid<L>, mu: L) -> L {
         let (i, fx) = cell(super::coat_mu_coord(mu), COAT_N_MU);
+        // The lower corner's offset: a sum of exact integers below 2^24.
+        let first = g.row + i;
         let t = super::coat_tables();
-        let at = |o: usize| L::from_fn(|l| t[g.row.lane(l) as usize + i.lane(l) as usize + o]);
+        let span = COAT_N_ALPHA * COAT_N_MU + COAT_N_MU + 2;
+        let at = |o: usize| L::from_fn(|l| corners(t, first, l, span)[o]);
         super::trilerp(at, (COAT_N_MU, COAT_N_ALPHA), fx, g.fa, g.fe)
+    }
+
+    /// The `span` entries of table `t` from lane `l`'s lower corner
+    /// `first` (a node offset made by [`cell`]s: a finite integer in a
+    /// float): one bounds check for a lookup's corners, and a bare
+    /// truncation for the offset, not a saturating float-to-integer
+    /// conversion per corner (they were most of a lookup's instructions).
+    #[inline(always)]
+    fn corners<L: Lane>(t: &[f32], first: L, l: usize, span: usize) -> &[f32] {
+        let x = first.lane(l);
+        assert!((0.0..(1u32 << 24) as f32).contains(&x));
+        // SAFETY: x is finite and within u32's range (just checked).
+        let first = unsafe { x.to_int_unchecked::<u32>() } as usize;
+        &t[first..first + span]
     }
 
     /// E(mu) of each lane's coat with s = 1 ([`super::coat_albedo`]): the
@@ -731,7 +748,7 @@ pub mod lanes {
         let eo = c.specular.scale(albedo(c, &grid, mu_o));
         // E_avg, bilinear in its table.
         let t = &super::coat_tables()[COAT_E_LEN..];
-        let at = |o: usize| L::from_fn(|l| t[avg_row.lane(l) as usize + o]);
+        let at = |o: usize| L::from_fn(|l| corners(t, avg_row, l, COAT_N_ALPHA + 2)[o]);
         let e_avg = c.specular.scale(super::bilerp(at, COAT_N_ALPHA, fa, fe));
         let spec = mean(eo);
         let diff = mean(c.base * (splat3(1.0) - eo));
