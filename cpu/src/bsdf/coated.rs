@@ -231,14 +231,18 @@ pub(crate) fn trilerp<L: Lane>(
     fy: L,
     fz: L,
 ) -> L {
-    let plane = |o: usize| {
-        let (a0, a1, b0, b1) = (at(o), at(o + 1), at(o + nx), at(o + nx + 1));
-        let a = a0 + (a1 - a0) * fx;
-        let b = b0 + (b1 - b0) * fx;
-        a + (b - a) * fy
-    };
-    let p0 = plane(0);
-    p0 + (plane(ny * nx) - p0) * fz
+    // Both planes written out: as a closure called twice, the plane was
+    // left out of line, its four offsets checked one by one.
+    let z = ny * nx;
+    let (a0, a1, b0, b1) = (at(0), at(1), at(nx), at(nx + 1));
+    let (c0, c1, d0, d1) = (at(z), at(z + 1), at(z + nx), at(z + nx + 1));
+    let a = a0 + (a1 - a0) * fx;
+    let b = b0 + (b1 - b0) * fx;
+    let p0 = a + (b - a) * fy;
+    let c = c0 + (c1 - c0) * fx;
+    let d = d0 + (d1 - d0) * fx;
+    let p1 = c + (d - c) * fy;
+    p0 + (p1 - p0) * fz
 }
 
 /// The bilinear interpolation of a table `t[k][j]` (`ny` nodes along j)
