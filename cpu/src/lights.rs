@@ -391,6 +391,7 @@ impl Lights {
     /// (see [`background_direction_frame`]). `u_cat`, `u_idx`, `u` are the
     /// four uniform numbers the sample consumes. `None`: the chosen light
     /// sends nothing toward `p` (back face, outside a spot cone).
+    #[inline]
     pub fn sample(
         &self,
         scene: &Scene,
@@ -414,6 +415,7 @@ impl Lights {
 
     /// An emissive triangle by power (`u_idx`), a point on it (`u`) by
     /// solid angle or by area ([`spherical_sampling_angle`]).
+    #[inline]
     fn sample_emitter(&self, scene: &Scene, p: Vec3, u_idx: f32, u: Vec2) -> Option<LightSample> {
         self.sample_emitter_lanes::<f32>(scene, p.into(), u_idx, u.into(), true)
             .lane(0)
@@ -549,6 +551,7 @@ impl Lights {
     }
 
     /// A punctual light, uniformly (`u_idx`).
+    #[inline]
     fn sample_punctual(&self, p: Vec3, u_idx: f32) -> Option<LightSample> {
         let n = self.punctual.len();
         let i = ((u_idx * n as f32) as usize).min(n - 1);
@@ -586,6 +589,7 @@ impl Lights {
 
     /// The environment map by its distribution, or the constant background
     /// (cosine lobe about `bg_normal`, or the uniform sphere).
+    #[inline]
     fn sample_background(&self, bg_normal: Vec3, u: Vec2) -> Option<LightSample> {
         let pr = self.probs;
         if let Some(env) = &self.envmap {
