@@ -1277,6 +1277,87 @@ fn packets_find_each_ray_s_closest_hit() {
     }
 }
 
+/// Packets whose rays pass exactly through the vertices and along the
+/// edges of a grid of triangles (edge functions that round to exactly 0,
+/// the triangle test's refinement, in every lane of the packet's leaf test)
+/// and whose eight rays share a leaf (the leaf tested eight rays per
+/// instruction): each ray's hit is the single ray's, bit for bit.
+#[test]
+fn packets_through_vertices_and_edges_match_single_rays() {
+    // A 12 x 12 grid of unit squares at z = -5, two triangles each, the
+    // diagonals alternating.
+    let mut input = Vec::new();
+    for i in 0..12 {
+        for j in 0..12 {
+            let p = |x: i32, y: i32| Vec3::new(x as f32, y as f32, -5.0);
+            let (a, b, c, d) = (p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1));
+            if (i + j) % 2 == 0 {
+                input.extend([tri(a, b, c), tri(a, c, d)]);
+            } else {
+                input.extend([tri(a, b, d), tri(b, c, d)]);
+            }
+        }
+    }
+    let (_, tris, _) = build(&input);
+    let (wide, _) = Bvh4::build(&input);
+    let mut packed = 0;
+    let mut rng = Pcg32::from_state(0x51d3);
+    // A square's corners and the middles of its sides: eight rays into
+    // one or two leaves.
+    let spots = [
+        (0.0, 0.0),
+        (1.0, 0.0),
+        (1.0, 1.0),
+        (0.0, 1.0),
+        (0.5, 0.0),
+        (1.0, 0.5),
+        (0.5, 1.0),
+        (0.0, 0.5),
+    ];
+    for x0 in 1..=9 {
+        for y0 in 1..=9 {
+            for offset in [Vec3::ZERO, Vec3::new(0.25, 0.25, 0.0)] {
+                // From origins on the grid's axis (a pixel's rays share
+                // theirs), directions all (+, +, -), z dominant.
+                let shared = rng.f32() < 0.5;
+                let rays: [Ray; 8] = std::array::from_fn(|k| {
+                    let (dx, dy) = spots[k];
+                    let target = Vec3::new(x0 as f32 + dx, y0 as f32 + dy, -5.0) + offset;
+                    let o = if shared {
+                        Vec3::ZERO
+                    } else {
+                        Vec3::new(0.0, 0.0, -(k as f32) * 0.125)
+                    };
+                    Ray {
+                        o,
+                        d: target - o,
+                        tmax: f32::MAX,
+                    }
+                });
+                let mut got = [None; 8];
+                wide.intersect_packet(&tris, &rays, 0xff, &mut got);
+                packed += usize::from(wide.intersect_packet_only(&rays, 0xff).is_some());
+                for (k, ray) in rays.iter().enumerate() {
+                    // The same distance bit for bit; the same barycentrics
+                    // where the same triangle (an exact tie between two may
+                    // go either way, as between the two trees).
+                    let (g, w) = (got[k].unwrap(), wide.intersect(&tris, ray).unwrap());
+                    assert_eq!(g.t.to_bits(), w.t.to_bits(), "ray {k} {ray:?}");
+                    if g.tri == w.tri {
+                        assert_eq!(
+                            (g.u.to_bits(), g.v.to_bits()),
+                            (w.u.to_bits(), w.v.to_bits())
+                        );
+                    }
+                }
+            }
+        }
+    }
+    if Kernel::has_avx2() {
+        assert!(packed > 0, "no packet was traversed as one");
+    }
+}
+
 /// Whether the rays agree in every direction component's sign and in the
 /// dominant axis (the packet traversal's condition).
 fn packable(rays: &[Ray; 8]) -> bool {

@@ -69,7 +69,7 @@ mod x86 {
     use super::super::wide::{is_leaf_ref, leaf_range};
     use super::super::wide_traverse::order_hits;
     use super::super::wide_traverse::x86::{
-        LeafRay, PLANES8, block_closest, hits8, leaf_ray_parts, slab_end8,
+        LeafRay, PLANES8, block_closest, hits8, leaf_ray_parts, slab_end8, triangles_sheared,
     };
     use super::super::wide8::{Bvh8Node, LeafBlock, WIDE8_STACK_SIZE};
     use super::{Hit, PACKET, Ray};
@@ -287,6 +287,76 @@ mod x86 {
         }
     }
 
+    /// The rays `rays` of the packet against leaf block `block`, eight
+    /// rays per instruction, the block's triangles in order: lane k tests
+    /// triangle j with ray k's constants and the operations of the
+    /// single-ray test ([`triangles_sheared`]), and takes it where it is
+    /// nearer than ray k's best so far, as [`block_closest`] takes the
+    /// block's lanes in order. So each ray's best hit is the one it finds
+    /// alone, bit for bit.
+    #[inline(always)]
+    fn block_closest8(
+        p: &Packet8,
+        block: &LeafBlock,
+        rays: u8,
+        best: &mut [Hit; PACKET],
+        best_t: &mut [f32; PACKET],
+    ) {
+        // SAFETY: called only from the AVX2 entry point below.
+        #[allow(unused_unsafe)]
+        unsafe {
+            // (No `array::map` here: its closures stay out of line, where
+            // the AVX intrinsics they call are calls too.)
+            let k = p.k;
+            let o = [p.o8[k[0]], p.o8[k[1]], p.o8[k[2]]];
+            // Vertex `n` of triangle j minus each ray's origin, in the
+            // rays' (common) axis order. (A function, not a closure, so
+            // that it is inlined.)
+            #[inline(always)]
+            fn vertex(
+                block: &LeafBlock,
+                n: usize,
+                j: usize,
+                k: [usize; 3],
+                o: &[__m256; 3],
+            ) -> [__m256; 3] {
+                // SAFETY: called only from the AVX2 entry point below.
+                #[allow(unused_unsafe)]
+                unsafe {
+                    let at = |i: usize| _mm256_set1_ps(block.v[n][k[i]][j]);
+                    [
+                        _mm256_sub_ps(at(0), o[0]),
+                        _mm256_sub_ps(at(1), o[1]),
+                        _mm256_sub_ps(at(2), o[2]),
+                    ]
+                }
+            }
+            for j in 0..block.count as usize {
+                let vertex = |n: usize| vertex(block, n, j, k, &o);
+                let tmax = _mm256_loadu_ps(best_t.as_ptr());
+                let (mut hit, [t, u, v]) = triangles_sheared(
+                    &p.shear8,
+                    vertex(0),
+                    vertex(1),
+                    vertex(2),
+                    u32::from(rays),
+                    tmax,
+                );
+                while hit != 0 {
+                    let l = hit.trailing_zeros() as usize;
+                    hit &= hit - 1;
+                    best[l] = Hit {
+                        t: t[l],
+                        tri: block.tri[j],
+                        u: u[l],
+                        v: v[l],
+                    };
+                    best_t[l] = t[l];
+                }
+            }
+        }
+    }
+
     /// The eight boxes against the packet: per box, a lower bound of every
     /// ray's entry distance (+inf where no ray of the packet can hit it
     /// before `tmax`, the largest of the rays' own limits), and the mask
@@ -394,12 +464,19 @@ mod x86 {
         loop {
             if is_leaf_ref(cur) {
                 let block = &blocks[leaf_range(cur).0];
-                let mut m = cur_rays;
-                while m != 0 {
-                    let k = m.trailing_zeros() as usize;
-                    m &= m - 1;
-                    block_closest(&p.leaf(k), block, &mut best[k], &|_, _, _| true);
-                    best_t[k] = best[k].t;
+                // More rays than triangles: the rays side by side, a
+                // triangle at a time (a test per triangle); else each ray's
+                // own test of the block's triangles (a test per ray).
+                if cur_rays.count_ones() > block.count {
+                    block_closest8(p, block, cur_rays, &mut best, &mut best_t);
+                } else {
+                    let mut m = cur_rays;
+                    while m != 0 {
+                        let k = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        block_closest(&p.leaf(k), block, &mut best[k], &|_, _, _| true);
+                        best_t[k] = best[k].t;
+                    }
                 }
                 far = farthest(&best_t);
             } else {

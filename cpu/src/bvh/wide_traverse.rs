@@ -726,90 +726,244 @@ pub(super) mod x86 {
         }
     }
 
-    /// The watertight test of up to four triangles whose vertices are
-    /// given minus the ray origin, in the ray's axis order (kx, ky, kz):
-    /// `lanes` of them are real.
+    /// The float vectors the watertight triangle test runs on: four
+    /// triangles against one ray (`__m128`), or one triangle against eight
+    /// rays (`__m256`, the camera packet's leaves). Each operation is the
+    /// same IEEE operation in every lane, so both give a ray and a
+    /// triangle the same bits.
+    ///
+    /// # Safety
+    /// The methods use the vector's instructions: SSE2 (the x86_64
+    /// baseline) for `__m128`, AVX for `__m256`, which only code the AVX2
+    /// entry points reach may call.
+    pub(in crate::bvh) trait TriVec: Copy {
+        /// The lanes, stored.
+        type Array: Copy + Default + AsRef<[f32]> + AsMut<[f32]>;
+        unsafe fn splat(x: f32) -> Self;
+        unsafe fn add(self, o: Self) -> Self;
+        unsafe fn sub(self, o: Self) -> Self;
+        unsafe fn mul(self, o: Self) -> Self;
+        unsafe fn div(self, o: Self) -> Self;
+        unsafe fn max(self, o: Self) -> Self;
+        unsafe fn or(self, o: Self) -> Self;
+        unsafe fn and(self, o: Self) -> Self;
+        /// `!self & o`.
+        unsafe fn andnot(self, o: Self) -> Self;
+        unsafe fn eq(self, o: Self) -> Self;
+        unsafe fn lt(self, o: Self) -> Self;
+        unsafe fn gt(self, o: Self) -> Self;
+        /// Lane k's sign as bit k.
+        unsafe fn mask(self) -> u32;
+        unsafe fn store(self) -> Self::Array;
+        unsafe fn load(a: &Self::Array) -> Self;
+        #[inline(always)]
+        unsafe fn abs(self) -> Self {
+            unsafe { Self::splat(-0.0).andnot(self) }
+        }
+    }
+
+    /// [`TriVec`] for one vector type, `$p` its intrinsics' prefix.
+    macro_rules! tri_vec {
+        ($v:ty, $n:literal, $set1:ident, $add:ident, $sub:ident, $mul:ident, $div:ident,
+         $max:ident, $or:ident, $and:ident, $andnot:ident, $cmp:ident, $movemask:ident,
+         $storeu:ident, $loadu:ident) => {
+            impl TriVec for $v {
+                type Array = [f32; $n];
+                #[inline(always)]
+                unsafe fn splat(x: f32) -> Self {
+                    unsafe { $set1(x) }
+                }
+                #[inline(always)]
+                unsafe fn add(self, o: Self) -> Self {
+                    unsafe { $add(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn sub(self, o: Self) -> Self {
+                    unsafe { $sub(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn mul(self, o: Self) -> Self {
+                    unsafe { $mul(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn div(self, o: Self) -> Self {
+                    unsafe { $div(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn max(self, o: Self) -> Self {
+                    unsafe { $max(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn or(self, o: Self) -> Self {
+                    unsafe { $or(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn and(self, o: Self) -> Self {
+                    unsafe { $and(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn andnot(self, o: Self) -> Self {
+                    unsafe { $andnot(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn eq(self, o: Self) -> Self {
+                    unsafe { $cmp::<_CMP_EQ_OQ>(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn lt(self, o: Self) -> Self {
+                    unsafe { $cmp::<_CMP_LT_OQ>(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn gt(self, o: Self) -> Self {
+                    unsafe { $cmp::<_CMP_GT_OQ>(self, o) }
+                }
+                #[inline(always)]
+                unsafe fn mask(self) -> u32 {
+                    unsafe { $movemask(self) as u32 }
+                }
+                #[inline(always)]
+                unsafe fn store(self) -> Self::Array {
+                    let mut a = [0f32; $n];
+                    unsafe { $storeu(a.as_mut_ptr(), self) };
+                    a
+                }
+                #[inline(always)]
+                unsafe fn load(a: &Self::Array) -> Self {
+                    unsafe { $loadu(a.as_ptr()) }
+                }
+            }
+        };
+    }
+
+    /// SSE's compares by predicate, as AVX's `_mm256_cmp_ps` takes them
+    /// (the ordered, quiet forms: what `cmpeq`, `cmplt`, `cmpgt` are).
     #[inline(always)]
-    fn triangles4_sheared(
-        shear: &[__m128; 3],
-        a: [__m128; 3],
-        b: [__m128; 3],
-        c: [__m128; 3],
-        lanes: usize,
-        tmax: f32,
-    ) -> (u32, [[f32; 4]; 3]) {
-        // SAFETY: SSE2 is part of the x86_64 baseline.
-        #[allow(unused_unsafe)]
+    unsafe fn cmp128<const P: i32>(a: __m128, b: __m128) -> __m128 {
+        unsafe {
+            match P {
+                _CMP_EQ_OQ => _mm_cmpeq_ps(a, b),
+                _CMP_LT_OQ => _mm_cmplt_ps(a, b),
+                _ => _mm_cmpgt_ps(a, b),
+            }
+        }
+    }
+
+    tri_vec!(
+        __m128,
+        4,
+        _mm_set1_ps,
+        _mm_add_ps,
+        _mm_sub_ps,
+        _mm_mul_ps,
+        _mm_div_ps,
+        _mm_max_ps,
+        _mm_or_ps,
+        _mm_and_ps,
+        _mm_andnot_ps,
+        cmp128,
+        _mm_movemask_ps,
+        _mm_storeu_ps,
+        _mm_loadu_ps
+    );
+    tri_vec!(
+        __m256,
+        8,
+        _mm256_set1_ps,
+        _mm256_add_ps,
+        _mm256_sub_ps,
+        _mm256_mul_ps,
+        _mm256_div_ps,
+        _mm256_max_ps,
+        _mm256_or_ps,
+        _mm256_and_ps,
+        _mm256_andnot_ps,
+        _mm256_cmp_ps,
+        _mm256_movemask_ps,
+        _mm256_storeu_ps,
+        _mm256_loadu_ps
+    );
+
+    /// The watertight test of the lanes' (ray, triangle) pairs, whose
+    /// vertices are given minus the ray origin, in the ray's axis order
+    /// (kx, ky, kz), `shear` the rays' shear: hits with 0 < t < `tmax`
+    /// above their own error bound, among the lanes of `lanes`, with their
+    /// (t, u, v) (stored where some lane hits).
+    ///
+    /// # Safety
+    /// See [`TriVec`].
+    #[inline(always)]
+    pub(in crate::bvh) unsafe fn triangles_sheared<V: TriVec>(
+        shear: &[V; 3],
+        a: [V; 3],
+        b: [V; 3],
+        c: [V; 3],
+        lanes: u32,
+        tmax: V,
+    ) -> (u32, [V::Array; 3]) {
         unsafe {
             let [sx, sy, sz] = *shear;
-            let ax = _mm_sub_ps(a[0], _mm_mul_ps(sx, a[2]));
-            let ay = _mm_sub_ps(a[1], _mm_mul_ps(sy, a[2]));
-            let bx = _mm_sub_ps(b[0], _mm_mul_ps(sx, b[2]));
-            let by = _mm_sub_ps(b[1], _mm_mul_ps(sy, b[2]));
-            let cx = _mm_sub_ps(c[0], _mm_mul_ps(sx, c[2]));
-            let cy = _mm_sub_ps(c[1], _mm_mul_ps(sy, c[2]));
-            let mut u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-            let mut v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-            let mut w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-            let zero = _mm_setzero_ps();
-            let zeros = _mm_or_ps(
-                _mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)),
-                _mm_cmpeq_ps(w, zero),
-            );
-            if _mm_movemask_ps(zeros) != 0 {
+            let ax = a[0].sub(sx.mul(a[2]));
+            let ay = a[1].sub(sy.mul(a[2]));
+            let bx = b[0].sub(sx.mul(b[2]));
+            let by = b[1].sub(sy.mul(b[2]));
+            let cx = c[0].sub(sx.mul(c[2]));
+            let cy = c[1].sub(sy.mul(c[2]));
+            let mut u = cx.mul(by).sub(cy.mul(bx));
+            let mut v = ax.mul(cy).sub(ay.mul(cx));
+            let mut w = bx.mul(ay).sub(by.mul(ax));
+            let zero = V::splat(0.0);
+            if u.eq(zero).or(v.eq(zero)).or(w.eq(zero)).mask() != 0 {
                 // Rare: the scalar test's refinement of edge functions that
                 // round to exactly 0, lane by lane.
-                let lanes = |x: __m128| {
-                    let mut a = [0f32; 4];
-                    _mm_storeu_ps(a.as_mut_ptr(), x);
-                    a
-                };
-                let [ax, ay, bx, by, cx, cy] = [ax, ay, bx, by, cx, cy].map(lanes);
-                let [mut eu, mut ev, mut ew] = [u, v, w].map(lanes);
-                for j in 0..4 {
-                    eu[j] = refine_edge(eu[j], cx[j], by[j], cy[j], bx[j]);
-                    ev[j] = refine_edge(ev[j], ax[j], cy[j], ay[j], cx[j]);
-                    ew[j] = refine_edge(ew[j], bx[j], ay[j], by[j], ax[j]);
+                // (Written out, not `array::map`: its closures stay out of
+                // line, and the AVX intrinsics in them become calls.)
+                let (ax, ay, bx, by, cx, cy) = (
+                    ax.store(),
+                    ay.store(),
+                    bx.store(),
+                    by.store(),
+                    cx.store(),
+                    cy.store(),
+                );
+                let (mut eu, mut ev, mut ew) = (u.store(), v.store(), w.store());
+                let (ax, ay, bx, by, cx, cy) = (
+                    ax.as_ref(),
+                    ay.as_ref(),
+                    bx.as_ref(),
+                    by.as_ref(),
+                    cx.as_ref(),
+                    cy.as_ref(),
+                );
+                for j in 0..ax.len() {
+                    eu.as_mut()[j] = refine_edge(eu.as_ref()[j], cx[j], by[j], cy[j], bx[j]);
+                    ev.as_mut()[j] = refine_edge(ev.as_ref()[j], ax[j], cy[j], ay[j], cx[j]);
+                    ew.as_mut()[j] = refine_edge(ew.as_ref()[j], bx[j], ay[j], by[j], ax[j]);
                 }
-                u = _mm_loadu_ps(eu.as_ptr());
-                v = _mm_loadu_ps(ev.as_ptr());
-                w = _mm_loadu_ps(ew.as_ptr());
+                u = V::load(&eu);
+                v = V::load(&ev);
+                w = V::load(&ew);
             }
-            let any_neg = _mm_or_ps(
-                _mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)),
-                _mm_cmplt_ps(w, zero),
-            );
-            let any_pos = _mm_or_ps(
-                _mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)),
-                _mm_cmpgt_ps(w, zero),
-            );
-            let det = _mm_add_ps(_mm_add_ps(u, v), w);
-            let az = _mm_mul_ps(sz, a[2]);
-            let bz = _mm_mul_ps(sz, b[2]);
-            let cz = _mm_mul_ps(sz, c[2]);
-            let t = _mm_div_ps(
-                _mm_add_ps(
-                    _mm_add_ps(_mm_mul_ps(u, az), _mm_mul_ps(v, bz)),
-                    _mm_mul_ps(w, cz),
-                ),
-                det,
-            );
+            let any_neg = u.lt(zero).or(v.lt(zero)).or(w.lt(zero));
+            let any_pos = u.gt(zero).or(v.gt(zero)).or(w.gt(zero));
+            let det = u.add(v).add(w);
+            let az = sz.mul(a[2]);
+            let bz = sz.mul(b[2]);
+            let cz = sz.mul(c[2]);
+            let t = u.mul(az).add(v.mul(bz)).add(w.mul(cz)).div(det);
             // Kept: not both signs, det != 0, 0 < t < tmax (false for NaN).
-            let ok = _mm_andnot_ps(
-                _mm_or_ps(_mm_and_ps(any_neg, any_pos), _mm_cmpeq_ps(det, zero)),
-                _mm_and_ps(_mm_cmpgt_ps(t, zero), _mm_cmplt_ps(t, _mm_set1_ps(tmax))),
-            );
-            let mut mask = _mm_movemask_ps(ok) as u32 & ((1u32 << lanes) - 1);
+            let ok = any_neg
+                .and(any_pos)
+                .or(det.eq(zero))
+                .andnot(t.gt(zero).and(t.lt(tmax)));
+            let mut mask = ok.mask() & lanes;
             if mask != 0 {
                 // Only where some lane hits: t above its own error bound.
-                let bound = t_error4([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], det);
-                mask &= _mm_movemask_ps(_mm_cmpgt_ps(t, bound)) as u32;
+                let bound = t_error_lanes([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], det);
+                mask &= t.gt(bound).mask();
             }
-            let mut out = [[0f32; 4]; 3];
+            let mut out = [V::Array::default(); 3];
             if mask != 0 {
-                _mm_storeu_ps(out[0].as_mut_ptr(), t);
-                _mm_storeu_ps(out[1].as_mut_ptr(), _mm_div_ps(v, det));
-                _mm_storeu_ps(out[2].as_mut_ptr(), _mm_div_ps(w, det));
+                out = [t.store(), v.div(det).store(), w.div(det).store()];
             }
             (mask, out)
         }
@@ -817,43 +971,46 @@ pub(super) mod x86 {
 
     /// [`t_error`](super::super::traverse::t_error) lane by lane, the same
     /// operations in the same order (max of absolute values, no FMA).
+    ///
+    /// # Safety
+    /// See [`TriVec`].
     #[inline(always)]
-    fn t_error4(
-        x: [__m128; 3],
-        y: [__m128; 3],
-        z: [__m128; 3],
-        e: [__m128; 3],
-        det: __m128,
-    ) -> __m128 {
+    unsafe fn t_error_lanes<V: TriVec>(x: [V; 3], y: [V; 3], z: [V; 3], e: [V; 3], det: V) -> V {
         use crate::abi::{TRI_GAMMA2, TRI_GAMMA3, TRI_GAMMA5};
-        // SAFETY: SSE2 is part of the x86_64 baseline.
-        #[allow(unused_unsafe)]
         unsafe {
-            let abs = |v: __m128| _mm_andnot_ps(_mm_set1_ps(-0.0), v);
-            let max3 = |v: [__m128; 3]| _mm_max_ps(_mm_max_ps(abs(v[0]), abs(v[1])), abs(v[2]));
+            let max3 = |v: [V; 3]| v[0].abs().max(v[1].abs()).max(v[2].abs());
             let (max_x, max_y, max_z, max_e) = (max3(x), max3(y), max3(z), max3(e));
-            let g = |k: f32| _mm_set1_ps(k);
-            let delta_x = _mm_mul_ps(g(TRI_GAMMA5), _mm_add_ps(max_x, max_z));
-            let delta_y = _mm_mul_ps(g(TRI_GAMMA5), _mm_add_ps(max_y, max_z));
-            let delta_e = _mm_mul_ps(
-                g(2.0),
-                _mm_add_ps(
-                    _mm_add_ps(
-                        _mm_mul_ps(_mm_mul_ps(g(TRI_GAMMA2), max_x), max_y),
-                        _mm_mul_ps(delta_y, max_x),
-                    ),
-                    _mm_mul_ps(delta_x, max_y),
-                ),
+            let g = |k: f32| V::splat(k);
+            let delta_x = g(TRI_GAMMA5).mul(max_x.add(max_z));
+            let delta_y = g(TRI_GAMMA5).mul(max_y.add(max_z));
+            let delta_e = g(2.0).mul(
+                g(TRI_GAMMA2)
+                    .mul(max_x)
+                    .mul(max_y)
+                    .add(delta_y.mul(max_x))
+                    .add(delta_x.mul(max_y)),
             );
-            let sum = _mm_add_ps(
-                _mm_add_ps(
-                    _mm_mul_ps(_mm_mul_ps(g(TRI_GAMMA3), max_e), max_z),
-                    _mm_mul_ps(delta_e, max_z),
-                ),
-                _mm_mul_ps(delta_x, max_e),
-            );
-            _mm_div_ps(_mm_mul_ps(g(3.0), sum), abs(det))
+            let sum = g(TRI_GAMMA3)
+                .mul(max_e)
+                .mul(max_z)
+                .add(delta_e.mul(max_z))
+                .add(delta_x.mul(max_e));
+            g(3.0).mul(sum).div(det.abs())
         }
+    }
+
+    /// Up to four triangles' test for one ray, `count` of them real.
+    #[inline(always)]
+    fn triangles4_sheared(
+        shear: &[__m128; 3],
+        a: [__m128; 3],
+        b: [__m128; 3],
+        c: [__m128; 3],
+        count: usize,
+        tmax: f32,
+    ) -> (u32, [[f32; 4]; 3]) {
+        // SAFETY: SSE2 is part of the x86_64 baseline.
+        unsafe { triangles_sheared(shear, a, b, c, (1u32 << count) - 1, __m128::splat(tmax)) }
     }
 
     /// `leaf_closest_scalar` four triangles per test: the lanes a group
