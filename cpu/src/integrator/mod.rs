@@ -349,6 +349,10 @@ struct PathState {
     /// by light sampling at the previous vertex, prev_p (it sampled lights
     /// and its BSDF sample was not a delta): only then is it MIS-weighted.
     prev_mis: bool,
+    /// Whether the current ray is a delta lobe's sample (a mirror's or a
+    /// smooth dielectric's): a pixel's such rays off neighbouring points
+    /// stay alike, and the wave traces them as a packet.
+    prev_delta: bool,
     prev_bsdf_pdf: f32,
     prev_bg_normal: Vec3,
     prev_p: Vec3,
@@ -360,6 +364,7 @@ impl PathState {
         throughput: Vec3::ONE,
         eta: 1.0,
         prev_mis: false,
+        prev_delta: false,
         prev_bsdf_pdf: 0.0,
         prev_bg_normal: Vec3::ZERO,
         prev_p: Vec3::ZERO,
@@ -666,6 +671,7 @@ impl<'a> PathTracer<'a> {
         path.throughput *= bs.weight;
         path.eta *= bs.eta;
         path.prev_mis = sample_lights && !bs.delta;
+        path.prev_delta = bs.delta;
         path.prev_bsdf_pdf = bs.pdf;
         path.prev_bg_normal = bg_normal;
         path.prev_p = p;

@@ -77,18 +77,23 @@ impl PathTracer<'_> {
         }
         let mut live = ((1u16 << n) - 1) as u8;
         let mut arrivals = [None::<Arrival>; 8];
-        let mut camera_hits = [None; PACKET];
+        let mut packet_hits = [None; PACKET];
+        // The camera rays, and rays that every live path drew from a
+        // delta lobe (mirrors, smooth glass: still alike), in one packet;
+        // other bounces' rays one at a time (measured: docs/benchmarks.md).
+        let mut alike = true;
         let mut depth = 0u32;
         while live != 0 {
-            // The camera rays in one packet; later bounces' rays, no longer
-            // alike, one at a time (measured: docs/benchmarks.md).
-            if depth == 0 {
+            if alike {
+                for k in live_lanes(live) {
+                    packet_hits[k] = None;
+                }
                 self.scene
-                    .intersect_packet(&ray_of, live, self.masks, &mut camera_hits);
+                    .intersect_packet(&ray_of, live, self.masks, &mut packet_hits);
             }
             for k in live_lanes(live) {
-                arrivals[k] = if depth == 0 {
-                    self.arrive_at(&mut paths[k], &ray_of[k], camera_hits[k], rays)
+                arrivals[k] = if alike {
+                    self.arrive_at(&mut paths[k], &ray_of[k], packet_hits[k], rays)
                 } else {
                     self.arrive(&mut paths[k], &ray_of[k], rays)
                 };
@@ -106,6 +111,9 @@ impl PathTracer<'_> {
                     live &= !(1 << k);
                 }
             }
+            // Two rays or more, all from delta lobes.
+            alike =
+                live & live.wrapping_sub(1) != 0 && live_lanes(live).all(|k| paths[k].prev_delta);
             depth += 1;
         }
         std::array::from_fn(|k| paths[k].radiance)
