@@ -245,6 +245,18 @@ pub(crate) fn trilerp<L: Lane>(
     p0 + (p1 - p0) * fz
 }
 
+/// How many entries from the lower corner [`trilerp`] reads: its last
+/// corner is `ny * nx + nx + 1` past it.
+pub(crate) const fn trilerp_span((nx, ny): (usize, usize)) -> usize {
+    ny * nx + nx + 2
+}
+
+/// How many entries from the lower corner [`bilerp`] reads: its last
+/// corner is `ny + 1` past it.
+pub(crate) const fn bilerp_span(ny: usize) -> usize {
+    ny + 2
+}
+
 /// The bilinear interpolation of a table `t[k][j]` (`ny` nodes along j)
 /// from its corners, `at(o)` the entry `o` past the lower corner.
 #[inline(always)]
@@ -701,9 +713,10 @@ pub mod lanes {
         // The lower corner's offset: a sum of exact integers below 2^24.
         let first = g.row + i;
         let t = super::coat_tables();
-        let span = COAT_N_ALPHA * COAT_N_MU + COAT_N_MU + 2;
+        let n = (COAT_N_MU, COAT_N_ALPHA);
+        let span = super::trilerp_span(n);
         let at = |o: usize| L::from_fn(|l| corners(t, first, l, span)[o]);
-        super::trilerp(at, (COAT_N_MU, COAT_N_ALPHA), fx, g.fa, g.fe)
+        super::trilerp(at, n, fx, g.fa, g.fe)
     }
 
     /// The `span` entries of table `t` from lane `l`'s lower corner
@@ -752,7 +765,8 @@ pub mod lanes {
         let eo = c.specular.scale(albedo(c, &grid, mu_o));
         // E_avg, bilinear in its table.
         let t = &super::coat_tables()[COAT_E_LEN..];
-        let at = |o: usize| L::from_fn(|l| corners(t, avg_row, l, COAT_N_ALPHA + 2)[o]);
+        let at =
+            |o: usize| L::from_fn(|l| corners(t, avg_row, l, super::bilerp_span(COAT_N_ALPHA))[o]);
         let e_avg = c.specular.scale(super::bilerp(at, COAT_N_ALPHA, fa, fe));
         let spec = mean(eo);
         let diff = mean(c.base * (splat3(1.0) - eo));

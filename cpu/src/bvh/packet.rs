@@ -470,10 +470,7 @@ mod x86 {
                 if cur_rays.count_ones() > block.count {
                     block_closest8(p, block, cur_rays, &mut best, &mut best_t);
                 } else {
-                    let mut m = cur_rays;
-                    while m != 0 {
-                        let k = m.trailing_zeros() as usize;
-                        m &= m - 1;
+                    for k in crate::lanes::live_lanes(cur_rays) {
                         block_closest(&p.leaf(k), block, &mut best[k], &|_, _, _| true);
                         best_t[k] = best[k].t;
                     }

@@ -762,7 +762,8 @@ pub(super) mod x86 {
         }
     }
 
-    /// [`TriVec`] for one vector type, `$p` its intrinsics' prefix.
+    /// [`TriVec`] for vector type `$v` of `$n` lanes, from its intrinsics
+    /// (`$cmp` takes the predicate as `_mm256_cmp_ps` does).
     macro_rules! tri_vec {
         ($v:ty, $n:literal, $set1:ident, $add:ident, $sub:ident, $mul:ident, $div:ident,
          $max:ident, $or:ident, $and:ident, $andnot:ident, $cmp:ident, $movemask:ident,
