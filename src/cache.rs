@@ -2,8 +2,9 @@
 //! the Vulkan pipeline cache: `$GLINT_CACHE_DIR`, else
 //! `$XDG_CACHE_HOME/glint`, else `~/.cache/glint`.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
+use glint_cpu::prepare::PrepareOptions;
 use glint_cpu::{RenderOptions, Scene};
 
 pub fn cache_dir() -> Option<PathBuf> {
@@ -62,26 +63,89 @@ impl Default for Fnv {
 /// What a [`render_key`] covers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum KeyScope {
-    /// What defines the expected image apart from its samples: the loaded
-    /// scene, size, camera, depth and methods. Shards of one image share
-    /// it; `merge` checks seeds, samplers and sample ranges on their own,
-    /// so it can say which one differs.
+    /// What defines the expected image apart from its samples: the scene's
+    /// files ([`SourceKey`]), size, camera, depth and methods. Shards of
+    /// one image share it; `merge` checks seeds, samplers and sample ranges
+    /// on their own, so it can say which one differs. It does not depend on
+    /// glint's own code, so a reference another glint version made keeps
+    /// its key: `glint test` then compares the two images, which is what a
+    /// regression test of an upgrade asks.
     Image,
-    /// One render exactly: the image's key plus the sample count, seed,
-    /// sampler, first sample and glint's version (the converge reference
-    /// cache).
+    /// One render exactly: the image's key plus the loaded scene as this
+    /// glint holds it, the sample count, seed, sampler, first sample and
+    /// glint's version (the converge reference cache).
     Render,
 }
 
-/// The one content key of a render (16 hex digits): what the loaded
-/// scene holds (so external buffers and images count, not only the file's
-/// bytes) and the options in `scope`.
-pub fn render_key(scene: &Scene, opts: &RenderOptions, scope: KeyScope) -> String {
+/// The scene's files and the options that change what they load into
+/// (`--multiscatter`, `--background`, the environment map's scale and
+/// turn): the bytes of every file the preparation read (the scene, its
+/// external buffers and images, the environment map), in the order of
+/// their paths, and none of the paths (a suite moved to another folder
+/// keeps its keys).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SourceKey(u64);
+
+/// Versions of the key's form: a change of what [`SourceKey`] or
+/// [`render_key`] hash takes a new one.
+const KEY_FORM: &[u8] = b"glint image key 2";
+
+impl SourceKey {
+    pub fn of(inputs: &[PathBuf], o: &PrepareOptions) -> std::io::Result<SourceKey> {
+        let mut h = Fnv::new();
+        h.add(KEY_FORM);
+        let mut files: Vec<&PathBuf> = inputs.iter().collect();
+        files.sort();
+        files.dedup();
+        for f in files {
+            h.add(&fnv_file(f)?.to_le_bytes());
+        }
+        let bits = |v: glam::Vec3| v.to_array().map(f32::to_bits);
+        h.add(
+            format!(
+                "multiscatter {} background {:?} envmap {:?}",
+                o.multiscatter,
+                o.background.map(bits),
+                o.envmap
+                    .as_ref()
+                    .map(|e| (e.scale.to_bits(), e.rotate_degrees.to_bits()))
+            )
+            .as_bytes(),
+        );
+        Ok(SourceKey(h.0))
+    }
+}
+
+/// [`fnv64`] of a file's bytes, read in blocks.
+fn fnv_file(path: &Path) -> std::io::Result<u64> {
+    use std::io::Read;
+    let mut f = std::fs::File::open(path)?;
+    let mut buf = vec![0u8; 1 << 16];
+    let mut h = FNV_OFFSET;
+    loop {
+        let n = f.read(&mut buf)?;
+        if n == 0 {
+            return Ok(h);
+        }
+        h = fnv1a(h, &buf[..n]);
+    }
+}
+
+/// The one content key of a render (16 hex digits): the scene's files
+/// (`source`), the options in `scope`, and for [`KeyScope::Render`] the
+/// loaded scene too.
+pub fn render_key(
+    source: SourceKey,
+    scene: &Scene,
+    opts: &RenderOptions,
+    scope: KeyScope,
+) -> String {
     let mut h = Fnv::new();
+    h.add(&source.0.to_le_bytes());
     if scope == KeyScope::Render {
         h.add(env!("CARGO_PKG_VERSION").as_bytes());
+        hash_scene(&mut h, scene);
     }
-    hash_scene(&mut h, scene);
     h.add(
         format!(
             "{}x{} depth {} camera {} {:?} {:?} {:?}",
@@ -125,5 +189,46 @@ fn hash_scene(h: &mut Fnv, scene: &Scene) {
     if let Some(e) = &scene.envmap {
         h.add(bytemuck::cast_slice(&e.texels));
         h.add(format!("{}x{} {}", e.width, e.height, e.rotation).as_bytes());
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glint_cpu::prepare::EnvmapSource;
+
+    #[test]
+    fn source_key_is_the_files_bytes_in_path_order_and_the_scene_options() {
+        let t = tempfile::tempdir().unwrap();
+        let (a, b) = (t.path().join("a.bin"), t.path().join("b.png"));
+        std::fs::write(&a, [1u8, 2, 3]).unwrap();
+        std::fs::write(&b, [4u8; 100_000]).unwrap();
+        let o = PrepareOptions::default();
+        let k = SourceKey::of(&[a.clone(), b.clone()], &o).unwrap();
+        assert_eq!(
+            SourceKey::of(&[b.clone(), a.clone(), b.clone()], &o).unwrap(),
+            k
+        );
+        let env = |scale| PrepareOptions {
+            envmap: Some(EnvmapSource {
+                path: b.clone(),
+                scale,
+                rotate_degrees: 0.0,
+            }),
+            ..PrepareOptions::default()
+        };
+        let keys = [
+            SourceKey::of(std::slice::from_ref(&a), &o).unwrap(),
+            SourceKey::of(&[a.clone(), b.clone()], &env(1.0)).unwrap(),
+            SourceKey::of(&[a.clone(), b.clone()], &env(2.0)).unwrap(),
+        ];
+        assert!(keys.iter().all(|x| *x != k) && keys[1] != keys[2]);
+        // A byte past the first read block.
+        let mut bytes = vec![4u8; 100_000];
+        bytes[99_999] = 5;
+        std::fs::write(&b, bytes).unwrap();
+        assert_ne!(SourceKey::of(&[a.clone(), b.clone()], &o).unwrap(), k);
+        std::fs::remove_file(&b).unwrap();
+        assert!(SourceKey::of(&[a, b], &o).is_err());
     }
 }

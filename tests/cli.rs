@@ -768,3 +768,49 @@ fn a_closed_stdout_ends_quietly() {
         out.status
     );
 }
+
+/// An EXR's scene key is the scene's files and the options that change
+/// what they load into, not glint's own form of the loaded scene: the same
+/// files in another folder keep it (a moved suite keeps its references),
+/// a changed byte of an external buffer or a scene option changes it.
+#[test]
+fn the_scene_key_follows_the_files_not_their_folder() {
+    let key = |dir: &Path, extra: &[&str]| {
+        let out = dir.join("k.exr");
+        let o = glint()
+            .arg("render")
+            .arg(dir.join("scene.gltf"))
+            .args(["--backend", "cpu", "--width", "8", "--spp", "2", "--quiet"])
+            .args(extra)
+            .arg("-o")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let img = glint_cpu::exr_file::RadianceImage::read(&out).unwrap();
+        img.meta.unwrap().scene.expect("a scene key")
+    };
+    let (a, b) = (scratch("key-a"), scratch("key-b"));
+    write_scene(&a);
+    write_scene(&b);
+    let k = key(&a, &[]);
+    assert_eq!(key(&b, &[]), k, "the same files in another folder");
+    assert_eq!(key(&a, &["--seed", "3"]), k, "samples are not the image");
+    for extra in [
+        &["--multiscatter", "on"][..],
+        &["--background", "0,0,0"],
+        &["--max-depth", "2"],
+        &["--height", "6"],
+    ] {
+        assert_ne!(key(&a, extra), k, "{extra:?}");
+    }
+    // One vertex of the light moved in the external buffer.
+    let bin = b.join("scene.bin");
+    let mut bytes = std::fs::read(&bin).unwrap();
+    bytes[4 * 3 * 5] ^= 1;
+    std::fs::write(&bin, bytes).unwrap();
+    assert_ne!(key(&b, &[]), k, "a changed external buffer");
+    for d in [a, b] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

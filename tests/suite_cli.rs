@@ -403,3 +403,22 @@ fn calibration_cheap() {
         assert_eq!(code(&o), 1, "the changed floor is caught");
     }
 }
+
+/// The example suite README.md and its own comments point to passes on
+/// the references committed with it: its scene keys have not drifted from
+/// what a render records, and the bundled scenes still render as they did.
+#[test]
+fn the_bundled_suite_passes_on_its_references() {
+    let t = tempfile::tempdir().unwrap();
+    let junit = t.path().join("j.xml");
+    let o = run(&[
+        "test",
+        &asset("suite/suite.toml"),
+        "--junit",
+        junit.to_str().unwrap(),
+    ]);
+    let cases = testcases(&std::fs::read_to_string(&junit).unwrap());
+    assert_eq!(code(&o), 0, "{cases:?}");
+    assert_eq!(cases.len(), 3);
+    assert!(cases.iter().all(|c| c.1.is_none()), "{cases:?}");
+}

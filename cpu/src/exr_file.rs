@@ -11,7 +11,7 @@
 //! | `glint.shard` | string | `I/N` for shard I of N, `0/1` for a whole render, `I,J,.../N` for a merge of some shards |
 //! | `glint.version` | string | the glint version that wrote the file |
 //! | `glint.samples` | string | the sample indices held, half-open ranges `a-b,c-d` (merge's overlap check) |
-//! | `glint.scene` | string | a content key of the scene and the image-defining options (merge's same-scene check) |
+//! | `glint.scene` | string | a content key of the scene's files and the image-defining options (merge's same-scene check, `glint test`'s reference check) |
 //! | `glint.variance_batch` | int | samples per batch of the variance estimate (`Film::variance_of_mean`; 1: samples treated as independent); 1 when absent |
 //!
 //! The attributes come from [`RenderMeta`], which the caller builds from

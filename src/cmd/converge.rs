@@ -11,7 +11,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use clap::Parser;
 use glam::Vec3;
 use glint::backend::{Backend, BackendRender};
-use glint::cache::{KeyScope, render_key};
+use glint::cache::{KeyScope, SourceKey, render_key};
 use glint::chart::{ChartSpec, Curve};
 use glint::cpu::exr_file::{RadianceImage, RenderMeta};
 use glint::cpu::metrics::{self, ImageRef, Metrics};
@@ -228,8 +228,8 @@ pub fn markdown(title: &str, command: &str, rows: &[Row], variants: &[Variant]) 
 }
 
 /// The reference's cache key: one exact render ([`KeyScope::Render`]).
-pub fn reference_key(scene: &Scene, opts: &RenderOptions) -> String {
-    render_key(scene, opts, KeyScope::Render)
+pub fn reference_key(source: SourceKey, scene: &Scene, opts: &RenderOptions) -> String {
+    render_key(source, scene, opts, KeyScope::Render)
 }
 
 /// Read a linear RGB EXR (or any image the `image` crate decodes).
@@ -254,6 +254,7 @@ pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
 /// whole or not at all. Cache problems only cost a re-render (a warning).
 fn reference_image(
     path: &Path,
+    source: SourceKey,
     scene: &Scene,
     base: &RenderOptions,
     spp: u32,
@@ -269,7 +270,7 @@ fn reference_image(
         light_sampling: glint::cpu::LightSampling::default(),
         ..base.clone()
     };
-    let key = reference_key(scene, &opts);
+    let key = reference_key(source, scene, &opts);
     let cached = glint::cache::cache_dir().map(|d| d.join("references").join(format!("{key}.exr")));
     if let Some(c) = &cached
         && c.is_file()
@@ -301,8 +302,13 @@ fn reference_image(
             .map_err(|e| e.to_string())
             .and_then(|_| {
                 // Through a temporary, so a crash leaves no half-written entry.
-                let meta =
-                    super::shard::render_meta(scene, &opts, super::shard::Shard::WHOLE, r.film.spp);
+                let meta = super::shard::render_meta(
+                    source,
+                    scene,
+                    &opts,
+                    super::shard::Shard::WHOLE,
+                    r.film.spp,
+                );
                 let mut bytes = std::io::Cursor::new(Vec::new());
                 RadianceImage::from_film(&r.film, false, Some(meta))
                     .write(&mut bytes)
@@ -468,12 +474,13 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     }
 
     let (scene, mut inputs) = super::load_with_inputs(&args.scene, &args.opts)?;
+    let source = super::source_key(&inputs, &args.opts)?;
     inputs.extend(args.reference.clone());
     outputs.refuse_inputs(&inputs)?;
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
     let (rw, rh, reference) = match (&args.reference, args.reference_spp) {
         (Some(p), _) => read_exr(p)?,
-        (None, Some(n)) => reference_image(&args.scene, &scene, &base, n, &args.opts)?,
+        (None, Some(n)) => reference_image(&args.scene, source, &scene, &base, n, &args.opts)?,
         (None, None) => unreachable!("clap requires one of --reference and --reference-spp"),
     };
     let ref_name = args
@@ -510,6 +517,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
             });
             if args.keep_images {
                 let meta = super::shard::render_meta(
+                    source,
                     &scene,
                     &opts,
                     super::shard::Shard::WHOLE,

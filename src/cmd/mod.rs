@@ -233,6 +233,14 @@ pub fn load_with_inputs(path: &Path, o: &RenderOpts) -> Result<(Scene, Vec<PathB
     Ok((prepared.scene, prepared.inputs))
 }
 
+/// The key of the scene's files and of the options that change what they
+/// load into ([`glint::cache::SourceKey`]), from [`load_with_inputs`]'s
+/// files: what an EXR's scene key says of the scene.
+pub fn source_key(inputs: &[PathBuf], o: &RenderOpts) -> Result<glint::cache::SourceKey> {
+    glint::cache::SourceKey::of(inputs, &prepare_options(o))
+        .map_err(|e| anyhow::anyhow!("reading the scene's files again for its key: {e}"))
+}
+
 /// The library's one scene preparation ([`glint::cpu::prepare`]) with the
 /// options as the CLI gives them, checked first; warnings not printed.
 pub fn prepare(path: &Path, o: &RenderOpts) -> Result<Prepared> {

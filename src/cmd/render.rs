@@ -173,6 +173,12 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     // Before anything renders: no output may overwrite what the scene read
     // (its buffers and images, the environment map).
     outputs.refuse_inputs(&inputs)?;
+    // Only an EXR records what it was rendered from; its scene key hashes
+    // every file the scene read (the textures' too), so a PNG skips it.
+    let source = formats
+        .contains(&OutputFormat::Exr)
+        .then(|| super::source_key(&inputs, &args.scene.opts))
+        .transpose()?;
     let mut opts = render_options(
         &scene,
         &args.scene.scene,
@@ -193,11 +199,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         &opts,
     )?;
 
-    // Only an EXR records what it was rendered from; its scene key hashes
-    // the whole loaded scene (the textures' texels too), so a PNG skips it.
-    let meta = formats
-        .contains(&OutputFormat::Exr)
-        .then(|| shard::render_meta(&scene, &opts, shard, r.film.spp));
+    let meta = source.map(|s| shard::render_meta(s, &scene, &opts, shard, r.film.spp));
     for (&slot, &format) in image_slots.iter().zip(&formats) {
         outputs.write(slot, |w| {
             encode(&r.film, w, format, meta.as_ref(), args.variance)

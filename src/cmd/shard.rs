@@ -8,7 +8,7 @@ use anyhow::{Result, bail};
 use glint::cpu::exr_file::RenderMeta;
 use glint::cpu::{RenderOptions, Scene};
 
-use glint::cache::{KeyScope, render_key};
+use glint::cache::{KeyScope, SourceKey, render_key};
 
 /// Shard `index` of `count` (0-based).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -86,13 +86,19 @@ pub fn apply(opts: &mut RenderOptions, shard: Shard) -> Result<()> {
 
 /// The key of what defines the image apart from its samples
 /// ([`KeyScope::Image`]), recorded in every shard's EXR.
-pub fn image_key(scene: &Scene, opts: &RenderOptions) -> String {
-    render_key(scene, opts, KeyScope::Image)
+pub fn image_key(source: SourceKey, scene: &Scene, opts: &RenderOptions) -> String {
+    render_key(source, scene, opts, KeyScope::Image)
 }
 
 /// What an `.exr` of a finished render records; `spp` is the samples
 /// taken (a time limit may stop short of `opts.spp`).
-pub fn render_meta(scene: &Scene, opts: &RenderOptions, shard: Shard, spp: u32) -> RenderMeta {
+pub fn render_meta(
+    source: SourceKey,
+    scene: &Scene,
+    opts: &RenderOptions,
+    shard: Shard,
+    spp: u32,
+) -> RenderMeta {
     RenderMeta {
         spp,
         seed: opts.seed,
@@ -100,7 +106,7 @@ pub fn render_meta(scene: &Scene, opts: &RenderOptions, shard: Shard, spp: u32) 
         shard: shard.to_string(),
         version: env!("CARGO_PKG_VERSION").to_string(),
         samples: vec![(opts.sample_start, opts.sample_start + spp)],
-        scene: Some(image_key(scene, opts)),
+        scene: Some(image_key(source, scene, opts)),
         variance_batch: opts.batch(),
     }
 }
