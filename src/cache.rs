@@ -90,6 +90,13 @@ pub struct SourceKey(u64);
 /// [`render_key`] hash takes a new one.
 const KEY_FORM: &[u8] = b"glint image key 2";
 
+/// 16 hex digits, as the EXR's `glint.files` records it.
+impl std::fmt::Display for SourceKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:016x}", self.0)
+    }
+}
+
 impl SourceKey {
     pub fn of(inputs: &[PathBuf], o: &PrepareOptions) -> std::io::Result<SourceKey> {
         let mut h = Fnv::new();

@@ -330,6 +330,7 @@ fn render_exr(
         version: env!("CARGO_PKG_VERSION").into(),
         samples: vec![(0, spp)],
         scene: None,
+        files: None,
         variance_batch: 1,
     };
     RadianceImage::from_film(&film, true, Some(meta))
@@ -511,6 +512,7 @@ fn diff_exit_status_and_guards() {
                 version: "0".into(),
                 samples: vec![(0, spp)],
                 scene: None,
+                files: None,
                 variance_batch: 1,
             }),
         }

@@ -256,6 +256,7 @@ fn write_exr(p: &Path, w: u32, mean: Vec3, variance: Option<Vec3>, seed: u64) {
             version: "0".into(),
             samples: vec![(0, 64)],
             scene: Some("k".into()),
+            files: None,
             variance_batch: 1,
         }),
     }

@@ -106,6 +106,24 @@ fn agree_differ_missing_and_junit() {
     assert_eq!(code(&o), 2, "{cases:?}");
     assert_eq!(cases[0], ("a".into(), None));
     assert_eq!(cases[1].1.as_deref(), Some("error"));
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        out.contains("b: ERROR") && out.contains("from other scene files"),
+        "{out}"
+    );
+    // The same file with another depth: the options are named instead.
+    let s3 = suite(
+        d,
+        "spp = 64",
+        &[
+            ("a", &diffuse, ""),
+            ("b", &diffuse, "options = [\"--max-depth\", \"3\"]"),
+        ],
+    );
+    let o = run(&["test", s3.to_str().unwrap()]);
+    assert_eq!(code(&o), 2);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("with other image options"), "{out}");
     // --filter: only b, and a missing reference is an error testcase.
     std::fs::remove_file(d.join("refs/b.exr")).unwrap();
     let o = run(&[

@@ -12,6 +12,7 @@
 //! | `glint.version` | string | the glint version that wrote the file |
 //! | `glint.samples` | string | the sample indices held, half-open ranges `a-b,c-d` (merge's overlap check) |
 //! | `glint.scene` | string | a content key of the scene's files and the image-defining options (merge's same-scene check, `glint test`'s reference check) |
+//! | `glint.files` | string | the part of `glint.scene` that the scene's files and the options changing what they load give (`glint test` says which part differs) |
 //! | `glint.variance_batch` | int | samples per batch of the variance estimate (`Film::variance_of_mean`; 1: samples treated as independent); 1 when absent |
 //!
 //! The attributes come from [`RenderMeta`], which the caller builds from
@@ -45,6 +46,9 @@ pub struct RenderMeta {
     /// Content key of the scene and the options that define the image
     /// (size, camera, depth, methods); absent in files from elsewhere.
     pub scene: Option<String>,
+    /// The part of `scene` that comes from the scene's files (and the
+    /// options that change what they load); absent in older files.
+    pub files: Option<String>,
     /// Samples per batch of the variance estimate ([`Film::variance_batch`]).
     pub variance_batch: u32,
 }
@@ -185,6 +189,7 @@ pub mod attr {
     pub const VERSION: &str = "glint.version";
     pub const SAMPLES: &str = "glint.samples";
     pub const SCENE: &str = "glint.scene";
+    pub const FILES: &str = "glint.files";
     pub const VARIANCE_BATCH: &str = "glint.variance_batch";
 }
 
@@ -295,6 +300,9 @@ impl RadianceImage {
             put(attr::SAMPLES, text(&format_ranges(&m.samples)));
             if let Some(k) = &m.scene {
                 put(attr::SCENE, text(k));
+            }
+            if let Some(k) = &m.files {
+                put(attr::FILES, text(k));
             }
             put(
                 attr::VARIANCE_BATCH,
@@ -450,6 +458,7 @@ fn parse_meta(other: &HashMap<Text, AttributeValue>) -> Result<Option<RenderMeta
         version: text(attr::VERSION)?,
         samples,
         scene: get(attr::SCENE).map(|_| text(attr::SCENE)).transpose()?,
+        files: get(attr::FILES).map(|_| text(attr::FILES)).transpose()?,
         variance_batch,
     }))
 }
@@ -476,6 +485,7 @@ mod tests {
             version: "0.1.0".into(),
             samples: vec![(4, 8)],
             scene: Some("00ff".into()),
+            files: Some("0f".into()),
             variance_batch: 1,
         };
         let img = RadianceImage::from_film(&f, true, Some(meta.clone()));
@@ -508,6 +518,7 @@ mod tests {
             version: "0.1.0".into(),
             samples: vec![(0, 2)],
             scene: Some("ab".into()),
+            files: None,
             variance_batch: 1,
         };
         let img = RadianceImage::from_film(&f, true, Some(meta));

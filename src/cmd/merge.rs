@@ -259,6 +259,7 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         version: env!("CARGO_PKG_VERSION").to_string(),
         samples: samples.clone(),
         scene: first.scene.clone(),
+        files: first.files.clone(),
         variance_batch: first.variance_batch,
     });
     outputs.write(slot, |w| merged.write(w).map_err(|e| anyhow!("{e}")))?;

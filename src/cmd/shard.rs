@@ -107,6 +107,7 @@ pub fn render_meta(
         version: env!("CARGO_PKG_VERSION").to_string(),
         samples: vec![(opts.sample_start, opts.sample_start + spp)],
         scene: Some(image_key(source, scene, opts)),
+        files: Some(source.to_string()),
         variance_batch: opts.batch(),
     }
 }
