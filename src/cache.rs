@@ -80,9 +80,14 @@ pub enum KeyScope {
 /// The scene's files and the options that change what they load into
 /// (`--multiscatter`, `--background`, the environment map's scale and
 /// turn): the bytes of every file the preparation read (the scene, its
-/// external buffers and images, the environment map), in the order of
-/// their paths, and none of the paths (a suite moved to another folder
-/// keeps its keys).
+/// external buffers and images, the environment map), in the order given,
+/// and none of their paths. `prepare` lists its files in an order that
+/// does not depend on how the scene was named ([`Prepared::inputs`]), so a
+/// scene named by a relative or an absolute path, from any working folder
+/// or under another name, keeps its key, and so does a suite moved to
+/// another folder.
+///
+/// [`Prepared::inputs`]: glint_cpu::prepare::Prepared::inputs
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SourceKey(u64);
 
@@ -101,10 +106,7 @@ impl SourceKey {
     pub fn of(inputs: &[PathBuf], o: &PrepareOptions) -> std::io::Result<SourceKey> {
         let mut h = Fnv::new();
         h.add(KEY_FORM);
-        let mut files: Vec<&PathBuf> = inputs.iter().collect();
-        files.sort();
-        files.dedup();
-        for f in files {
+        for f in inputs {
             h.add(&fnv_file(f)?.to_le_bytes());
         }
         let bits = |v: glam::Vec3| v.to_array().map(f32::to_bits);
@@ -205,17 +207,18 @@ mod tests {
     use glint_cpu::prepare::EnvmapSource;
 
     #[test]
-    fn source_key_is_the_files_bytes_in_path_order_and_the_scene_options() {
+    fn source_key_is_the_files_bytes_in_order_and_the_scene_options() {
         let t = tempfile::tempdir().unwrap();
         let (a, b) = (t.path().join("a.bin"), t.path().join("b.png"));
         std::fs::write(&a, [1u8, 2, 3]).unwrap();
         std::fs::write(&b, [4u8; 100_000]).unwrap();
         let o = PrepareOptions::default();
         let k = SourceKey::of(&[a.clone(), b.clone()], &o).unwrap();
-        assert_eq!(
-            SourceKey::of(&[b.clone(), a.clone(), b.clone()], &o).unwrap(),
-            k
-        );
+        let c = t.path().join("sub").join("c.bin");
+        std::fs::create_dir(t.path().join("sub")).unwrap();
+        std::fs::copy(&a, &c).unwrap();
+        assert_eq!(SourceKey::of(&[c, b.clone()], &o).unwrap(), k, "paths");
+        assert_ne!(SourceKey::of(&[b.clone(), a.clone()], &o).unwrap(), k);
         let env = |scale| PrepareOptions {
             envmap: Some(EnvmapSource {
                 path: b.clone(),

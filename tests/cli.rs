@@ -775,11 +775,12 @@ fn a_closed_stdout_ends_quietly() {
 /// a changed byte of an external buffer or a scene option changes it.
 #[test]
 fn the_scene_key_follows_the_files_not_their_folder() {
-    let key = |dir: &Path, extra: &[&str]| {
+    let key_from = |cwd: &Path, scene: &Path, dir: &Path, extra: &[&str]| {
         let out = dir.join("k.exr");
         let o = glint()
+            .current_dir(cwd)
             .arg("render")
-            .arg(dir.join("scene.gltf"))
+            .arg(scene)
             .args(["--backend", "cpu", "--width", "8", "--spp", "2", "--quiet"])
             .args(extra)
             .arg("-o")
@@ -790,11 +791,20 @@ fn the_scene_key_follows_the_files_not_their_folder() {
         let img = glint_cpu::exr_file::RadianceImage::read(&out).unwrap();
         img.meta.unwrap().scene.expect("a scene key")
     };
+    let key = |dir: &Path, extra: &[&str]| key_from(dir, &dir.join("scene.gltf"), dir, extra);
     let (a, b) = (scratch("key-a"), scratch("key-b"));
     write_scene(&a);
     write_scene(&b);
     let k = key(&a, &[]);
     assert_eq!(key(&b, &[]), k, "the same files in another folder");
+    // The same file as a.gltf, named absolutely (its path sorts before its
+    // buffer's, scene.bin) and relatively (after the buffer's real path).
+    std::fs::copy(a.join("scene.gltf"), a.join("a.gltf")).unwrap();
+    assert_eq!(key_from(&a, &a.join("a.gltf"), &a, &[]), k, "absolute");
+    assert_eq!(key_from(&a, Path::new("a.gltf"), &a, &[]), k, "relative");
+    let parent = a.parent().unwrap();
+    let rel = Path::new(a.file_name().unwrap()).join("a.gltf");
+    assert_eq!(key_from(parent, &rel, &a, &[]), k, "from the parent");
     assert_eq!(key(&a, &["--seed", "3"]), k, "samples are not the image");
     for extra in [
         &["--multiscatter", "on"][..],

@@ -49,8 +49,11 @@ pub struct PrepareOptions {
 #[derive(Clone, Debug)]
 pub struct Prepared {
     pub scene: Scene,
-    /// Every file read: the scene, its external buffers and images (real
-    /// paths) and the environment map. No output may name one.
+    /// Every file read: the scene's external buffers and images (real
+    /// paths, sorted), then the scene as named, then the environment map.
+    /// No output may name one. The order does not depend on how the scene
+    /// was named (relative, absolute, another name): the EXR's scene key
+    /// hashes the files' bytes in it (`glint::cache::SourceKey`).
     pub inputs: Vec<PathBuf>,
     /// What the simplifications did, one line each (`glint info`).
     pub simplified: Vec<String>,
