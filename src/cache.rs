@@ -125,10 +125,13 @@ impl SourceKey {
     }
 }
 
-/// [`fnv64`] of a file's bytes, read in blocks.
+/// [`fnv64`] of a file's bytes, read in blocks; only a regular file is
+/// opened, without waiting (`safe_fs::open_regular`: a file swapped for a
+/// FIFO since the scene was read cannot hang the render).
 fn fnv_file(path: &Path) -> std::io::Result<u64> {
     use std::io::Read;
-    let mut f = std::fs::File::open(path)?;
+    let mut f = glint_cpu::safe_fs::open_regular(path)
+        .map_err(|e| std::io::Error::other(format!("{}: {e}", path.display())))?;
     let mut buf = vec![0u8; 1 << 16];
     let mut h = FNV_OFFSET;
     loop {
@@ -239,6 +242,11 @@ mod tests {
         std::fs::write(&b, bytes).unwrap();
         assert_ne!(SourceKey::of(&[a.clone(), b.clone()], &o).unwrap(), k);
         std::fs::remove_file(&b).unwrap();
-        assert!(SourceKey::of(&[a, b], &o).is_err());
+        assert!(SourceKey::of(&[a.clone(), b.clone()], &o).is_err());
+        // A FIFO in a file's place: an error at once, not a wait.
+        let c = std::ffi::CString::new(b.to_str().unwrap()).unwrap();
+        assert_eq!(unsafe { libc::mkfifo(c.as_ptr(), 0o600) }, 0);
+        let e = SourceKey::of(&[a, b], &o).unwrap_err().to_string();
+        assert!(e.contains("FIFO"), "{e}");
     }
 }
