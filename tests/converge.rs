@@ -399,3 +399,60 @@ fn adaptive_and_target_error_variants_report_the_spp_reached() {
         assert!(!bad.join("converge.csv").exists());
     }
 }
+
+/// A variant's options that change what the file loads into
+/// (`--multiscatter`, `--background`) are its own: it renders its own
+/// preparation of the scene (they were ignored, and the variants rendered
+/// the shared scene's image bit for bit), and its kept image records that
+/// scene's key, the one `glint render` with the same options records.
+#[test]
+fn variants_that_change_the_scene_render_their_own() {
+    let dir = scratch("scene-variants");
+    let (out, cache) = (dir.join("out"), dir.join("cache"));
+    let scene = asset("roughconductor.gltf");
+    let o = glint(&cache)
+        .arg("converge")
+        .arg(&scene)
+        .arg("-o")
+        .arg(&out)
+        .args(["--reference-spp", "16", "--width", "16", "--spp", "4"])
+        .arg("--keep-images")
+        .args(["--variant", "off=--backend cpu --multiscatter off"])
+        .args(["--variant", "on=--backend cpu --multiscatter on"])
+        .args(["--variant", "white=--backend cpu --background 1,1,1"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let csv = std::fs::read_to_string(out.join("converge.csv")).unwrap();
+    let means: Vec<String> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').skip(8).collect::<Vec<_>>().join(","))
+        .collect();
+    assert_eq!(means.len(), 3, "{csv}");
+    assert!(
+        means[0] != means[1] && means[0] != means[2] && means[1] != means[2],
+        "{csv}"
+    );
+    let key = |p: &Path| {
+        let m = glint::cpu::exr_file::RadianceImage::read(p)
+            .unwrap()
+            .meta
+            .unwrap();
+        (m.scene.unwrap(), m.files.unwrap())
+    };
+    let white = dir.join("white.exr");
+    let r = glint(&cache)
+        .arg("render")
+        .arg(&scene)
+        .args(["--width", "16", "--spp", "4", "--backend", "cpu", "--quiet"])
+        .args(["--background", "1,1,1", "-o"])
+        .arg(&white)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", stderr(&r));
+    assert_eq!(key(&out.join("white-4.exr")).1, key(&white).1);
+    assert_ne!(key(&out.join("off-4.exr")).1, key(&white).1);
+    assert_ne!(key(&out.join("on-4.exr")).1, key(&out.join("off-4.exr")).1);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -475,6 +475,22 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
 
     let (scene, mut inputs) = super::load_with_inputs(&args.scene, &args.opts)?;
     let source = super::source_key(&inputs, &args.opts)?;
+    // A variant whose options change what the file loads into
+    // (`--multiscatter`, `--background`, `--envmap`) renders its own
+    // preparation of it; the reference stays the shared options' scene.
+    let mut own = Vec::with_capacity(variants.len());
+    for v in variants {
+        own.push(
+            if super::prepare_options(&v.opts) != super::prepare_options(&args.opts) {
+                let (s, files) = super::load_with_inputs(&args.scene, &v.opts)?;
+                let key = super::source_key(&files, &v.opts)?;
+                inputs.extend(files);
+                Some((s, key))
+            } else {
+                None
+            },
+        );
+    }
     inputs.extend(args.reference.clone());
     outputs.refuse_inputs(&inputs)?;
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
@@ -493,10 +509,11 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     let mut rows = Vec::new();
     let mut devices = Vec::new();
     let mut films: Vec<(Film, RenderMeta)> = Vec::new();
-    for v in variants {
+    for (v, own) in variants.iter().zip(&own) {
+        let (scene, source) = own.as_ref().map_or((&scene, source), |(s, k)| (s, *k));
         for &b in budgets {
-            let opts = variant_options(&scene, &args.scene, v, b, (rw, rh), &ref_name)?;
-            let r: BackendRender = render_on(v.backend, &args.scene, &v.opts, &scene, &opts)?;
+            let opts = variant_options(scene, &args.scene, v, b, (rw, rh), &ref_name)?;
+            let r: BackendRender = render_on(v.backend, &args.scene, &v.opts, scene, &opts)?;
             let means = r.film.means();
             let img = ImageRef::new(opts.width, opts.height, &means)?;
             let m = metrics::compute(&img, &reference_img)?;
@@ -518,7 +535,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
             if args.keep_images {
                 let meta = super::shard::render_meta(
                     source,
-                    &scene,
+                    scene,
                     &opts,
                     super::shard::Shard::WHOLE,
                     r.film.spp,
