@@ -609,6 +609,32 @@ fn warnings_strict_background_and_the_no_light_rule() {
     );
     let out = render(&["--blas-parts", "0"], "zero.exr");
     assert!(!out.status.success());
+    // The GPU's options on the CPU backend: one warning naming them, and
+    // with --strict the error, before anything is written.
+    let out = render(
+        &[
+            "--background",
+            "0.1,0.1,0.1",
+            "--kernel",
+            "generic",
+            "--traversal",
+            "hardware",
+        ],
+        "gpu-only.exr",
+    );
+    assert!(out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.matches("glint: warning:").count(), 1, "{err}");
+    assert!(
+        err.contains("--kernel, --traversal apply to the GPU backend only: ignored"),
+        "{err}"
+    );
+    let out = render(
+        &["--background", "0.1,0.1,0.1", "--device", "x", "--strict"],
+        "gpu-only-strict.exr",
+    );
+    assert_one_line_error(&out, "--device applies to the GPU backend only");
+    assert!(!dir.join("gpu-only-strict.exr").exists());
 }
 
 /// `glint info` of a bundled asset, which must succeed.

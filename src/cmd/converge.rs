@@ -480,6 +480,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     // preparation of it; the reference stays the shared options' scene.
     let mut own = Vec::with_capacity(variants.len());
     for v in variants {
+        super::check_gpu_only(&args.scene, &v.opts, v.backend)?;
         own.push(
             if super::prepare_options(&v.opts) != super::prepare_options(&args.opts) {
                 let (s, files) = super::load_with_inputs(&args.scene, &v.opts)?;

@@ -311,6 +311,42 @@ pub fn report_warnings(path: &Path, scene: &Scene, strict: bool) -> Result<()> {
     Ok(())
 }
 
+/// The GPU-only options (`--kernel`, `--traversal`, `--device`, and with
+/// `--traversal hardware` `--ray-tracing` and `--blas-parts`) given to a
+/// render on `backend` that runs on the CPU: one warning line saying they
+/// are ignored (the error with `--strict`). `Auto` is resolved only when
+/// such an option was given (it asks Vulkan for a GPU).
+pub fn check_gpu_only(path: &Path, o: &RenderOpts, backend: Backend) -> Result<()> {
+    use crate::cli::{KernelArg, RayTracingArg, TraversalArg};
+    let hardware = o.traversal == TraversalArg::Hardware;
+    let given: Vec<&str> = [
+        (o.kernel != KernelArg::Specialized, "--kernel"),
+        (hardware, "--traversal"),
+        (o.device.is_some(), "--device"),
+        (
+            hardware && o.ray_tracing != RayTracingArg::Auto,
+            "--ray-tracing",
+        ),
+        (hardware && o.blas_parts != 1, "--blas-parts"),
+    ]
+    .into_iter()
+    .filter_map(|(g, name)| g.then_some(name))
+    .collect();
+    if given.is_empty() || backend.resolve(o.device.as_deref()) != Backend::Cpu {
+        return Ok(());
+    }
+    let w = format!(
+        "{} {} to the GPU backend only: ignored on the CPU backend",
+        given.join(", "),
+        if given.len() == 1 { "applies" } else { "apply" }
+    );
+    if o.strict {
+        bail!("{}: {w} (--strict)", path.display());
+    }
+    eprintln!("glint: warning: {}: {w}", path.display());
+    Ok(())
+}
+
 /// Settle the render options for `scene` (camera, image size, methods).
 pub fn render_options(
     scene: &Scene,

@@ -169,6 +169,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(|s| outputs.reserve(s))
         .transpose()?;
 
+    super::check_gpu_only(&args.scene.scene, &args.scene.opts, args.backend)?;
     let (scene, inputs) = load_with_inputs(&args.scene.scene, &args.scene.opts)?;
     // Before anything renders: no output may overwrite what the scene read
     // (its buffers and images, the environment map).
