@@ -440,3 +440,41 @@ fn the_bundled_suite_passes_on_its_references() {
     assert_eq!(cases.len(), 3);
     assert!(cases.iter().all(|c| c.1.is_none()), "{cases:?}");
 }
+
+/// A file an option names (`--envmap`, either form) is relative to the
+/// suite, as `file` is: the suite passes from its own folder, from another
+/// one and by an absolute path.
+#[test]
+fn option_files_are_relative_to_the_suite() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path().join("suite");
+    std::fs::create_dir(&d).unwrap();
+    image::Rgb32FImage::from_pixel(16, 8, image::Rgb([0.5f32, 0.5, 0.5]))
+        .save(d.join("sky.exr"))
+        .unwrap();
+    let s = suite(
+        &d,
+        "spp = 16",
+        &[
+            (
+                "a",
+                &asset("diffuse.gltf"),
+                "options = [\"--envmap\", \"sky.exr\"]",
+            ),
+            (
+                "b",
+                &asset("diffuse.gltf"),
+                "options = [\"--envmap=sky.exr\"]",
+            ),
+        ],
+    );
+    let in_dir = |cwd: &Path, args: &[&str]| {
+        let o = glint().current_dir(cwd).args(args).output().unwrap();
+        eprintln!("{}", String::from_utf8_lossy(&o.stdout));
+        code(&o)
+    };
+    assert_eq!(in_dir(&d, &["test", "suite.toml", "--update"]), 0);
+    assert_eq!(in_dir(&d, &["test", "suite.toml"]), 0);
+    assert_eq!(in_dir(t.path(), &["test", "suite/suite.toml"]), 0);
+    assert_eq!(in_dir(Path::new("/"), &["test", s.to_str().unwrap()]), 0);
+}

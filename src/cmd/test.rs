@@ -182,11 +182,21 @@ fn case(e: &Entry, dir: &Path, i: usize) -> Result<Case> {
     flag("sampler", e.sampler.clone());
     flag("multiscatter", e.multiscatter.clone());
     flag("kernel", e.kernel.clone());
+    // A file an option names is relative to the suite, as `file` is, so
+    // the suite runs from any folder.
+    let mut names_file = false;
     for f in e.options.iter().flatten() {
         if ["--spp", "--seed", "-o", "--output", "--variance", "--shard"].contains(&f.as_str()) {
             bail!("scene {name}: options: {f} is set by glint test (use the spp key)");
         }
-        o.push(f.clone());
+        if std::mem::take(&mut names_file) {
+            o.push(dir.join(f).to_string_lossy().into_owned());
+        } else if let Some(v) = f.strip_prefix("--envmap=") {
+            o.push(format!("--envmap={}", dir.join(v).display()));
+        } else {
+            names_file = f == "--envmap";
+            o.push(f.clone());
+        }
     }
     Ok(Case {
         name,
