@@ -457,6 +457,33 @@ fn chart_spec(title: &str, rows: &[Row], variants: &[Variant]) -> ChartSpec {
     }
 }
 
+/// Each variant's own scene where its options change what the file loads
+/// into (`--multiscatter`, `--background`, `--envmap`), with its key (the
+/// reference stays the shared options' scene); None where it renders the
+/// shared one. The files they read join `inputs`. A variant's GPU-only
+/// options on the CPU backend are warned of here, once.
+fn variant_scenes(
+    args: &ConvergeArgs,
+    variants: &[Variant],
+    inputs: &mut Vec<std::path::PathBuf>,
+) -> Result<Vec<Option<(Scene, SourceKey)>>> {
+    let mut own = Vec::with_capacity(variants.len());
+    for v in variants {
+        super::check_gpu_only(&args.scene, &v.opts, v.backend)?;
+        own.push(
+            if super::prepare_options(&v.opts) != super::prepare_options(&args.opts) {
+                let (s, files) = super::load_with_inputs(&args.scene, &v.opts)?;
+                let key = super::source_key(&files, &v.opts)?;
+                inputs.extend(files);
+                Some((s, key))
+            } else {
+                None
+            },
+        );
+    }
+    Ok(own)
+}
+
 fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &Path) -> Result<()> {
     let mut outputs = Outputs::new();
     let csv_slot = outputs.reserve(&dir.join("converge.csv"))?;
@@ -475,23 +502,7 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
 
     let (scene, mut inputs) = super::load_with_inputs(&args.scene, &args.opts)?;
     let source = super::source_key(&inputs, &args.opts)?;
-    // A variant whose options change what the file loads into
-    // (`--multiscatter`, `--background`, `--envmap`) renders its own
-    // preparation of it; the reference stays the shared options' scene.
-    let mut own = Vec::with_capacity(variants.len());
-    for v in variants {
-        super::check_gpu_only(&args.scene, &v.opts, v.backend)?;
-        own.push(
-            if super::prepare_options(&v.opts) != super::prepare_options(&args.opts) {
-                let (s, files) = super::load_with_inputs(&args.scene, &v.opts)?;
-                let key = super::source_key(&files, &v.opts)?;
-                inputs.extend(files);
-                Some((s, key))
-            } else {
-                None
-            },
-        );
-    }
+    let own = variant_scenes(args, variants, &mut inputs)?;
     inputs.extend(args.reference.clone());
     outputs.refuse_inputs(&inputs)?;
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
