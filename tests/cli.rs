@@ -368,6 +368,12 @@ fn bad_inputs_fail_with_one_line_and_no_output() {
             "scene.gltf",
         ),
         (vec![s(&scene)], "output"),
+        // An output in a folder that is not there: said plainly, before
+        // anything renders.
+        (
+            vec![s(&scene), "-o".into(), s(&dir.join("nodir").join("x.png"))],
+            "cannot write: no folder",
+        ),
     ];
     assert_one_line_error(&glint().output().unwrap(), "missing command");
     assert_one_line_error(&glint().arg("paint").output().unwrap(), "paint");

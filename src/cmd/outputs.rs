@@ -134,8 +134,23 @@ impl Outputs {
         // Registered under the pending lock as soon as it exists, so a
         // signal still removes it.
         let mut p = pending();
-        let (file, tmp) = create_temp_beside(path)
-            .map_err(|e| anyhow!(e).context(format!("{}: cannot write", path.display())))?;
+        let (file, tmp) = create_temp_beside(path).map_err(|e| {
+            // The usual cause, said plainly (the error itself names the
+            // temporary, a path the user never gave).
+            let dir = path
+                .parent()
+                .filter(|d| !d.as_os_str().is_empty())
+                .unwrap_or(Path::new("."));
+            if dir.is_dir() {
+                anyhow!(e).context(format!("{}: cannot write", path.display()))
+            } else {
+                anyhow!(
+                    "{}: cannot write: no folder {}",
+                    path.display(),
+                    dir.display()
+                )
+            }
+        })?;
         p.push(tmp.clone());
         drop(p);
         self.finals.push(path.to_path_buf());
