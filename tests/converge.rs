@@ -456,3 +456,51 @@ fn variants_that_change_the_scene_render_their_own() {
     assert_ne!(key(&out.join("on-4.exr")).1, key(&out.join("off-4.exr")).1);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `--reference` made by glint from another scene, or with other image
+/// options, is named in a warning (its recorded scene key is not the shared
+/// options'); one of the same scene and options is not.
+#[test]
+fn a_reference_of_another_scene_is_warned_of() {
+    let dir = scratch("reference-key");
+    let cache = dir.join("cache");
+    let reference = |scene: &str, out: &str| {
+        let p = dir.join(out);
+        let o = glint(&cache)
+            .arg("render")
+            .arg(asset(scene))
+            .args(["--backend", "cpu", "--spp", "8", "--width", "16", "--quiet"])
+            .args(["--height", "12", "-o"])
+            .arg(&p)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        p
+    };
+    let (same, other) = (
+        reference("diffuse.gltf", "same.exr"),
+        reference("conductor.gltf", "other.exr"),
+    );
+    let converge = |r: &Path, extra: &[&str], out: &str| {
+        let o = glint(&cache)
+            .arg("converge")
+            .arg(asset("diffuse.gltf"))
+            .arg("-o")
+            .arg(dir.join(out))
+            .arg("--reference")
+            .arg(r)
+            .args(["--width", "16", "--height", "12", "--spp", "2"])
+            .args(["--variant", "c=--backend cpu"])
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", stderr(&o));
+        stderr(&o)
+    };
+    assert!(!converge(&same, &[], "a").contains("warning"));
+    let e = converge(&other, &[], "b");
+    assert!(e.contains("made from other scene files"), "{e}");
+    let e = converge(&same, &["--max-depth", "2"], "c");
+    assert!(e.contains("made with other image options"), "{e}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -457,6 +457,29 @@ fn chart_spec(title: &str, rows: &[Row], variants: &[Variant]) -> ChartSpec {
     }
 }
 
+/// A warning where `--reference`'s recorded scene key (a glint EXR's)
+/// is not the key of the shared options' image at its size: made from
+/// other scene files or with other image options, it may not be the
+/// image the variants converge to. Another renderer's EXR records none.
+fn warn_on_reference_key(
+    path: &Path,
+    source: SourceKey,
+    scene: &Scene,
+    base: &RenderOptions,
+    size: (u32, u32),
+) {
+    let Some(there) = RadianceImage::read(path).ok().and_then(|i| i.meta) else {
+        return;
+    };
+    if there.scene.is_none() || size != (base.width, base.height) {
+        return;
+    }
+    let here = super::shard::render_meta(source, scene, base, super::shard::Shard::WHOLE, 1);
+    if let Some(why) = super::shard::key_mismatch(Some(&here), Some(&there)) {
+        eprintln!("glint: warning: {}: {why}", path.display());
+    }
+}
+
 /// Each variant's own scene where its options change what the file loads
 /// into (`--multiscatter`, `--background`, `--envmap`), with its key (the
 /// reference stays the shared options' scene); None where it renders the
@@ -507,7 +530,11 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     outputs.refuse_inputs(&inputs)?;
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
     let (rw, rh, reference) = match (&args.reference, args.reference_spp) {
-        (Some(p), _) => read_exr(p)?,
+        (Some(p), _) => {
+            let r = read_exr(p)?;
+            warn_on_reference_key(p, source, &scene, &base, (r.0, r.1));
+            r
+        }
         (None, Some(n)) => reference_image(&args.scene, source, &scene, &base, n, &args.opts)?,
         (None, None) => unreachable!("clap requires one of --reference and --reference-spp"),
     };

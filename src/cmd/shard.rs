@@ -112,6 +112,32 @@ pub fn render_meta(
     }
 }
 
+/// Why the image `there` records was not made from what `here` records
+/// (their scene keys differ), saying whether the scene's files or the image
+/// options differ where both record the files' part; None when the keys
+/// match or `here` records none.
+pub fn key_mismatch(here: Option<&RenderMeta>, there: Option<&RenderMeta>) -> Option<String> {
+    let scene = |m: Option<&RenderMeta>| m.and_then(|m| m.scene.clone());
+    let a = here?;
+    if scene(Some(a)) == scene(there) {
+        return None;
+    }
+    let what = match (&a.files, there.and_then(|m| m.files.as_ref())) {
+        (Some(x), Some(y)) if x == y => {
+            "made with other image options (size, camera, depth, NEE, MIS or light sampling)"
+        }
+        (Some(_), Some(_)) => {
+            "made from other scene files (or --multiscatter, --background or the environment map)"
+        }
+        _ => "made from another scene or settings (or by a glint that keyed scenes otherwise)",
+    };
+    Some(format!(
+        "{what}: scene key {} here, {} in the reference",
+        scene(Some(a)).unwrap_or_else(|| "none".into()),
+        scene(there).unwrap_or_else(|| "none".into())
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

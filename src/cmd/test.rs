@@ -418,31 +418,6 @@ fn update(c: &Case, work: &Path) -> Result<u32> {
     Ok(ref_spp)
 }
 
-/// Why `reference` was not made from what `img` was (its recorded scene
-/// key differs), saying whether the scene's files or the image options
-/// differ where both files record the files' part; None when they match.
-fn key_mismatch(img: &RadianceImage, reference: &RadianceImage) -> Option<String> {
-    let (a, b) = (img.meta.as_ref()?, reference.meta.as_ref());
-    let scene = |m: Option<&glint::cpu::exr_file::RenderMeta>| m.and_then(|m| m.scene.clone());
-    if scene(Some(a)) == scene(b) {
-        return None;
-    }
-    let what = match (&a.files, b.and_then(|m| m.files.as_ref())) {
-        (Some(x), Some(y)) if x == y => {
-            "made with other image options (size, camera, depth, NEE, MIS or light sampling)"
-        }
-        (Some(_), Some(_)) => {
-            "made from other scene files (or --multiscatter, --background or the environment map)"
-        }
-        _ => "made from another scene or settings (or by a glint that keyed scenes otherwise)",
-    };
-    Some(format!(
-        "{what}: scene key {} here, {} in the reference",
-        scene(Some(a)).unwrap_or_else(|| "none".into()),
-        scene(b).unwrap_or_else(|| "none".into())
-    ))
-}
-
 /// Render and diff one case; `Err` is bad input (an error testcase).
 fn check(c: &Case, work: &Path, seed: u64, o: &mut Outcome) -> Result<Verdict> {
     if !c.reference.is_file() {
@@ -482,7 +457,7 @@ fn check(c: &Case, work: &Path, seed: u64, o: &mut Outcome) -> Result<Verdict> {
     o.detect_by = sized.by.clone();
     o.detect_materials = sized.changes.iter().map(|ch| ch.label.clone()).collect();
     o.detect_capped = sized.capped;
-    if let Some(why) = key_mismatch(&img, &reference) {
+    if let Some(why) = super::shard::key_mismatch(img.meta.as_ref(), reference.meta.as_ref()) {
         bail!("{}: {why}; run glint test --update", c.reference.display());
     }
     report::images(n, &img, &reference, work, &mut o.images)?;
