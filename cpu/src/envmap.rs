@@ -90,8 +90,15 @@ impl EnvMap {
         let texels: Vec<[f32; 4]> = rgb
             .iter()
             .map(|c| {
-                let c = (Vec3::from(*c) * scale).max(Vec3::ZERO);
-                let c = if c.is_finite() { c } else { Vec3::ZERO };
+                // A texel with a non-finite channel emits nothing (the
+                // load's warning says so): tested before the clamp, whose
+                // max() would make a NaN channel 0 and keep the others.
+                let c = Vec3::from(*c) * scale;
+                let c = if c.is_finite() {
+                    c.max(Vec3::ZERO)
+                } else {
+                    Vec3::ZERO
+                };
                 [c.x, c.y, c.z, 0.0]
             })
             .collect();

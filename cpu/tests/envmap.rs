@@ -175,3 +175,22 @@ fn constant_envmap_equals_the_same_background() {
     assert!(((a - b) / a).abs().max_element() < 0.01, "{a} vs {b}");
     assert!(a.min_element() > 0.39);
 }
+
+/// A texel with any non-finite channel (after the scale) emits nothing, in
+/// every channel, as the load's warning says; negative channels clamp to 0.
+#[test]
+fn a_non_finite_texel_emits_nothing() {
+    let rgb = [
+        [f32::NAN, 1.0, 1.0],
+        [1.0, f32::INFINITY, 1.0],
+        [-1.0, 2.0, 3.0],
+        [1e38, 1.0, 1.0],
+    ];
+    let m = EnvMap::new(4, 1, &rgb, 10.0, 0.0);
+    let t: Vec<[f32; 3]> = m.texels.iter().map(|t| [t[0], t[1], t[2]]).collect();
+    assert_eq!(
+        t,
+        [[0.0; 3], [0.0; 3], [0.0, 20.0, 30.0], [0.0; 3]],
+        "1e38 x 10 overflows"
+    );
+}

@@ -8,15 +8,17 @@
 //! Exact where the models are Mitsuba's own (the contract's `extras.bsdf`
 //! types: `diffuse`, `conductor`, `roughconductor`, `dielectric`,
 //! `roughdielectric`, `plastic`, `roughplastic`, `thindielectric`), the
-//! emitters (area lights from emissive triangles, point, directional and
-//! constant background) and the camera (a box filter one pixel wide, the
+//! emitters (area lights from emissive triangles, point, directional,
+//! constant background and the environment map, as `envmap` with its turn)
+//! and the camera (a box filter one pixel wide, the
 //! vertical field of view, `path` with the same `max_depth` and Russian
 //! roulette from depth 5). Approximate, with a warning each: the glTF
 //! non-metal and metallic blend (Mitsuba's `principled`), height-correlated
 //! shadowing (Mitsuba's GGX is separable), `multiscatter`, anisotropic
 //! lobes (oriented by Mitsuba's own tangent frame), the spot light's
-//! falloff (glTF's quadratic ramp against Mitsuba's smoothstep), interior
-//! absorption and environment maps (not written).
+//! falloff (glTF's quadratic ramp against Mitsuba's smoothstep), the
+//! environment map's filter (Mitsuba's bilinear against glint's nearest
+//! texel) and interior absorption (not written).
 //!
 //! Textures of the glTF metallic-roughness model are written as bitmaps
 //! (`textures/*.exr`, linear, their factors multiplied in) on the meshes'
@@ -37,6 +39,7 @@ use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
 use glint_cpu::camera::scene_camera;
+use glint_cpu::envmap::EnvMap;
 use glint_cpu::scene::{NO_LIGHT, TRI_NORMALS, TRI_SHADING_SHIFT};
 use glint_cpu::{PunctualLight, RenderOptions, Scene};
 
@@ -371,6 +374,32 @@ fn sensor_xml(scene: &Scene, opts: &RenderOptions) -> String {
     )
 }
 
+/// The environment map as Mitsuba's `envmap`: its texels as glint holds
+/// them (the scale applied, non-finite ones 0) in `textures/envmap.exr`,
+/// turned about +Y by its rotation. Both map a direction d to
+/// (atan2(d.x, -d.z) / 2 pi, acos(d.y) / pi) in the map's frame and turn
+/// it right-handed about +Y (`tests/export.rs` renders the two against
+/// each other); Mitsuba filters the map bilinearly where glint takes the
+/// nearest texel, a warning says so.
+fn envmap_xml(env: &EnvMap, dir: &Path, warnings: &mut Vec<String>) -> Result<(String, String)> {
+    let file = "textures/envmap.exr".to_string();
+    std::fs::create_dir_all(dir.join("textures")).with_context(|| format!("{}", dir.display()))?;
+    let pixels: Vec<f32> = env.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
+    let path = dir.join(&file);
+    image::Rgb32FImage::from_raw(env.width, env.height, pixels)
+        .context("environment map size")?
+        .save(&path)
+        .with_context(|| format!("{}", path.display()))?;
+    warnings.push(
+        "the environment map: Mitsuba filters it bilinearly, glint takes the nearest texel".into(),
+    );
+    let xml = format!(
+        r#"  <emitter type="envmap"><string name="filename" value="{file}"/><transform name="to_world"><rotate y="1" angle="{:e}"/></transform></emitter>"#,
+        env.rotation.to_degrees()
+    );
+    Ok((xml, file))
+}
+
 fn lights_xml(scene: &Scene, warnings: &mut Vec<String>) -> String {
     let mut xml = String::new();
     for l in &scene.lights {
@@ -430,9 +459,7 @@ fn lights_xml(scene: &Scene, warnings: &mut Vec<String>) -> String {
             ),
         };
     }
-    if scene.envmap.is_some() {
-        warnings.push("the environment map is not written".into());
-    } else if scene.background.max_element() > 0.0 {
+    if scene.envmap.is_none() && scene.background.max_element() > 0.0 {
         let _ = writeln!(
             xml,
             r#"  <emitter type="constant">{}</emitter>"#,
@@ -524,6 +551,12 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
             }
         }
     }
+    let mut env_xml = String::new();
+    if let Some(env) = &scene.envmap {
+        let (xml, file) = envmap_xml(env, dir, &mut warnings)?;
+        env_xml = xml + "\n";
+        files.push(file);
+    }
     let depth = opts.max_depth;
     let xml = format!(
         r#"<?xml version="1.0" encoding="utf-8"?>
@@ -533,7 +566,7 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
 {sensor}{lights}{shapes}</scene>
 "#,
         sensor = sensor_xml(scene, opts),
-        lights = lights_xml(scene, &mut warnings),
+        lights = lights_xml(scene, &mut warnings) + &env_xml,
     );
     std::fs::write(dir.join("scene.xml"), xml)
         .with_context(|| format!("{}", dir.join("scene.xml").display()))?;
