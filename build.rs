@@ -217,10 +217,10 @@ fn resolve_include(
     requester: &str,
 ) -> shaderc::IncludeCallbackResult {
     let mut candidates = Vec::new();
-    if kind == shaderc::IncludeType::Relative {
-        if let Some(dir) = manifest.join(requester).parent() {
-            candidates.push(dir.join(requested));
-        }
+    if kind == shaderc::IncludeType::Relative
+        && let Some(dir) = manifest.join(requester).parent()
+    {
+        candidates.push(dir.join(requested));
     }
     candidates.extend(roots.iter().map(|r| r.join(requested)));
     for c in candidates {

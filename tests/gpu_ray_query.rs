@@ -123,7 +123,7 @@ fn finish(ctx: Context, log: Option<std::sync::Arc<ValidationLog>>) {
 
 /// Every third triangle is alpha-tested (shaders/tests/mask_test.glsl).
 fn test_masked(tri: u32) -> bool {
-    tri % 3 == 0
+    tri.is_multiple_of(3)
 }
 
 /// (t, tri, u, v) per ray and the occlusion flags.

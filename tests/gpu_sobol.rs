@@ -22,7 +22,7 @@ fn glsl_sobol_returns_the_cpu_bits() {
     let mut queries = Vec::with_capacity(N);
     for _ in 0..N {
         let r = rng.next_u32();
-        let key = if r % 4 == 0 {
+        let key = if r.is_multiple_of(4) {
             rng.next_u32()
         } else {
             keys[(r >> 2) as usize % keys.len()]

@@ -203,7 +203,11 @@ impl RenderOptions {
             (SamplerKind::Sobol, 0) => variance_batch_for(self.spp, 1),
             (SamplerKind::Sobol, l) => l,
         };
-        if self.sample_start % l == 0 { l } else { 1 }
+        if self.sample_start.is_multiple_of(l) {
+            l
+        } else {
+            1
+        }
     }
 }
 
@@ -219,7 +223,7 @@ pub const MIN_VARIANCE_BATCHES: u32 = 16;
 pub fn variance_batch_for(spp: u32, shards: u32) -> u32 {
     let need = MIN_VARIANCE_BATCHES.max(shards.saturating_mul(2));
     let mut l = 1u32;
-    while l <= u32::MAX / 2 && spp % (2 * l) == 0 && spp / (2 * l) >= need {
+    while l <= u32::MAX / 2 && spp.is_multiple_of(2 * l) && spp / (2 * l) >= need {
         l *= 2;
     }
     l
@@ -291,7 +295,7 @@ pub fn add_sample(
     *sum += l;
     *sum_sq += l * l;
     *run += l;
-    if (s + 1) % batch.max(1) == 0 {
+    if (s + 1).is_multiple_of(batch.max(1)) {
         *sq += *run * *run;
         *run = Vec3::ZERO;
     }
@@ -342,7 +346,7 @@ impl Film {
     /// samples are whole batches (at least two), else 1.
     pub fn variance_batch(&self) -> u32 {
         let l = self.batch.max(1);
-        if l > 1 && self.spp % l == 0 && self.spp / l >= 2 {
+        if l > 1 && self.spp.is_multiple_of(l) && self.spp / l >= 2 {
             l
         } else {
             1

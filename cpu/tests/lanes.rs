@@ -48,7 +48,11 @@ impl Rand {
 /// Lane `i`'s special case, if it has one: 0 ordinary, 1 on the horizon,
 /// 2 NaN, 3 straight up, 4 the square's centre (u = 1/2).
 fn special(batch: usize, i: usize) -> usize {
-    if batch % 4 == 0 { 0 } else { (batch + i) % 5 }
+    if batch.is_multiple_of(4) {
+        0
+    } else {
+        (batch + i) % 5
+    }
 }
 
 fn dir_for(r: &mut Rand, kind: usize) -> Vec3 {

@@ -123,7 +123,7 @@ fn spherical_chi2(v: [Vec3; 3], p: Vec3, n_samples: usize, seed: u64) -> f64 {
 /// its plane (1e-3 to 1 radians), so slivers seen edge-on, thin
 /// triangles, far ones and nearly hemispherical ones all occur.
 fn random_configuration(rng: &mut Pcg32, k: usize) -> ([Vec3; 3], Vec3) {
-    let v = if k % 2 == 0 {
+    let v = if k.is_multiple_of(2) {
         [
             Vec3::new(-1.0, 1.0, -0.5),
             Vec3::new(1.5, 1.0, -0.3),

@@ -234,7 +234,7 @@ impl<'a> Buffer<'a> {
     /// `size_of::<T>()`).
     pub fn read<T: Pod>(&self) -> Result<Vec<T>, GpuError> {
         let elem = size_of::<T>() as u64;
-        if elem == 0 || self.len % elem != 0 {
+        if elem == 0 || !self.len.is_multiple_of(elem) {
             return Err(GpuError::Invalid(format!(
                 "buffer '{}' holds {} bytes, not a whole number of {}-byte elements",
                 self.name, self.len, elem

@@ -167,7 +167,7 @@ impl<'a> Kernel<'a> {
         let code =
             super::shaders::spirv(name).ok_or_else(|| GpuError::UnknownKernel(name.to_string()))?;
         let max_push = ctx.info().limits.max_push_constants_size;
-        if push_constant_size > max_push || push_constant_size % 4 != 0 {
+        if push_constant_size > max_push || !push_constant_size.is_multiple_of(4) {
             return Err(GpuError::Invalid(format!(
                 "kernel '{name}': {push_constant_size} bytes of push constants (must be a multiple of 4, at most {max_push})"
             )));

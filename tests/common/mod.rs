@@ -40,17 +40,17 @@ impl ValidatedContext {
 impl Drop for ValidatedContext {
     fn drop(&mut self) {
         self.ctx.take();
-        if let Some(log) = self.log.take() {
-            if !std::thread::panicking() {
-                let messages = log.messages();
-                assert!(
-                    messages.is_empty(),
-                    "validation layer reported {} error(s), {} warning(s):\n{}",
-                    log.errors(),
-                    log.warnings(),
-                    messages.join("\n")
-                );
-            }
+        if let Some(log) = self.log.take()
+            && !std::thread::panicking()
+        {
+            let messages = log.messages();
+            assert!(
+                messages.is_empty(),
+                "validation layer reported {} error(s), {} warning(s):\n{}",
+                log.errors(),
+                log.warnings(),
+                messages.join("\n")
+            );
         }
     }
 }

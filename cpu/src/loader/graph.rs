@@ -400,7 +400,7 @@ fn add_primitive(
     // winding, fans pivot on vertex 0).
     let refs_of = |t: usize| match mode {
         Mode::Triangles => [3 * t, 3 * t + 1, 3 * t + 2],
-        Mode::TriangleStrip if t % 2 == 0 => [t, t + 1, t + 2],
+        Mode::TriangleStrip if t.is_multiple_of(2) => [t, t + 1, t + 2],
         Mode::TriangleStrip => [t, t + 2, t + 1],
         _ => [t + 1, t + 2, 0],
     };
@@ -841,10 +841,10 @@ fn camera(src: &Source, index: usize, world: Mat4) -> Result<Camera, String> {
     if !(persp.yfov.is_finite() && persp.yfov > 0.0 && persp.yfov < std::f32::consts::PI) {
         return Err(err(format!("yfov must lie in (0, pi), got {}", persp.yfov)));
     }
-    if let Some(a) = persp.aspect_ratio {
-        if !(a.is_finite() && a > 0.0) {
-            return Err(err(format!("aspectRatio must be finite and > 0, got {a}")));
-        }
+    if let Some(a) = persp.aspect_ratio
+        && !(a.is_finite() && a > 0.0)
+    {
+        return Err(err(format!("aspectRatio must be finite and > 0, got {a}")));
     }
     let z = world.z_axis.truncate().normalize_or_zero();
     let y = world.y_axis.truncate();
