@@ -374,6 +374,22 @@ fn sensor_xml(scene: &Scene, opts: &RenderOptions) -> String {
     )
 }
 
+/// A linear RGB EXR of `mean` (row by row, top first), through glint's own
+/// writer: the same texels give the same bytes, so an export can be
+/// compared or committed (the `image` crate's EXR header came out in
+/// another order at every run).
+pub(super) fn write_exr(path: &Path, width: u32, height: u32, mean: Vec<Vec3>) -> Result<()> {
+    glint_cpu::exr_file::RadianceImage {
+        width,
+        height,
+        mean,
+        variance: None,
+        meta: None,
+    }
+    .write_file(path)
+    .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
 /// The environment map as Mitsuba's `envmap`: its texels as glint holds
 /// them (the scale applied, non-finite ones 0) in `textures/envmap.exr`,
 /// turned about +Y by its rotation. Both map a direction d to
@@ -384,12 +400,12 @@ fn sensor_xml(scene: &Scene, opts: &RenderOptions) -> String {
 fn envmap_xml(env: &EnvMap, dir: &Path, warnings: &mut Vec<String>) -> Result<(String, String)> {
     let file = "textures/envmap.exr".to_string();
     std::fs::create_dir_all(dir.join("textures")).with_context(|| format!("{}", dir.display()))?;
-    let pixels: Vec<f32> = env.texels.iter().flat_map(|t| [t[0], t[1], t[2]]).collect();
-    let path = dir.join(&file);
-    image::Rgb32FImage::from_raw(env.width, env.height, pixels)
-        .context("environment map size")?
-        .save(&path)
-        .with_context(|| format!("{}", path.display()))?;
+    let mean = env
+        .texels
+        .iter()
+        .map(|t| Vec3::new(t[0], t[1], t[2]))
+        .collect();
+    write_exr(&dir.join(&file), env.width, env.height, mean)?;
     warnings.push(
         "the environment map: Mitsuba filters it bilinearly, glint takes the nearest texel".into(),
     );
@@ -400,7 +416,14 @@ fn envmap_xml(env: &EnvMap, dir: &Path, warnings: &mut Vec<String>) -> Result<(S
     Ok((xml, file))
 }
 
-fn lights_xml(scene: &Scene, warnings: &mut Vec<String>) -> String {
+/// The punctual lights, and the background: the environment map (its
+/// file written into `dir` and named in `files`) or the constant.
+fn lights_xml(
+    scene: &Scene,
+    dir: &Path,
+    files: &mut Vec<String>,
+    warnings: &mut Vec<String>,
+) -> Result<String> {
     let mut xml = String::new();
     for l in &scene.lights {
         let _ = match *l {
@@ -459,14 +482,18 @@ fn lights_xml(scene: &Scene, warnings: &mut Vec<String>) -> String {
             ),
         };
     }
-    if scene.envmap.is_none() && scene.background.max_element() > 0.0 {
+    if let Some(env) = &scene.envmap {
+        let (env_xml, file) = envmap_xml(env, dir, warnings)?;
+        let _ = writeln!(xml, "{env_xml}");
+        files.push(file);
+    } else if scene.background.max_element() > 0.0 {
         let _ = writeln!(
             xml,
             r#"  <emitter type="constant">{}</emitter>"#,
             rgb("radiance", scene.background)
         );
     }
-    xml
+    Ok(xml)
 }
 
 /// Write `scene` as Mitsuba 3 XML and PLY meshes into `dir` (created),
@@ -551,12 +578,7 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
             }
         }
     }
-    let mut env_xml = String::new();
-    if let Some(env) = &scene.envmap {
-        let (xml, file) = envmap_xml(env, dir, &mut warnings)?;
-        env_xml = xml + "\n";
-        files.push(file);
-    }
+    let lights = lights_xml(scene, dir, &mut files, &mut warnings)?;
     let depth = opts.max_depth;
     let xml = format!(
         r#"<?xml version="1.0" encoding="utf-8"?>
@@ -566,7 +588,6 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
 {sensor}{lights}{shapes}</scene>
 "#,
         sensor = sensor_xml(scene, opts),
-        lights = lights_xml(scene, &mut warnings) + &env_xml,
     );
     std::fs::write(dir.join("scene.xml"), xml)
         .with_context(|| format!("{}", dir.join("scene.xml").display()))?;

@@ -41,20 +41,17 @@ impl Bitmaps<'_> {
     ) -> Result<String> {
         let st = &self.scene.textures;
         let t = st.table[r.texture as usize];
-        let mut pixels = Vec::with_capacity((t.width * t.height * 3) as usize);
+        let mut pixels = Vec::with_capacity((t.width * t.height) as usize);
         for y in 0..t.height as i32 {
             for x in 0..t.width as i32 {
-                pixels.extend_from_slice(&f(texture_fetch(&st.texels, &t, x, y, srgb)).to_array());
+                pixels.push(f(texture_fetch(&st.texels, &t, x, y, srgb)));
             }
         }
         let file = format!("textures/t{}.exr", self.files.len());
         let path = self.dir.join(&file);
         std::fs::create_dir_all(self.dir.join("textures"))
             .with_context(|| format!("{}", self.dir.display()))?;
-        image::Rgb32FImage::from_raw(t.width, t.height, pixels)
-            .context("texture size")?
-            .save(&path)
-            .with_context(|| format!("{}", path.display()))?;
+        super::write_exr(&path, t.width, t.height, pixels)?;
         self.files.push(file.clone());
         let mode = |m: u32| match m {
             WRAP_CLAMP => "clamp",
