@@ -394,9 +394,10 @@ pub(super) fn write_exr(path: &Path, width: u32, height: u32, mean: Vec<Vec3>) -
 /// them (the scale applied, non-finite ones 0) in `textures/envmap.exr`,
 /// turned about +Y by its rotation. Both map a direction d to
 /// (atan2(d.x, -d.z) / 2 pi, acos(d.y) / pi) in the map's frame and turn
-/// it right-handed about +Y (`tests/export.rs` renders the two against
-/// each other); Mitsuba filters the map bilinearly where glint takes the
-/// nearest texel, a warning says so.
+/// it right-handed about +Y (rendered against each other on a sky-only
+/// view: docs/benchmarks.md; `tests/export.rs` checks the file and the
+/// turn); Mitsuba filters the map bilinearly where glint takes the nearest
+/// texel, a warning says so.
 fn envmap_xml(env: &EnvMap, dir: &Path, warnings: &mut Vec<String>) -> Result<(String, String)> {
     let file = "textures/envmap.exr".to_string();
     std::fs::create_dir_all(dir.join("textures")).with_context(|| format!("{}", dir.display()))?;
