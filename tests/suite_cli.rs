@@ -478,3 +478,47 @@ fn option_files_are_relative_to_the_suite() {
     assert_eq!(in_dir(t.path(), &["test", "suite/suite.toml"]), 0);
     assert_eq!(in_dir(Path::new("/"), &["test", s.to_str().unwrap()]), 0);
 }
+
+/// What a scene's renders warn of (here the GPU's `--kernel` on the CPU
+/// backend) is shown under the scene's line and in its JUnit testcase's
+/// `system-err`, once, though `--update`'s pilot and reference renders
+/// both warned.
+#[test]
+fn the_renders_warnings_are_shown_per_scene() {
+    let t = tempfile::tempdir().unwrap();
+    let d = t.path();
+    let diffuse = asset("diffuse.gltf");
+    let s = suite(
+        d,
+        "spp = 64\ndetect = 0.2\nkernel = \"generic\"",
+        &[
+            ("w", &diffuse, ""),
+            ("q", &diffuse, "kernel = \"specialized\""),
+        ],
+    );
+    let s = s.to_str().unwrap();
+    let o = run(&["test", s, "--update"]);
+    assert_eq!(code(&o), 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert_eq!(out.matches("w: warning: ").count(), 1, "{out}");
+    let junit = d.join("j.xml");
+    let o = run(&["test", s, "--junit", junit.to_str().unwrap()]);
+    assert_eq!(code(&o), 0);
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(out.contains("w: warning: "), "{out}");
+    assert!(
+        out.contains("--kernel applies to the GPU backend only"),
+        "{out}"
+    );
+    assert!(!out.contains("q: warning"), "{out}");
+    let xml = std::fs::read_to_string(&junit).unwrap();
+    let doc = roxmltree::Document::parse(&xml).unwrap();
+    let err_of = |name: &str| {
+        doc.descendants()
+            .find(|n| n.has_tag_name("testcase") && n.attribute("name") == Some(name))
+            .and_then(|n| n.children().find(|c| c.has_tag_name("system-err")))
+            .and_then(|n| n.text().map(str::to_string))
+    };
+    assert!(err_of("w").is_some_and(|e| e.contains("--kernel")), "{xml}");
+    assert_eq!(err_of("q"), None);
+}

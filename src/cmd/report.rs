@@ -141,6 +141,13 @@ pub fn junit(path: &Path, suite: &str, results: &[Outcome], seconds: f64) -> Res
                 let _ = writeln!(x, "      <error message=\"{}\"/>", escape(m));
             }
         }
+        if !o.warnings.is_empty() {
+            let _ = writeln!(
+                x,
+                "      <system-err>{}</system-err>",
+                escape(&o.warnings.join("\n"))
+            );
+        }
         let _ = writeln!(x, "    </testcase>");
     }
     x.push_str("  </testsuite>\n</testsuites>\n");

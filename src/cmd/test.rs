@@ -103,6 +103,9 @@ pub struct Outcome {
     pub metrics: Option<serde_json::Value>,
     /// (label, file name in the report's folder).
     pub images: Vec<(&'static str, String)>,
+    /// The warnings its renders printed (`FILE: ...`), each once: what
+    /// glint skipped or substituted in the scene or the options.
+    pub warnings: Vec<String>,
 }
 
 fn merge(d: &Entry, s: &Entry) -> Entry {
@@ -242,7 +245,9 @@ pub fn load(path: &Path) -> Result<Vec<Case>> {
 }
 
 /// Run this binary with `args`: (exit code, stdout, stderr's last line).
-fn glint(args: &[OsString]) -> Result<(i32, String, String)> {
+/// Run glint with `args`: its exit status, stdout, its last line on stderr
+/// that is not a warning, and its warnings (`FILE: ...`).
+fn glint(args: &[OsString]) -> Result<(i32, String, String, Vec<String>)> {
     let exe = std::env::current_exe().context("locating the glint binary")?;
     let out = Command::new(exe)
         .args(args)
@@ -256,15 +261,22 @@ fn glint(args: &[OsString]) -> Result<(i32, String, String)> {
         .unwrap_or("")
         .trim_start_matches("glint: ")
         .to_string();
+    let warnings = err
+        .lines()
+        .filter_map(|l| l.strip_prefix("glint: warning: "))
+        .map(str::to_string)
+        .collect();
     Ok((
         out.status.code().unwrap_or(101),
         String::from_utf8_lossy(&out.stdout).into_owned(),
         last,
+        warnings,
     ))
 }
 
-/// `glint render` of the case to `out` (with variance) at `spp`, `seed`.
-fn render(c: &Case, out: &Path, spp: u32, seed: u64) -> Result<()> {
+/// `glint render` of the case to `out` (with variance) at `spp`, `seed`;
+/// its warnings join `warnings` (each once).
+fn render(c: &Case, out: &Path, spp: u32, seed: u64, warnings: &mut Vec<String>) -> Result<()> {
     let mut a: Vec<OsString> = vec!["render".into(), c.file.clone().into()];
     a.extend(c.render_opts.iter().map(OsString::from));
     for s in ["--spp", &spp.to_string(), "--seed", &seed.to_string()] {
@@ -274,7 +286,12 @@ fn render(c: &Case, out: &Path, spp: u32, seed: u64) -> Result<()> {
         a.push(s.into());
     }
     a.push(out.into());
-    let (code, _, err) = glint(&a)?;
+    let (code, _, err, warned) = glint(&a)?;
+    for w in warned {
+        if !warnings.contains(&w) {
+            warnings.push(w);
+        }
+    }
     if code != 0 {
         bail!("render: {err}");
     }
@@ -368,9 +385,9 @@ fn whole_batches(n: u32) -> u32 {
 }
 
 /// With `detect`: a pilot render of [`PILOT_SPP`] (a fixed seed).
-fn pilot(c: &Case, work: &Path) -> Result<RadianceImage> {
+fn pilot(c: &Case, work: &Path, warnings: &mut Vec<String>) -> Result<RadianceImage> {
     let pilot_path = work.join(format!("{}-pilot.exr", c.name));
-    render(c, &pilot_path, PILOT_SPP, PILOT_SEED)?;
+    render(c, &pilot_path, PILOT_SPP, PILOT_SEED, warnings)?;
     let pilot = read(&pilot_path)?;
     let _ = std::fs::remove_file(&pilot_path);
     Ok(pilot)
@@ -393,16 +410,16 @@ fn material_changes(c: &Case) -> Result<Vec<detect::Change>> {
 /// rare bright paths), so the rule is applied again with the reference's
 /// own variance as the pilot; when that asks for more, the reference is
 /// rendered again at REF_FACTOR x that.
-fn update(c: &Case, work: &Path) -> Result<u32> {
+fn update(c: &Case, work: &Path, warnings: &mut Vec<String>) -> Result<u32> {
     let sized = match c.detect {
-        Some(_) => Sized::new(c, &pilot(c, work)?, PILOT_SPP, None, None)?,
+        Some(_) => Sized::new(c, &pilot(c, work, warnings)?, PILOT_SPP, None, None)?,
         None => Sized::fixed(c),
     };
     if let Some(dir) = c.reference.parent() {
         std::fs::create_dir_all(dir).with_context(|| dir.display().to_string())?;
     }
     let mut ref_spp = sized.spp.saturating_mul(detect::REF_FACTOR);
-    render(c, &c.reference, ref_spp, REF_SEED)?;
+    render(c, &c.reference, ref_spp, REF_SEED, warnings)?;
     let first = read(&c.reference)?;
     // The reference holds REF_FACTOR x the samples the rule was given.
     let as_pilot = Sized {
@@ -413,7 +430,7 @@ fn update(c: &Case, work: &Path) -> Result<u32> {
         && more.spp > ref_spp / detect::REF_FACTOR
     {
         ref_spp = more.spp.saturating_mul(detect::REF_FACTOR);
-        render(c, &c.reference, ref_spp, REF_SEED)?;
+        render(c, &c.reference, ref_spp, REF_SEED, warnings)?;
     }
     Ok(ref_spp)
 }
@@ -439,17 +456,21 @@ fn check(c: &Case, work: &Path, seed: u64, o: &mut Outcome) -> Result<Verdict> {
         .filter(|_| reference.variance.is_some() && c.detect.is_some());
     let mut sized = match ref_spp {
         Some(r) => Sized::new(c, &reference, r, Some(&reference), None)?,
-        None if c.detect.is_some() => {
-            Sized::new(c, &pilot(c, work)?, PILOT_SPP, Some(&reference), None)?
-        }
+        None if c.detect.is_some() => Sized::new(
+            c,
+            &pilot(c, work, &mut o.warnings)?,
+            PILOT_SPP,
+            Some(&reference),
+            None,
+        )?,
         None => Sized::fixed(c),
     };
     let n = &c.name;
     let out = work.join(format!("{n}.exr"));
-    render(c, &out, sized.spp, seed)?;
+    render(c, &out, sized.spp, seed, &mut o.warnings)?;
     let mut img = read(&out)?;
     if let Some(more) = sized.again(c, &img, Some(&reference))? {
-        render(c, &out, more.spp, seed ^ RESIZE_SEED)?;
+        render(c, &out, more.spp, seed ^ RESIZE_SEED, &mut o.warnings)?;
         img = read(&out)?;
         sized = more;
     }
@@ -470,7 +491,7 @@ fn check(c: &Case, work: &Path, seed: u64, o: &mut Outcome) -> Result<Verdict> {
         "--alpha".into(),
         c.alpha.to_string().into(),
     ]);
-    let (code, stdout, err) = glint(&a)?;
+    let (code, stdout, err, _) = glint(&a)?;
     if let Ok(t) = std::fs::read_to_string(&json) {
         o.metrics = serde_json::from_str(&t).ok();
         o.images.push(("z map", z));
@@ -499,9 +520,10 @@ fn run_one(c: &Case, args: &TestArgs, work: &Path) -> Outcome {
         detect_capped: false,
         metrics: None,
         images: Vec::new(),
+        warnings: Vec::new(),
     };
     o.verdict = if args.update {
-        match update(c, work) {
+        match update(c, work, &mut o.warnings) {
             Ok(spp) => {
                 o.spp = Some(spp);
                 Verdict::Pass
@@ -532,7 +554,12 @@ fn print(o: &Outcome, update: bool) {
         (Verdict::Fail(l), _) => format!("DIFFER: {l}"),
         (Verdict::Error(e), _) => format!("ERROR: {e}"),
     };
-    println!("{}: {what} ({:.1} s{spp})", o.case.name, o.seconds);
+    // One print per case, so parallel jobs' lines do not interleave.
+    let mut text = format!("{}: {what} ({:.1} s{spp})", o.case.name, o.seconds);
+    for w in &o.warnings {
+        text += &format!("\n{}: warning: {w}", o.case.name);
+    }
+    println!("{text}");
 }
 
 /// The suite's exit status: 0 all agree, 1 any differs, 2 any bad input.
