@@ -237,7 +237,13 @@ pub fn reference_key(source: SourceKey, scene: &Scene, opts: &RenderOptions) -> 
 /// backs (`RadianceImage::read`), every value finite. A NaN or infinite
 /// reference would put NaN in every row of the table: refused, exit 2.
 pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
-    let img = glint::cpu::exr_file::RadianceImage::read(path)
+    let img = read_reference(path)?;
+    Ok((img.width, img.height, img.mean))
+}
+
+/// [`read_exr`]'s checked image, with what glint recorded in it.
+fn read_reference(path: &Path) -> Result<RadianceImage> {
+    let img = RadianceImage::read(path)
         .map_err(|e| anyhow!("{}: cannot read the image: {e}", path.display()))?;
     if let Some(at) = super::first_non_finite(img.width, &img.mean) {
         return Err(super::BadInput(format!(
@@ -246,7 +252,7 @@ pub fn read_exr(path: &Path) -> Result<(u32, u32, Vec<Vec3>)> {
         ))
         .into());
     }
-    Ok((img.width, img.height, img.mean))
+    Ok(img)
 }
 
 /// The CPU reference at `spp` for `base` (an independent seed), from the
@@ -463,19 +469,19 @@ fn chart_spec(title: &str, rows: &[Row], variants: &[Variant]) -> ChartSpec {
 /// image the variants converge to. Another renderer's EXR records none.
 fn warn_on_reference_key(
     path: &Path,
+    reference: &RadianceImage,
     source: SourceKey,
     scene: &Scene,
     base: &RenderOptions,
-    size: (u32, u32),
 ) {
-    let Some(there) = RadianceImage::read(path).ok().and_then(|i| i.meta) else {
+    let Some(there) = &reference.meta else {
         return;
     };
-    if there.scene.is_none() || size != (base.width, base.height) {
+    if there.scene.is_none() || (reference.width, reference.height) != (base.width, base.height) {
         return;
     }
     let here = super::shard::render_meta(source, scene, base, super::shard::Shard::WHOLE, 1);
-    if let Some(why) = super::shard::key_mismatch(Some(&here), Some(&there)) {
+    if let Some(why) = super::shard::key_mismatch(Some(&here), Some(there)) {
         eprintln!("glint: warning: {}: {why}", path.display());
     }
 }
@@ -531,9 +537,9 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     let base = render_options(&scene, &args.scene, 1, &args.opts)?;
     let (rw, rh, reference) = match (&args.reference, args.reference_spp) {
         (Some(p), _) => {
-            let r = read_exr(p)?;
-            warn_on_reference_key(p, source, &scene, &base, (r.0, r.1));
-            r
+            let r = read_reference(p)?;
+            warn_on_reference_key(p, &r, source, &scene, &base);
+            (r.width, r.height, r.mean)
         }
         (None, Some(n)) => reference_image(&args.scene, source, &scene, &base, n, &args.opts)?,
         (None, None) => unreachable!("clap requires one of --reference and --reference-spp"),
