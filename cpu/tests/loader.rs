@@ -230,14 +230,53 @@ fn texcoords_give_dp_du_tangents() {
         assert_close(Vec3::from_slice(&t[..3]), Vec3::Y);
         assert_eq!(t[3], 1.0);
     }
-    assert!(
-        s.shading_of(1).t.iter().all(|t| t[3] == 0.0),
-        "degenerate UVs give no tangent"
-    );
+    // Degenerate UVs: the first edge, as without them (Mitsuba's
+    // fallback too).
+    for t in s.shading_of(1).t {
+        assert_close(Vec3::from_slice(&t[..3]), Vec3::X);
+        assert_eq!(t[3], 1.0);
+    }
     // The default (isotropic) material needs no orientation: no tangent
     // stored, and no shading data at all for this flat triangle.
     assert!(s.shading_of(2).t.iter().all(|t| t[3] == 0.0));
     assert_eq!(s.triangles[2].flags >> 1, 0);
+}
+
+#[test]
+fn without_texcoords_the_tangent_is_the_files_first_edge() {
+    // Mitsuba 3 (3.9.1) takes dp_du = p1 - p0 on a mesh without texture
+    // coordinates, and pbrt-v4's default uv (0,0), (1,0), (1,1) gives the
+    // same: the first edge in the file's vertex order, under a mirroring
+    // node too (where glint swaps two of its own vertices).
+    let mut d = Doc::new();
+    let pos = d.floats(&[0., 0., 0., 2., 1., 0., 0., 3., 0.], "VEC3");
+    let nrm = d.floats(&[0., 0.2, 1., 0.1, 0., 1., 0., 0., 1.], "VEC3");
+    let aniso = d.material(anisotropic_material());
+    let m = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos, "NORMAL": nrm }, "material": aniso }),
+    ]);
+    let flat = d.mesh(vec![
+        json!({ "attributes": { "POSITION": pos }, "material": aniso }),
+    ]);
+    d.node(json!({ "mesh": m }));
+    d.node(json!({ "mesh": m, "scale": [-1, 1, 1], "translation": [0, 0, 1] }));
+    d.node(json!({ "mesh": flat, "translation": [0, 0, 2] }));
+    let s = parse_doc(&d, "first-edge");
+    let mut seen = 0;
+    for (i, tri) in s.triangles.iter().enumerate() {
+        let z = tri.vertices()[0].z;
+        let want = if z == 1.0 {
+            Vec3::new(-2.0, 1.0, 0.0).normalize()
+        } else {
+            Vec3::new(2.0, 1.0, 0.0).normalize()
+        };
+        for t in s.shading_of(i).t {
+            assert_close(Vec3::from_slice(&t[..3]), want);
+            assert_eq!(t[3], 1.0);
+        }
+        seen += 1;
+    }
+    assert_eq!(seen, 3);
 }
 
 /// A rough conductor with alpha_u != alpha_v.

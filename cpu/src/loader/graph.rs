@@ -488,7 +488,7 @@ fn push_triangle(
         (None, Some(m)) => Some(corner.map(|j| m[j])),
         _ => None,
     };
-    let sh = triangle_shading(
+    let mut sh = triangle_shading(
         v,
         p,
         geo,
@@ -498,6 +498,17 @@ fn push_triangle(
         given.as_ref(),
         d.uvs.as_deref(),
     );
+    if geo != Vec3::ZERO && sh.t.iter().all(|t| t[3] == 0.0) {
+        // Neither TANGENT nor a dP/du (no TEXCOORD_0, or a degenerate
+        // mapping): dP/du of the triangle's barycentric parameterization,
+        // its first edge in the file's vertex order, as Mitsuba 3 (3.9.1
+        // measured: `dp_du` = p1 - p0 without texture coordinates) and
+        // pbrt-v4 (default uv (0,0), (1,0), (1,1)) take it. The readers
+        // project it onto the shading normal, so on a curved mesh the
+        // lobe turns from face to face, as in both.
+        let edge = if place.flip { p[2] - p[0] } else { p[1] - p[0] };
+        sh.t = [edge.normalize_or_zero().extend(1.0).to_array(); 3];
+    }
     out.shading.push(sh);
     if want_uvs {
         let uv = (d.uvs.as_deref(), d.uvs1.as_deref());
