@@ -37,6 +37,13 @@ fn ply(path: &Path) -> (usize, usize, bool) {
 
 /// [`ply`] and the vertices' texture coordinates (empty where none).
 fn ply_body(path: &Path) -> (usize, usize, bool, Vec<[f32; 2]>) {
+    let (v, f, normals, _, uvs) = ply_vertices(path);
+    (v, f, normals, uvs)
+}
+
+/// [`ply_body`] with the vertices' positions.
+#[allow(clippy::type_complexity)]
+fn ply_vertices(path: &Path) -> (usize, usize, bool, Vec<[f32; 3]>, Vec<[f32; 2]>) {
     let bytes = std::fs::read(path).unwrap();
     let end = bytes
         .windows(11)
@@ -58,6 +65,12 @@ fn ply_body(path: &Path) -> (usize, usize, bool, Vec<[f32; 2]>) {
     let stride = 12 + if normals { 12 } else { 0 } + if uv { 8 } else { 0 };
     assert_eq!(bytes.len() - end, v * stride + f * 13, "{}", path.display());
     let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
+    let positions = (0..v)
+        .map(|i| {
+            let o = end + i * stride;
+            [f32_at(o), f32_at(o + 4), f32_at(o + 8)]
+        })
+        .collect();
     let uvs = if uv {
         (0..v)
             .map(|i| {
@@ -68,7 +81,7 @@ fn ply_body(path: &Path) -> (usize, usize, bool, Vec<[f32; 2]>) {
     } else {
         Vec::new()
     };
-    (v, f, normals, uvs)
+    (v, f, normals, positions, uvs)
 }
 
 fn export(scene: &Path, dir: &Path) -> String {
@@ -515,6 +528,94 @@ fn the_environment_map_is_written_as_mitsubas_envmap() {
             img.get_pixel(x, y).0.map(|c| 2.0 * c)
         };
         assert_eq!(p.0, want, "texel ({x}, {y})");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Anisotropic lobes are oriented alike in both renderers: Mitsuba 3 takes
+/// dP/du of a mesh's texture coordinates, or p1 - p0 without them (3.9.1
+/// measured), so the export writes coordinates whose dP/du is glint's
+/// tangent on every triangle, where one tangent per triangle says it
+/// (dP/du of the file's TEXCOORD_0, or the first edge without one), and
+/// warns where it cannot (a TANGENT that turns within a face).
+#[test]
+fn anisotropic_lobes_keep_glints_tangent_in_mitsuba() {
+    use glam::{Vec2, Vec3};
+    let mut d = builder::Doc::new();
+    // A bent quad with smooth normals; its u runs along +y, across the
+    // first edge (+x), so a PLY without coordinates would turn the lobe.
+    let pos = d.floats(&[0., 0., 0., 1., 0., 0., 1., 1., 0.3, 0., 1., 0.], "VEC3");
+    let nrm = d.floats(
+        &[0., -0.3, 1., 0.2, -0.3, 1., 0.2, 0.3, 1., 0., 0.3, 1.],
+        "VEC3",
+    );
+    let uv = d.floats(&[0., 0., 0., 1., 1., 1., 1., 0.], "VEC2");
+    let tan = d.floats(
+        &[
+            1., 0., 0., 1., 0., 1., 0., 1., 1., 0., 0., 1., 0.7, 0.7, 0., 1.,
+        ],
+        "VEC4",
+    );
+    let idx = d.indices_u16(&[0, 1, 2, 0, 2, 3]);
+    let mut prims = Vec::new();
+    for attrs in [
+        serde_json::json!({ "POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv }),
+        serde_json::json!({ "POSITION": pos, "NORMAL": nrm }),
+        serde_json::json!({ "POSITION": pos, "NORMAL": nrm, "TANGENT": tan }),
+    ] {
+        // Three materials (the loader merges equal ones).
+        let alpha_u = 0.05 + 0.01 * prims.len() as f32;
+        let m = d.material(serde_json::json!({ "extras": { "bsdf": {
+            "type": "roughconductor", "material": "Au", "alpha_u": alpha_u, "alpha_v": 0.4,
+            "shadowing": "separable" } } }));
+        prims.push(serde_json::json!({ "attributes": attrs, "indices": idx, "material": m }));
+    }
+    let mesh = d.mesh(prims);
+    d.node(serde_json::json!({ "mesh": mesh }));
+    let dir = scratch("aniso");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = d.write_gltf(&dir, "aniso");
+    let out = dir.join("out");
+    let stderr = export(&file, &out);
+    let warned = |m: usize| {
+        stderr
+            .lines()
+            .any(|l| l.contains(&format!("material {m} ")) && l.contains("anisotropic"))
+    };
+    assert!(!warned(0) && !warned(1) && warned(2), "{stderr}");
+
+    let scene = glint::cpu::loader::parse(&file).unwrap();
+    for m in 0..2u32 {
+        let (_, faces, _, positions, uvs) = ply_vertices(&out.join(format!("meshes/m{m}.ply")));
+        assert_eq!(uvs.len(), 3 * faces, "material {m}: coordinates written");
+        let tris: Vec<usize> = (0..scene.triangles.len())
+            .filter(|&i| scene.triangles[i].material == m)
+            .collect();
+        assert_eq!(tris.len(), faces);
+        for (f, &i) in tris.iter().enumerate() {
+            // Mitsuba's dp_du of what was written (mesh.cpp).
+            let p = [0, 1, 2].map(|k| Vec3::from(positions[3 * f + k]));
+            let uv = [0, 1, 2].map(|k| Vec2::from(uvs[3 * f + k]));
+            let (d0, d1) = (uv[1] - uv[0], uv[2] - uv[0]);
+            let det = d0.x * d1.y - d0.y * d1.x;
+            assert!(det != 0.0);
+            let dp_du = ((d1.y * (p[1] - p[0]) - d0.y * (p[2] - p[0])) / det).normalize();
+            for t in scene.shading_of(i).t {
+                let t = Vec3::from_slice(&t[..3]).normalize();
+                assert!(
+                    t.dot(dp_du) > 0.9999,
+                    "material {m}, face {f}: {t} vs {dp_du}"
+                );
+            }
+            // Material 0's tangent is the file's dP/du (+y here), material
+            // 1's its first edge.
+            let want = if m == 0 {
+                Vec3::Y
+            } else {
+                (p[1] - p[0]).normalize()
+            };
+            assert!(dp_du.dot(want) > 0.95, "material {m}: {dp_du} vs {want}");
+        }
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

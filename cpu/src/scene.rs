@@ -340,8 +340,19 @@ impl Scene {
     /// Whether material `m`'s shading needs a tangent: an anisotropic rough
     /// lobe, or a normal map (tangent space).
     pub fn material_needs_tangent(&self, m: usize) -> bool {
+        self.material_is_anisotropic(m)
+            || self
+                .textures
+                .materials
+                .get(m)
+                .is_some_and(|t| t.normal.is_some())
+    }
+
+    /// Whether material `m` has an anisotropic rough lobe (oriented by the
+    /// surface tangent).
+    pub fn material_is_anisotropic(&self, m: usize) -> bool {
         let aniso = |r: &crate::bsdf::Roughness| !r.is_smooth() && r.alpha_u != r.alpha_v;
-        let lobe = match &self.materials[m].bsdf {
+        match &self.materials[m].bsdf {
             Bsdf::Diffuse { .. }
             | Bsdf::Plastic(_)
             | Bsdf::RoughPlastic(_)
@@ -350,12 +361,7 @@ impl Scene {
             Bsdf::Conductor(c) => aniso(&c.roughness),
             Bsdf::Dielectric { roughness, .. } => aniso(roughness),
             Bsdf::Metallic { conductor, .. } => aniso(&conductor.roughness),
-        };
-        lobe || self
-            .textures
-            .materials
-            .get(m)
-            .is_some_and(|t| t.normal.is_some())
+        }
     }
 
     /// Triangle `tri`'s shading record: what [`Scene::set_shading`] stored,

@@ -15,7 +15,9 @@
 //! roulette from depth 5). Approximate, with a warning each: the glTF
 //! non-metal and metallic blend (Mitsuba's `principled`), height-correlated
 //! shadowing (Mitsuba's GGX is separable), `multiscatter`, anisotropic
-//! lobes (oriented by Mitsuba's own tangent frame), the spot light's
+//! lobes where the file's TANGENT turns within a face (elsewhere the PLY's
+//! texture coordinates carry glint's tangent as their dP/du, the axis
+//! Mitsuba orients the lobe by), the spot light's
 //! falloff (glTF's quadratic ramp against Mitsuba's smoothstep), the
 //! environment map's filter (Mitsuba's bilinear against glint's nearest
 //! texel) and interior absorption (not written).
@@ -40,7 +42,8 @@ use glam::{Mat4, Vec3};
 use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
 use glint_cpu::camera::scene_camera;
 use glint_cpu::envmap::EnvMap;
-use glint_cpu::scene::{NO_LIGHT, TRI_NORMALS, TRI_SHADING_SHIFT};
+use glint_cpu::frame::Frame;
+use glint_cpu::scene::{NO_LIGHT, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use glint_cpu::{PunctualLight, RenderOptions, Scene};
 
 mod textures;
@@ -77,12 +80,6 @@ fn ggx(r: &Roughness, what: &str, warnings: &mut Vec<String>) -> String {
     if r.shadowing == Shadowing::Correlated {
         warnings.push(format!(
             "{what}: height-correlated Smith shadowing written as Mitsuba's separable G1 G1"
-        ));
-    }
-    if r.alpha_u != r.alpha_v {
-        warnings.push(format!(
-            "{what}: anisotropic: Mitsuba orients the lobe by its own tangent frame (from UVs, \
-             or its coordinate system without them), not glint's"
         ));
     }
     if r.multiscatter {
@@ -302,8 +299,50 @@ struct Mesh {
     positions: Vec<[f32; 3]>,
     normals: Vec<[f32; 3]>,
     smooth: bool,
-    /// Texture coordinate set `uv_set`'s, where asked for.
+    /// Texture coordinate set `uv_set`'s, or coordinates that carry
+    /// glint's tangents ([`tangent_uvs`]), where asked for.
     uvs: Vec<[f32; 2]>,
+    /// Triangles whose tangent Mitsuba derives otherwise than glint holds
+    /// it ([`same_tangent`]), where the material is anisotropic.
+    other_frames: usize,
+}
+
+/// Per-corner texture coordinates of triangle `p` whose dP/du is `t`
+/// projected onto its plane (normal `ng`): the map from the plane onto
+/// (t, ng x t) is an isometry, so Mitsuba's `dp_du` of them is that
+/// projection, the axis glint's readers orient the lobe by.
+fn tangent_uvs(p: [Vec3; 3], ng: Vec3, t: Vec3) -> [[f32; 2]; 3] {
+    let s = (t - ng * ng.dot(t)).normalize_or_zero();
+    let s = if s == Vec3::ZERO {
+        Frame::from_normal(ng).s
+    } else {
+        s
+    };
+    let b = ng.cross(s);
+    p.map(|q| [(q - p[0]).dot(s), (q - p[0]).dot(b)])
+}
+
+/// Whether Mitsuba 3 orients triangle `p` (texture coordinates `uv` as
+/// written, or none) as glint does (`t`: glint's tangent at each corner):
+/// Mitsuba takes dP/du of the coordinates, or of the barycentric
+/// parameterization (p1 - p0) where there are none or they are
+/// degenerate; glint interpolates its corners' tangents. Both then
+/// project onto the shading normal, so parallel is the same.
+fn same_tangent(p: [Vec3; 3], uv: Option<[[f32; 2]; 3]>, t: [Vec3; 3]) -> bool {
+    let (dp0, dp1) = (p[1] - p[0], p[2] - p[0]);
+    let mut dp_du = dp0;
+    if let Some(uv) = uv {
+        let (d0, d1) = (
+            glam::Vec2::from(uv[1]) - glam::Vec2::from(uv[0]),
+            glam::Vec2::from(uv[2]) - glam::Vec2::from(uv[0]),
+        );
+        let det = d0.x * d1.y - d0.y * d1.x;
+        if det != 0.0 {
+            dp_du = (d1.y * dp0 - d0.y * dp1) / det;
+        }
+    }
+    let m = dp_du.normalize_or_zero();
+    m != Vec3::ZERO && t.iter().all(|t| t.normalize_or_zero().dot(m) > 1.0 - 1e-5)
 }
 
 /// The triangles of material `m` that emit (or not), with texture
@@ -315,18 +354,38 @@ fn mesh_of(scene: &Scene, m: u32, emitting: bool, uv_set: Option<u32>) -> Option
         normals: Vec::new(),
         smooth: false,
         uvs: Vec::new(),
+        other_frames: 0,
     };
+    let aniso = scene.material_is_anisotropic(m as usize);
     for (i, t) in scene.triangles.iter().enumerate() {
         if t.material != m || (t.light != NO_LIGHT) != emitting {
             continue;
         }
-        if let Some(set) = uv_set {
-            let uv = &scene.textures.uvs[i].uv;
-            let o = if set == 1 { 2 } else { 0 };
-            mesh.uvs.extend((0..3).map(|k| [uv[k][o], uv[k][o + 1]]));
-        }
         let [a, b, c] = t.vertices();
         let ng = t.geometric_normal().normalize_or_zero();
+        // glint's tangent at each corner (the frame of the geometric
+        // normal where the triangle holds none).
+        let tangents = if t.flags & TRI_TANGENTS != 0 {
+            scene.shading_of(i).t.map(|c| Vec3::from_slice(&c[..3]))
+        } else {
+            [Frame::from_normal(ng).s; 3]
+        };
+        let uv = match uv_set {
+            Some(set) => {
+                let uv = &scene.textures.uvs[i].uv;
+                let o = if set == 1 { 2 } else { 0 };
+                Some([0, 1, 2].map(|k| [uv[k][o], uv[k][o + 1]]))
+            }
+            None if aniso => {
+                let mean = tangents[0] + tangents[1] + tangents[2];
+                Some(tangent_uvs([a, b, c], ng, mean))
+            }
+            None => None,
+        };
+        if aniso && !same_tangent([a, b, c], uv, tangents) {
+            mesh.other_frames += 1;
+        }
+        mesh.uvs.extend(uv.into_iter().flatten());
         let mut ns = [ng; 3];
         if t.flags & TRI_NORMALS != 0 {
             let off = (t.flags >> TRI_SHADING_SHIFT) as usize;
@@ -555,7 +614,15 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
                 let id = format!("m{m}{}", if emitting { "e" } else { "" });
                 let name = format!("meshes/{id}.ply");
                 let normals = mesh.smooth.then_some(&mesh.normals[..]);
-                let uvs = uv_set.map(|_| &mesh.uvs[..]);
+                let uvs = (!mesh.uvs.is_empty()).then_some(&mesh.uvs[..]);
+                if mesh.other_frames > 0 {
+                    warnings.push(format!(
+                        "{what}: anisotropic: on {} of {} triangles Mitsuba's tangent frame (dP/du of \
+                         the texture coordinates written) is not glint's (from the file's TANGENT or TEXCOORD_0)",
+                        mesh.other_frames,
+                        mesh.positions.len() / 3
+                    ));
+                }
                 write_ply(&dir.join(&name), &mesh.positions, normals, uvs)?;
                 files.push(name.clone());
                 let emitter = if emitting {
