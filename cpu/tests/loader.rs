@@ -543,6 +543,46 @@ fn extras_plastic_and_thindielectric() {
 }
 
 #[test]
+fn sample_visible_is_taken_as_mitsuba_writes_it() {
+    // Mitsuba's rough models take `sample_visible` (its glint export
+    // writes it): either value gives the same BSDF, which samples the
+    // visible normals.
+    let plain = bsdfs(
+        "sample_visible_plain",
+        vec![
+            json!({ "type": "roughconductor", "alpha": 0.2 }),
+            json!({ "type": "roughdielectric", "alpha": 0.2 }),
+            json!({ "type": "roughplastic", "alpha": 0.2 }),
+        ],
+    );
+    for v in [true, false] {
+        let b = bsdfs(
+            "sample_visible",
+            vec![
+                json!({ "type": "roughconductor", "alpha": 0.2, "sample_visible": v }),
+                json!({ "type": "roughdielectric", "alpha": 0.2, "sample_visible": v }),
+                json!({ "type": "roughplastic", "alpha": 0.2, "sample_visible": v }),
+            ],
+        );
+        assert_eq!(b, plain);
+    }
+    for (bad, want) in [
+        (
+            json!({ "type": "roughconductor", "sample_visible": 1 }),
+            "\"sample_visible\" must be true or false",
+        ),
+        (
+            json!({ "type": "conductor", "sample_visible": true }),
+            "takes no parameter \"sample_visible\"",
+        ),
+    ] {
+        let d = material_doc(vec![json!({ "extras": { "bsdf": bad } })]);
+        let e = parse_doc_err(&d, "bad_sample_visible");
+        assert!(e.contains(want), "{e}");
+    }
+}
+
+#[test]
 fn extras_dielectrics_with_defaults_and_names() {
     let b = bsdfs(
         "extras_dielectric",

@@ -332,6 +332,7 @@ const ROUGH_KEYS: &[&str] = &[
     "distribution",
     "shadowing",
     "multiscatter",
+    "sample_visible",
 ];
 
 /// Parse `extras.bsdf` with Mitsuba 3's plugin names and parameters. Like
@@ -543,6 +544,14 @@ fn parse_roughness(
             }
         },
     };
+    // Mitsuba's choice between sampling the visible normals (its default,
+    // and glint's only way) and the whole distribution: the same image in
+    // expectation, other noise, so either value is taken.
+    if let Some(v) = obj.get("sample_visible")
+        && !v.is_boolean()
+    {
+        return Err(format!("\"sample_visible\" must be true or false, got {v}"));
+    }
     let multiscatter = match obj.get("multiscatter") {
         None => multiscatter_default,
         Some(Value::Bool(b)) => *b,
