@@ -583,6 +583,46 @@ fn sample_visible_is_taken_as_mitsuba_writes_it() {
 }
 
 #[test]
+fn twosided_is_the_opaque_bsdf_it_wraps() {
+    // Mitsuba 3 scenes wrap opaque BSDFs in `twosided`; glint's opaque
+    // models reflect on both sides already.
+    let inner = [
+        json!({ "type": "diffuse", "reflectance": [0.2, 0.4, 0.6] }),
+        json!({ "type": "roughconductor", "material": "Au", "alpha": 0.2 }),
+        json!({ "type": "plastic", "diffuse_reflectance": 0.3 }),
+    ];
+    let plain = bsdfs("twosided_plain", inner.to_vec());
+    let wrapped = bsdfs(
+        "twosided",
+        inner
+            .iter()
+            .enumerate()
+            .map(|(i, b)| json!({ "type": "twosided", ["bsdf", "material", "x"][i]: b }))
+            .collect(),
+    );
+    assert_eq!(wrapped, plain);
+    for (bad, want) in [
+        (
+            json!({ "type": "twosided", "bsdf": { "type": "dielectric" } }),
+            "opaque",
+        ),
+        (
+            json!({ "type": "twosided", "front": { "type": "diffuse" }, "back": { "type": "diffuse" } }),
+            "one nested BSDF",
+        ),
+        (json!({ "type": "twosided" }), "one nested BSDF"),
+        (
+            json!({ "type": "twosided", "bsdf": { "type": "diffuse", "alpha": 1 } }),
+            "in \"twosided\": \"diffuse\" takes no parameter \"alpha\"",
+        ),
+    ] {
+        let d = material_doc(vec![json!({ "extras": { "bsdf": bad } })]);
+        let e = parse_doc_err(&d, "bad_twosided");
+        assert!(e.contains(want), "{e}");
+    }
+}
+
+#[test]
 fn extras_dielectrics_with_defaults_and_names() {
     let b = bsdfs(
         "extras_dielectric",

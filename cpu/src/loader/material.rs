@@ -322,7 +322,7 @@ pub fn gltf_blend(metallic: f32, base: Vec3, rough: Roughness, coat: CoatParams)
 }
 
 const TYPES: &str = "diffuse, conductor, roughconductor, dielectric, roughdielectric, \
-                     thindielectric, plastic or roughplastic";
+                     thindielectric, plastic, roughplastic or twosided";
 /// Mitsuba 3's `plastic` default int_ior ("polypropylene").
 pub const DEFAULT_PLASTIC_INT_IOR: f32 = 1.49;
 const ROUGH_KEYS: &[&str] = &[
@@ -392,6 +392,9 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
         Some(other) => return Err(format!("\"type\" must be a string, got {other}")),
         None => return Err("has no \"type\"".into()),
     };
+    if ty == "twosided" {
+        return twosided(obj, multiscatter_default);
+    }
     let (own, rough) = bsdf_parameters(ty)?;
     for key in obj.keys() {
         let known = key == "type"
@@ -450,6 +453,28 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             })
         }
     }
+}
+
+/// Mitsuba 3's `twosided` around one opaque BSDF (its one nested object,
+/// under any key, as Mitsuba names nested plugins): that BSDF, since
+/// glint's opaque models reflect on both sides already. Like Mitsuba, a
+/// transmissive one is an error; so are two (a front and a back BSDF).
+fn twosided(obj: &Map<String, Value>, multiscatter_default: bool) -> Result<Bsdf, String> {
+    let nested: Vec<(&String, &Value)> = obj.iter().filter(|(k, _)| *k != "type").collect();
+    let [(_, inner)] = nested[..] else {
+        return Err(format!(
+            "\"twosided\" takes one nested BSDF (an object with a \"type\"), got {} entries",
+            nested.len()
+        ));
+    };
+    let bsdf = bsdf_from_extras_with(inner, multiscatter_default)
+        .map_err(|e| format!("in \"twosided\": {e}"))?;
+    if bsdf.has_transmission() {
+        return Err(
+            "\"twosided\" takes an opaque BSDF (as Mitsuba's), not a transmissive one".into(),
+        );
+    }
+    Ok(bsdf)
 }
 
 /// `plastic`'s parameters (also `roughplastic`'s), Mitsuba 3's defaults.
