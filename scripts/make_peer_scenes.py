@@ -19,6 +19,8 @@ own noise where they agree):
   (alpha 0.05 and 0.3).
 - glass: `thindielectric`, `dielectric` of water and diamond, and a
   `roughdielectric` of alpha 0.2.
+- tinted: `dielectric` and `roughdielectric` with Mitsuba's
+  `specular_reflectance` and `specular_transmittance`.
 - metals: `roughconductor` (alpha 0.15) of each named metal (Ag, Al, Au,
   Cr, Cu) and a smooth `conductor` with a specular_reflectance.
 - punctual: diffuse and rough spheres under a point and a directional
@@ -103,6 +105,12 @@ GLASSES = [
 ]
 METALS = [rough("roughconductor", material=m, alpha=0.15) for m in ("Ag", "Al", "Au", "Cr", "Cu")] + [
     {"type": "conductor", "material": "Au", "specular_reflectance": [0.5, 0.8, 1.0]}]
+TINTED = [
+    {"type": "dielectric", "int_ior": "bk7", "specular_transmittance": [0.3, 0.8, 1.0]},
+    {"type": "dielectric", "int_ior": 1.5, "specular_reflectance": [1.0, 0.4, 0.1],
+     "specular_transmittance": [0.9, 0.9, 0.5]},
+    rough("roughdielectric", int_ior=1.5, alpha=0.15, specular_transmittance=[0.5, 1.0, 0.6]),
+]
 PUNCTUAL = [
     {"type": "diffuse", "reflectance": [0.7, 0.5, 0.3]},
     rough("roughconductor", material="Al", alpha=0.25),
@@ -119,6 +127,7 @@ def main():
     row(os.path.join(out, "plastics.gltf"), PLASTICS)
     row(os.path.join(out, "glass.gltf"), GLASSES)
     row(os.path.join(out, "metals.gltf"), METALS)
+    row(os.path.join(out, "tinted.gltf"), TINTED)
     row(os.path.join(out, "punctual.gltf"), PUNCTUAL, area=False,
         lights=[("point", "point", 3.0, [1.0, 1.8, 1.2]), ("sun", "directional", 1.5, [-0.4, -1.0, -0.5])])
 

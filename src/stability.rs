@@ -271,6 +271,7 @@ fn alpha_points(add: &mut Add<'_>) {
                 Bsdf::Dielectric {
                     eta: 1.5,
                     roughness: r,
+                    tint: glint_cpu::bsdf::Tint::NONE,
                 },
             );
         }
@@ -283,6 +284,7 @@ fn alpha_points(add: &mut Add<'_>) {
             Bsdf::Dielectric {
                 eta: 1.0 / 1.5,
                 roughness: r,
+                tint: glint_cpu::bsdf::Tint::NONE,
             },
         );
         add(
@@ -323,6 +325,7 @@ fn eta_points(add: &mut Add<'_>) {
                 Bsdf::Dielectric {
                     eta,
                     roughness: rough(a, a, Shadowing::Correlated),
+                    tint: glint_cpu::bsdf::Tint::NONE,
                 },
             );
         }
@@ -368,6 +371,7 @@ fn aniso_points(add: &mut Add<'_>) {
             Bsdf::Dielectric {
                 eta: 1.5,
                 roughness: r,
+                tint: glint_cpu::bsdf::Tint::NONE,
             },
         );
     }

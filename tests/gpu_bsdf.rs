@@ -89,8 +89,24 @@ fn materials() -> Vec<(u32, Bsdf)> {
             };
             let m = ["Au", "Ag", "Cu", "Al", "Cr"][i % 5];
             v.push((1, Bsdf::Conductor(metal(m, r))));
-            for eta in [1.5, 1.0 / 1.5, 1.333, 2.419] {
-                v.push((2, Bsdf::Dielectric { eta, roughness: r }));
+            for (j, eta) in [1.5, 1.0 / 1.5, 1.333, 2.419].into_iter().enumerate() {
+                // Mitsuba's specular_reflectance and _transmittance on some.
+                let tint = if (i + j) % 2 == 0 {
+                    glint::cpu::bsdf::Tint::NONE
+                } else {
+                    glint::cpu::bsdf::Tint {
+                        reflect: Vec3::new(0.9, 0.5, 0.2),
+                        transmit: Vec3::new(0.3, 0.8, 1.0),
+                    }
+                };
+                v.push((
+                    2,
+                    Bsdf::Dielectric {
+                        eta,
+                        roughness: r,
+                        tint,
+                    },
+                ));
             }
             // The glTF non-metal: coloured and black bases, IORs from
             // near 1 to diamond, a KHR_materials_specular tint.

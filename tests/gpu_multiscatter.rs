@@ -94,6 +94,7 @@ fn gpu_white_furnace_is_one_with_multiscatter() {
     let glass = |alpha, ms| Bsdf::Dielectric {
         eta: 1.5,
         roughness: rough(alpha, ms),
+        tint: glint::cpu::bsdf::Tint::NONE,
     };
     // (scene, compensated, tolerance), over the objects' pixels: the glass
     // furnace compounds the tables' ~0.3% interpolation error over internal

@@ -297,7 +297,8 @@ device_struct! {
         /// GGX alphas; the smooth (delta) form when max < SMOOTH_ALPHA_THRESHOLD.
         pub alpha_u: f32,
         pub alpha_v: f32,
-        /// Diffuse reflectance (diffuse, metallic blend's base); `.w` = metallic weight.
+        /// Diffuse reflectance (diffuse, metallic blend's base); `.w` = metallic
+        /// weight. Dielectric: `specular_transmittance` (`bsdf::Tint`).
         pub reflectance: [f32; 4],
         /// Conductor eta (rgb); dielectric: `.x` = int_ior / ext_ior. `.w` of
         /// eta, k, specular: the conductor's F_avg (rgb) with `multiscatter`.
@@ -305,7 +306,8 @@ device_struct! {
         /// Conductor k (rgb); dielectric: the interior's absorption sigma_a
         /// (rgb, `Material::absorption`).
         pub k: [f32; 4],
-        /// Conductor specular_reflectance (rgb).
+        /// Conductor specular_reflectance (rgb); dielectric: its
+        /// `specular_reflectance` (`bsdf::Tint`).
         pub specular: [f32; 4],
         /// Emitted radiance (rgb); `.w` = 1 when emission leaves both faces.
         pub emission: [f32; 4],

@@ -168,7 +168,7 @@ impl Features {
                     f |= Self::CONDUCTOR;
                     f |= Self::rough(&c.roughness);
                 }
-                Bsdf::Dielectric { eta, roughness } => {
+                Bsdf::Dielectric { eta, roughness, .. } => {
                     f |= Self::DIELECTRIC;
                     // A rough dielectric with eta = 1 is rendered smooth.
                     if *eta != 1.0 {
@@ -246,7 +246,7 @@ pub fn simplify(scene: &mut Scene) -> Vec<String> {
             Bsdf::Conductor(c) => snap(&mut c.roughness, &mut snapped),
             Bsdf::Metallic { conductor, .. } => snap(&mut conductor.roughness, &mut snapped),
             Bsdf::Coated { roughness, .. } => snap(roughness, &mut snapped),
-            Bsdf::Dielectric { eta, roughness } => {
+            Bsdf::Dielectric { eta, roughness, .. } => {
                 if *eta == 1.0 && !(roughness.alpha_u == 0.0 && roughness.alpha_v == 0.0) {
                     roughness.alpha_u = 0.0;
                     roughness.alpha_v = 0.0;
@@ -426,6 +426,7 @@ mod tests {
         let glass = material(Bsdf::Dielectric {
             eta: 1.5,
             roughness: rough(0.2, 0.2, Shadowing::Correlated),
+            tint: crate::bsdf::Tint::NONE,
         });
         let f = Features::of(&scene(vec![glass], vec![], Vec3::ZERO), &opts());
         assert!(
@@ -536,6 +537,7 @@ mod tests {
         let pass = material(Bsdf::Dielectric {
             eta: 1.0,
             roughness: rough(0.3, 0.3, Shadowing::Correlated),
+            tint: crate::bsdf::Tint::NONE,
         });
         let mut s = scene(vec![pass], vec![], Vec3::ZERO);
         assert!(!Features::of(&s, &opts()).has(Features::ROUGH));

@@ -126,9 +126,16 @@ impl From<&Material> for GpuMaterial {
                 g.kind = abi::KIND_CONDUCTOR;
                 conductor(&mut g, c);
             }
-            Bsdf::Dielectric { eta, roughness } => {
+            Bsdf::Dielectric {
+                eta,
+                roughness,
+                tint,
+            } => {
                 g.kind = abi::KIND_DIELECTRIC;
                 g.eta = [*eta, 0.0, 0.0, 0.0];
+                // Mitsuba's specular_reflectance and _transmittance.
+                g.specular = vec4(tint.reflect, 0.0);
+                g.reflectance = vec4(tint.transmit, 0.0);
                 // k is the interior's absorption sigma_a for a dielectric.
                 g.k = vec4(m.absorption, 0.0);
                 g.alpha_u = roughness.alpha_u;

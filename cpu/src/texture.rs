@@ -442,6 +442,7 @@ pub fn textured_bsdf(
                 Bsdf::Dielectric {
                     eta: mt.mr_factor[3],
                     roughness: rough,
+                    tint: crate::bsdf::Tint::NONE,
                 }
             } else {
                 // Always the blend (the GPU's KIND_METALLIC: one kernel

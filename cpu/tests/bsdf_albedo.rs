@@ -342,7 +342,7 @@ fn furnace(bsdf: &Bsdf, cos: f32) -> Furnace {
                 TARGET
             }
         }
-        Bsdf::Dielectric { eta, roughness } => {
+        Bsdf::Dielectric { eta, roughness, .. } => {
             let denser_side = (*eta > 1.0) == (cos < 0.0);
             let _ = roughness;
             if denser_side {
@@ -390,6 +390,7 @@ fn cases() -> Vec<Case> {
                         Bsdf::Dielectric {
                             eta,
                             roughness: rough(a, a, sh),
+                            tint: glint_cpu::bsdf::Tint::NONE,
                         },
                         c,
                         None,
@@ -416,6 +417,7 @@ fn cases() -> Vec<Case> {
                     let b = Bsdf::Dielectric {
                         eta,
                         roughness: with_ms(rough(a, a, sh), true),
+                        tint: glint_cpu::bsdf::Tint::NONE,
                     };
                     v.push((
                         format!("MS dielectric eta={en} {}", shname(sh)),
@@ -645,6 +647,7 @@ fn half_vector_map_matches_sphere_quadrature() {
     let glass = |eta: f32, a: f32, sh| Bsdf::Dielectric {
         eta,
         roughness: rough(a, a, sh),
+        tint: glint_cpu::bsdf::Tint::NONE,
     };
     let cases: Vec<(&str, Bsdf, f32)> = vec![
         (

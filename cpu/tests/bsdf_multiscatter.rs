@@ -319,6 +319,7 @@ fn glass(eta: f32, alpha: f32, ms: bool) -> Bsdf {
             shadowing: Shadowing::Correlated,
             multiscatter: ms,
         },
+        tint: glint_cpu::bsdf::Tint::NONE,
     }
 }
 

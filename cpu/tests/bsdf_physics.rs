@@ -42,7 +42,11 @@ fn property_cases() -> Vec<(String, Bsdf)> {
             for eta in [1.5, 1.0 / 1.5] {
                 v.push((
                     format!("roughdielectric eta={eta} {au},{av} {sh:?}"),
-                    Bsdf::Dielectric { eta, roughness: r },
+                    Bsdf::Dielectric {
+                        eta,
+                        roughness: r,
+                        tint: glint_cpu::bsdf::Tint::NONE,
+                    },
                 ));
             }
             if au == av {
@@ -122,8 +126,20 @@ fn property_cases() -> Vec<(String, Bsdf)> {
             Bsdf::Dielectric {
                 eta,
                 roughness: Roughness::SMOOTH,
+                tint: glint_cpu::bsdf::Tint::NONE,
             },
         ));
+        // Mitsuba's specular_reflectance and _transmittance.
+        for roughness in [Roughness::SMOOTH, rough(0.2, 0.05, Shadowing::Separable)] {
+            v.push((
+                format!("tinted dielectric eta={eta} alpha={}", roughness.alpha_u),
+                Bsdf::Dielectric {
+                    eta,
+                    roughness,
+                    tint: TINT,
+                },
+            ));
+        }
     }
     for nonlinear in [false, true] {
         v.push((
@@ -168,6 +184,68 @@ fn property_cases() -> Vec<(String, Bsdf)> {
 /// clear coat tilted by its own normal map (its lobe carries the coat's
 /// cosine, `bsdf/clearcoat.rs`), rough and smooth, over a white non-metal
 /// (the furnace's worst case) and over the blend.
+/// A dielectric tint with every channel different.
+const TINT: glint_cpu::bsdf::Tint = glint_cpu::bsdf::Tint {
+    reflect: Vec3::new(0.9, 0.5, 0.2),
+    transmit: Vec3::new(0.3, 0.8, 1.0),
+};
+
+/// Mitsuba's tints scale a dielectric's reflected part by
+/// `specular_reflectance` and its transmitted part by
+/// `specular_transmittance`; the sampling (directions and densities) is
+/// the untinted one, and a sample's weight is scaled as its value.
+#[test]
+fn dielectric_tints_scale_each_part() {
+    use glint_cpu::sampling::square_to_uniform_sphere;
+    let mut rng = glint_cpu::sampling::Pcg32::new(7, 1);
+    for roughness in [Roughness::SMOOTH, rough(0.3, 0.1, Shadowing::Correlated)] {
+        for eta in [1.5, 1.0 / 1.33] {
+            let plain = Bsdf::Dielectric {
+                eta,
+                roughness,
+                tint: glint_cpu::bsdf::Tint::NONE,
+            };
+            let tinted = Bsdf::Dielectric {
+                eta,
+                roughness,
+                tint: TINT,
+            };
+            let (mut reflected, mut transmitted) = (0, 0);
+            for _ in 0..2000 {
+                let wo = square_to_uniform_sphere(Vec2::new(rng.f32(), rng.f32()));
+                let (uc, u) = (rng.f32(), Vec2::new(rng.f32(), rng.f32()));
+                let (a, b) = (plain.sample(wo, uc, u), tinted.sample(wo, uc, u));
+                assert_eq!(a.is_some(), b.is_some());
+                let (Some(a), Some(b)) = (a, b) else { continue };
+                assert_eq!((a.wi, a.pdf, a.eta, a.delta), (b.wi, b.pdf, b.eta, b.delta));
+                let t = if wo.z * a.wi.z > 0.0 {
+                    reflected += 1;
+                    TINT.reflect
+                } else {
+                    transmitted += 1;
+                    TINT.transmit
+                };
+                assert!(
+                    (b.weight - a.weight * t).abs().max_element() <= 1e-6 * a.weight.max_element()
+                );
+                let wi = square_to_uniform_sphere(Vec2::new(rng.f32(), rng.f32()));
+                let t = if wo.z * wi.z > 0.0 {
+                    TINT.reflect
+                } else {
+                    TINT.transmit
+                };
+                let (fa, fb) = (plain.eval(wo, wi), tinted.eval(wo, wi));
+                assert!((fb - fa * t).abs().max_element() <= 1e-6 * fa.max_element());
+                assert_eq!(plain.pdf(wo, wi), tinted.pdf(wo, wi));
+            }
+            assert!(
+                reflected > 100 && transmitted > 100,
+                "{reflected} {transmitted}"
+            );
+        }
+    }
+}
+
 fn nonreciprocal_cases() -> Vec<(String, Bsdf)> {
     let mut v = Vec::new();
     for (n, ca) in [
@@ -571,8 +649,15 @@ fn reference_albedo(bsdf: &Bsdf, wo: Vec3) -> Option<(DVec3, DVec3)> {
             let f = fresnel_conductor(wo.z.abs(), c.eta, c.k) * c.specular_reflectance;
             Some((f.as_dvec3(), DVec3::splat(1e-6)))
         }
-        Bsdf::Dielectric { roughness, .. } if roughness.is_smooth() => {
-            Some((DVec3::ONE, DVec3::splat(1e-6)))
+        Bsdf::Dielectric {
+            eta,
+            roughness,
+            tint,
+        } if roughness.is_smooth() => {
+            // F reflected, 1 - F transmitted (1 untinted).
+            let f = fresnel_dielectric(wo.z, *eta) as f64;
+            let a = tint.reflect.as_dvec3() * f + tint.transmit.as_dvec3() * (1.0 - f);
+            Some((a, DVec3::splat(1e-6)))
         }
         Bsdf::ThinDielectric {
             reflectance,
@@ -590,9 +675,20 @@ fn reference_albedo(bsdf: &Bsdf, wo: Vec3) -> Option<(DVec3, DVec3)> {
             );
             Some((q.r, e.r))
         }
-        Bsdf::Dielectric { roughness: r, .. } if !r.multiscatter => {
-            let (q, e) = hv_two(bsdf, wo, r.alpha_u as f64, r.alpha_v as f64);
-            Some((DVec3::splat(q.r.x + q.t), DVec3::splat(e.r.x + e.t)))
+        Bsdf::Dielectric {
+            eta,
+            roughness: r,
+            tint,
+        } if !r.multiscatter => {
+            // The untinted quadrature's two parts, each times its tint.
+            let plain = Bsdf::Dielectric {
+                eta: *eta,
+                roughness: *r,
+                tint: glint_cpu::bsdf::Tint::NONE,
+            };
+            let (q, e) = hv_two(&plain, wo, r.alpha_u as f64, r.alpha_v as f64);
+            let (rt, tt) = (tint.reflect.as_dvec3(), tint.transmit.as_dvec3());
+            Some((rt * q.r.x + tt * q.t, rt * e.r.x + tt * e.t))
         }
         Bsdf::Diffuse { .. } => Some(sphere_quadrature(bsdf, wo)),
         Bsdf::RoughPlastic(p) if layered_wide(&p.roughness) => Some(sphere_quadrature(bsdf, wo)),
@@ -734,6 +830,7 @@ fn smooth_dielectric_choice_scaling_and_tir() {
     let glass = Bsdf::Dielectric {
         eta,
         roughness: Roughness::SMOOTH,
+        tint: glint_cpu::bsdf::Tint::NONE,
     };
     let mut rng = Pcg32::new(2, 2);
     for &c in &[0.9f32, 0.4, 0.05, -0.95, -0.8] {
@@ -817,6 +914,7 @@ fn no_nan_or_inf_on_extreme_inputs() {
             2 => Bsdf::Dielectric {
                 eta: 0.4 + 2.5 * rng.f32(),
                 roughness: r,
+                tint: glint_cpu::bsdf::Tint::NONE,
             },
             _ => Bsdf::Metallic {
                 metallic: rng.f32(),

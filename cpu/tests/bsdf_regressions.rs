@@ -57,6 +57,7 @@ fn pbrt_v3_254_total_internal_reflection_in_rough_glass() {
         let glass = Bsdf::Dielectric {
             eta: 1.5,
             roughness: rough(0.02, 0.02, sh),
+            tint: glint_cpu::bsdf::Tint::NONE,
         };
         // Inside, 70 degrees from the normal: well past the critical angle
         // (41.8 degrees) for every microfacet within a few alphas.
@@ -100,10 +101,12 @@ fn pbrt_v3_273_and_v4_283_zero_alpha_is_finite() {
                 Bsdf::Dielectric {
                     eta: 1.5,
                     roughness: r,
+                    tint: glint_cpu::bsdf::Tint::NONE,
                 },
                 Bsdf::Dielectric {
                     eta: 1.0 / 1.5,
                     roughness: r,
+                    tint: glint_cpu::bsdf::Tint::NONE,
                 },
                 Bsdf::Metallic {
                     metallic: 0.5,
@@ -148,10 +151,12 @@ fn pbrt_v3_214_tiny_roughness_is_smooth() {
                     Bsdf::Dielectric {
                         eta: 1.5,
                         roughness: r,
+                        tint: glint_cpu::bsdf::Tint::NONE,
                     },
                     Bsdf::Dielectric {
                         eta: 1.5,
                         roughness: Roughness::SMOOTH,
+                        tint: glint_cpu::bsdf::Tint::NONE,
                     },
                 ),
             ];
@@ -181,6 +186,7 @@ fn pbrt_v4_30_btdf_radiance_scaling_is_eta_squared() {
         let glass = Bsdf::Dielectric {
             eta,
             roughness: rough(0.002, 0.002, Shadowing::Correlated),
+            tint: glint_cpu::bsdf::Tint::NONE,
         };
         for side in [1.0f32, -1.0] {
             let wo = Vec3::new(0.0, 0.0, side);
@@ -223,7 +229,11 @@ fn mitsuba_957_wi_equals_wo_is_finite() {
             let r = rough(alpha, alpha, sh);
             models.push(Bsdf::Conductor(gold(r)));
             for eta in [1.5, 1.0 / 1.5, 1.0, 1.0 + 1e-6, 1.0 - 1e-6] {
-                models.push(Bsdf::Dielectric { eta, roughness: r });
+                models.push(Bsdf::Dielectric {
+                    eta,
+                    roughness: r,
+                    tint: glint_cpu::bsdf::Tint::NONE,
+                });
             }
         }
     }
@@ -256,6 +266,7 @@ fn ior_exactly_one_passes_straight_through() {
             let b = Bsdf::Dielectric {
                 eta,
                 roughness: rough(alpha, alpha, Shadowing::Correlated),
+                tint: glint_cpu::bsdf::Tint::NONE,
             };
             assert!(b.is_delta(), "eta {eta} alpha {alpha}");
             let mut rng = Pcg32::new(1, 1);
@@ -295,6 +306,7 @@ fn cycles_near_equal_iors_sample_matches_pdf() {
             let b = Bsdf::Dielectric {
                 eta,
                 roughness: rough(alpha, alpha, Shadowing::Correlated),
+                tint: glint_cpu::bsdf::Tint::NONE,
             };
             assert!(!b.is_delta());
             for c in [1.0f32, 0.5, -0.5, -1.0] {

@@ -10,7 +10,7 @@ use std::path::Path;
 use builder::{Doc, temp_dir};
 use glam::{Mat3, Quat, Vec2, Vec3};
 use glint_cpu::bsdf::coated::CoatParams;
-use glint_cpu::bsdf::{Bsdf, Roughness, Shadowing};
+use glint_cpu::bsdf::{Bsdf, Roughness, Shadowing, Tint};
 use glint_cpu::loader::{
     self, DEFAULT_EXT_IOR, DEFAULT_INT_IOR, default_camera, parse, select_camera,
 };
@@ -623,6 +623,41 @@ fn twosided_is_the_opaque_bsdf_it_wraps() {
 }
 
 #[test]
+fn dielectrics_take_mitsubas_tints() {
+    let b = bsdfs(
+        "dielectric_tints",
+        vec![
+            json!({ "type": "dielectric", "specular_transmittance": [0.2, 0.5, 0.9] }),
+            json!({ "type": "roughdielectric", "alpha": 0.2, "specular_reflectance": 0.5 }),
+            json!({ "type": "dielectric" }),
+        ],
+    );
+    let tint = |b: &Bsdf| match b {
+        Bsdf::Dielectric { tint, .. } => *tint,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(
+        tint(&b[0]),
+        Tint {
+            reflect: Vec3::ONE,
+            transmit: Vec3::new(0.2, 0.5, 0.9)
+        }
+    );
+    assert_eq!(
+        tint(&b[1]),
+        Tint {
+            reflect: Vec3::splat(0.5),
+            transmit: Vec3::ONE
+        }
+    );
+    assert_eq!(tint(&b[2]), Tint::NONE);
+    let d = material_doc(vec![json!({ "extras": { "bsdf":
+        { "type": "dielectric", "specular_reflectance": [1.5, 0, 0] } } })]);
+    let e = parse_doc_err(&d, "bad_tint");
+    assert!(e.contains("specular_reflectance"), "{e}");
+}
+
+#[test]
 fn extras_dielectrics_with_defaults_and_names() {
     let b = bsdfs(
         "extras_dielectric",
@@ -896,7 +931,8 @@ fn transmission_is_thin_walled_unless_the_volume_has_a_thickness() {
         s.materials[3].bsdf,
         Bsdf::Dielectric {
             eta: 1.33,
-            roughness: rough(0.25, 0.25, Shadowing::Correlated)
+            roughness: rough(0.25, 0.25, Shadowing::Correlated),
+            tint: glint_cpu::bsdf::Tint::NONE,
         }
     );
     let Bsdf::Metallic { metallic, coat, .. } = s.materials[4].bsdf else {

@@ -160,10 +160,6 @@ const METALS: [(&str, &str); 5] = [
     ("Cr", "chromium"),
 ];
 
-fn rel(a: f64, b: f64) -> f64 {
-    (a - b).abs() / b.abs()
-}
-
 /// Mitsuba 3.9.1's RGB (eta, k) of the contract's five metals and a few
 /// more, as `scripts/mitsuba_metals.py` printed them (six significant
 /// digits).

@@ -123,6 +123,7 @@ fn glass_slab_under_white_sky_is_invisible() {
         bsdf: Bsdf::Dielectric {
             eta: 1.5046,
             roughness: Roughness::SMOOTH,
+            tint: glint_cpu::bsdf::Tint::NONE,
         },
         emission: Vec3::ZERO,
         double_sided: false,
@@ -230,6 +231,7 @@ fn glass_sphere_under_white_sky_is_invisible() {
         bsdf: Bsdf::Dielectric {
             eta: 1.5046,
             roughness: Roughness::SMOOTH,
+            tint: glint_cpu::bsdf::Tint::NONE,
         },
         emission: Vec3::ZERO,
         double_sided: false,
@@ -530,6 +532,7 @@ fn absorbing_glass_sphere_transmits_exp_minus_sigma_chord() {
         bsdf: Bsdf::Dielectric {
             eta: 1.0,
             roughness: Roughness::SMOOTH,
+            tint: glint_cpu::bsdf::Tint::NONE,
         },
         emission: Vec3::ZERO,
         double_sided: false,

@@ -66,6 +66,7 @@ fn mis_agrees_on_glossy_and_transmissive_surfaces() {
         Bsdf::Dielectric {
             eta: 1.5,
             roughness: rough,
+            tint: glint_cpu::bsdf::Tint::NONE,
         },
     ];
     for (i, bsdf) in materials.into_iter().enumerate() {

@@ -681,13 +681,19 @@ bool gltf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
 // per-call test (tests/gpu_bsdf.rs) sees, never another BSDF's values.
 #define BSDF_UNKNOWN_KIND uintBitsToFloat(0x7fc00000u)
 
+// A dielectric's Mitsuba specular_reflectance (.specular) and
+// specular_transmittance (.reflectance) for the pair (wo, wi): bsdf::Tint.
+vec3 dielectric_tint(Material m, vec3 wo, vec3 wi) {
+    return wo.z * wi.z > 0.0 ? m.specular.xyz : m.reflectance.xyz;
+}
+
 vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
     if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return diffuse_eval(m.reflectance.xyz, wo, wi);
     } else if (HAS(F_CONDUCTOR) && m.kind == KIND_CONDUCTOR) {
         return conductor_eval(m, wo, wi);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
-        return dielectric_eval(m.eta.x, m, wo, wi);
+        return dielectric_eval(m.eta.x, m, wo, wi) * dielectric_tint(m, wo, wi);
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return gltf_eval(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
@@ -729,7 +735,9 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
     } else if (HAS(F_CONDUCTOR) && m.kind == KIND_CONDUCTOR) {
         return conductor_sample(m, wo, u, s);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
-        return dielectric_sample(m.eta.x, m, wo, uc, u, s);
+        bool ok = dielectric_sample(m.eta.x, m, wo, uc, u, s);
+        s.weight *= dielectric_tint(m, wo, s.wi);
+        return ok;
     } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
         return gltf_sample(m, wo, uc, u, s);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {

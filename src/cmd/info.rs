@@ -131,11 +131,25 @@ pub fn model(b: &Bsdf) -> String {
     match b {
         Bsdf::Diffuse { reflectance } => format!("diffuse reflectance {}", rgb(*reflectance)),
         Bsdf::Conductor(c) => conductor(c),
-        Bsdf::Dielectric { eta, roughness: r } if r.is_smooth() => {
-            format!("dielectric eta {eta:.4}")
-        }
-        Bsdf::Dielectric { eta, roughness: r } => {
-            format!("roughdielectric eta {eta:.4} {}", roughness(r))
+        Bsdf::Dielectric {
+            eta,
+            roughness: r,
+            tint,
+        } => {
+            let name = if r.is_smooth() {
+                format!("dielectric eta {eta:.4}")
+            } else {
+                format!("roughdielectric eta {eta:.4} {}", roughness(r))
+            };
+            if *tint == glint::cpu::bsdf::Tint::NONE {
+                name
+            } else {
+                format!(
+                    "{name} specular_reflectance {} specular_transmittance {}",
+                    rgb(tint.reflect),
+                    rgb(tint.transmit)
+                )
+            }
         }
         Bsdf::Plastic(p) => format!(
             "plastic diffuse_reflectance {} specular_reflectance {} eta {:.4}{}",

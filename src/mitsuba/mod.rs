@@ -152,8 +152,16 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
             )
         }
         Bsdf::Conductor(c) => conductor(c, what, warnings),
-        Bsdf::Dielectric { eta, roughness } => {
-            let iors = format!("{}{}", float("int_ior", *eta), float("ext_ior", 1.0));
+        Bsdf::Dielectric {
+            eta,
+            roughness,
+            tint,
+        } => {
+            let mut iors = format!("{}{}", float("int_ior", *eta), float("ext_ior", 1.0));
+            if *tint != glint_cpu::bsdf::Tint::NONE {
+                iors += &rgb("specular_reflectance", tint.reflect);
+                iors += &rgb("specular_transmittance", tint.transmit);
+            }
             if roughness.is_smooth() {
                 format!(r#"<bsdf type="dielectric">{iors}</bsdf>"#)
             } else {

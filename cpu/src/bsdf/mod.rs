@@ -118,8 +118,13 @@ pub enum Bsdf {
     /// Smooth (delta) or GGX rough conductor. Two-sided.
     Conductor(ConductorParams),
     /// Smooth or GGX rough dielectric; `eta` = int_ior / ext_ior, the
-    /// outside being the side the geometric normal points to.
-    Dielectric { eta: f32, roughness: Roughness },
+    /// outside being the side the geometric normal points to; `tint`
+    /// Mitsuba's `specular_reflectance` and `specular_transmittance`.
+    Dielectric {
+        eta: f32,
+        roughness: Roughness,
+        tint: Tint,
+    },
     /// Mitsuba 3's smooth `plastic` (`plastic.rs`). Two-sided.
     Plastic(PlasticParams),
     /// Mitsuba 3's `roughplastic` (`roughplastic.rs`). Two-sided.
@@ -194,13 +199,47 @@ impl LaneSample<f32> {
     }
 }
 
+/// Mitsuba 3's `specular_reflectance` and `specular_transmittance` of a
+/// dielectric: factors on the reflected and on the transmitted part of
+/// its value (and of a sample's weight), its sampling unchanged, as
+/// Mitsuba's `dielectric` and `roughdielectric` apply them. 1 (none) by
+/// default; not physical unless 1, but Mitsuba scenes use them (tinted
+/// glass without a medium).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tint {
+    pub reflect: Vec3,
+    pub transmit: Vec3,
+}
+
+impl Tint {
+    pub const NONE: Tint = Tint {
+        reflect: Vec3::ONE,
+        transmit: Vec3::ONE,
+    };
+
+    /// The factor for the pair (wo, wi): reflection where both lie on
+    /// one side of the surface.
+    #[inline]
+    pub fn between(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if wo.z * wi.z > 0.0 {
+            self.reflect
+        } else {
+            self.transmit
+        }
+    }
+}
+
 impl Bsdf {
     /// f(wo, wi), without the cosine; zero for delta lobes.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
         match self {
             Bsdf::Diffuse { reflectance } => diffuse_eval(*reflectance, wo, wi),
             Bsdf::Conductor(c) => conductor_eval(c, wo, wi),
-            Bsdf::Dielectric { eta, roughness } => dielectric_eval(*eta, roughness, wo, wi),
+            Bsdf::Dielectric {
+                eta,
+                roughness,
+                tint,
+            } => dielectric_eval(*eta, roughness, wo, wi) * tint.between(wo, wi),
             Bsdf::Plastic(p) => plastic_eval(p, wo, wi),
             Bsdf::RoughPlastic(p) => roughplastic_eval(p, wo, wi),
             Bsdf::ThinDielectric { .. } => Vec3::ZERO,
@@ -228,7 +267,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse { .. } => diffuse_pdf(wo, wi),
             Bsdf::Conductor(c) => conductor_pdf(c, wo, wi),
-            Bsdf::Dielectric { eta, roughness } => dielectric_pdf(*eta, roughness, wo, wi),
+            Bsdf::Dielectric { eta, roughness, .. } => dielectric_pdf(*eta, roughness, wo, wi),
             Bsdf::Plastic(p) => plastic_pdf(p, wo, wi),
             Bsdf::RoughPlastic(p) => roughplastic_pdf(p, wo, wi),
             Bsdf::ThinDielectric { .. } => 0.0,
@@ -257,7 +296,14 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse { reflectance } => diffuse_sample(*reflectance, wo, u),
             Bsdf::Conductor(c) => conductor_sample(c, wo, u),
-            Bsdf::Dielectric { eta, roughness } => dielectric_sample(*eta, roughness, wo, uc, u),
+            Bsdf::Dielectric {
+                eta,
+                roughness,
+                tint,
+            } => dielectric_sample(*eta, roughness, wo, uc, u).map(|mut s| {
+                s.weight *= tint.between(wo, s.wi);
+                s
+            }),
             Bsdf::Plastic(p) => plastic_sample(p, wo, uc, u),
             Bsdf::RoughPlastic(p) => roughplastic_sample(p, wo, uc, u),
             Bsdf::ThinDielectric {
@@ -337,7 +383,7 @@ impl Bsdf {
         match self {
             Bsdf::Diffuse { .. } => false,
             Bsdf::Conductor(c) => c.roughness.is_smooth(),
-            Bsdf::Dielectric { eta, roughness } => dielectric_is_smooth(*eta, roughness),
+            Bsdf::Dielectric { eta, roughness, .. } => dielectric_is_smooth(*eta, roughness),
             // The Lambertian base is never a delta: only a smooth, fully
             // transmissive (thin-walled) non-metal is.
             Bsdf::Coated {

@@ -189,6 +189,7 @@ pub fn dielectric_albedo_reference(
     let a = alpha.max(super::SMOOTH_ALPHA_THRESHOLD * 1.001);
     let b = super::Bsdf::Dielectric {
         eta,
+        tint: super::Tint::NONE,
         roughness: super::Roughness {
             alpha_u: a,
             alpha_v: a,

@@ -8,7 +8,7 @@ use serde_json::{Map, Value};
 use crate::bsdf::coated::CoatParams;
 use crate::bsdf::plastic::PlasticParams;
 use crate::bsdf::roughplastic::RoughPlasticParams;
-use crate::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_ior, named_metal};
+use crate::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, Tint, named_ior, named_metal};
 use crate::scene::Material;
 
 /// Mitsuba 3's default GGX alpha for `roughconductor` and `roughdielectric`
@@ -287,6 +287,7 @@ fn bsdf_from_gltf(
         return Ok(Bsdf::Dielectric {
             eta: ior,
             roughness: rough,
+            tint: Tint::NONE,
         });
     }
     // A metallicRoughnessTexture can make a metallic-1 material a blend
@@ -335,6 +336,14 @@ const ROUGH_KEYS: &[&str] = &[
     "sample_visible",
 ];
 
+/// `dielectric`'s and `roughdielectric`'s own parameters.
+const DIELECTRIC_KEYS: [&str; 4] = [
+    "int_ior",
+    "ext_ior",
+    "specular_reflectance",
+    "specular_transmittance",
+];
+
 /// Parse `extras.bsdf` with Mitsuba 3's plugin names and parameters. Like
 /// Mitsuba, a parameter the type does not take is an error (it catches typos).
 pub fn bsdf_from_extras(v: &Value) -> Result<Bsdf, String> {
@@ -348,8 +357,8 @@ fn bsdf_parameters(ty: &str) -> Result<(&'static [&'static str], bool), String> 
         "diffuse" => (&["reflectance"], false),
         "conductor" => (&["eta", "k", "material", "specular_reflectance"], false),
         "roughconductor" => (&["eta", "k", "material", "specular_reflectance"], true),
-        "dielectric" => (&["int_ior", "ext_ior"], false),
-        "roughdielectric" => (&["int_ior", "ext_ior"], true),
+        "dielectric" => (&DIELECTRIC_KEYS, false),
+        "roughdielectric" => (&DIELECTRIC_KEYS, true),
         "thindielectric" => (
             &[
                 "int_ior",
@@ -450,6 +459,10 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             Ok(Bsdf::Dielectric {
                 eta: int_ior / ext_ior,
                 roughness,
+                tint: Tint {
+                    reflect: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+                    transmit: rgb(obj, "specular_transmittance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+                },
             })
         }
     }

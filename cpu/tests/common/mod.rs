@@ -482,6 +482,7 @@ pub fn chi2_cases() -> Vec<Case> {
                 bsdf: Bsdf::Dielectric {
                     eta: 1.5,
                     roughness: rough(au, av, sh),
+                    tint: glint_cpu::bsdf::Tint::NONE,
                 },
                 wo: dir_cos(c, PHI_O),
             });
@@ -493,6 +494,7 @@ pub fn chi2_cases() -> Vec<Case> {
             bsdf: Bsdf::Dielectric {
                 eta: 1.0 / 1.333,
                 roughness: rough(0.2, 0.2, Shadowing::Correlated),
+                tint: glint_cpu::bsdf::Tint::NONE,
             },
             wo: dir_cos(c, PHI_O),
         });
@@ -702,6 +704,7 @@ pub fn chi2_cases() -> Vec<Case> {
             bsdf: Bsdf::Dielectric {
                 eta: 1.5,
                 roughness: Roughness::SMOOTH,
+                tint: glint_cpu::bsdf::Tint::NONE,
             },
             wo: dir_cos(c, PHI_O),
         });
