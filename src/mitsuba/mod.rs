@@ -315,6 +315,21 @@ struct Mesh {
     other_frames: usize,
 }
 
+impl Mesh {
+    /// The warning where Mitsuba will orient an anisotropic lobe otherwise
+    /// than glint on some triangles (`other_frames`).
+    fn frames_warning(&self, what: &str) -> Option<String> {
+        (self.other_frames > 0).then(|| {
+            format!(
+                "{what}: anisotropic: on {} of {} triangles Mitsuba's tangent frame (dP/du of \
+                 the texture coordinates written) is not glint's (from the file's TANGENT or TEXCOORD_0)",
+                self.other_frames,
+                self.positions.len() / 3
+            )
+        })
+    }
+}
+
 /// Per-corner texture coordinates of triangle `p` whose dP/du is `t`
 /// projected onto its plane (normal `ng`): the map from the plane onto
 /// (t, ng x t) is an isometry, so Mitsuba's `dp_du` of them is that
@@ -623,14 +638,7 @@ pub fn export(scene: &Scene, opts: &RenderOptions, dir: &Path) -> Result<Export>
                 let name = format!("meshes/{id}.ply");
                 let normals = mesh.smooth.then_some(&mesh.normals[..]);
                 let uvs = (!mesh.uvs.is_empty()).then_some(&mesh.uvs[..]);
-                if mesh.other_frames > 0 {
-                    warnings.push(format!(
-                        "{what}: anisotropic: on {} of {} triangles Mitsuba's tangent frame (dP/du of \
-                         the texture coordinates written) is not glint's (from the file's TANGENT or TEXCOORD_0)",
-                        mesh.other_frames,
-                        mesh.positions.len() / 3
-                    ));
-                }
+                warnings.extend(mesh.frames_warning(&what));
                 write_ply(&dir.join(&name), &mesh.positions, normals, uvs)?;
                 files.push(name.clone());
                 let emitter = if emitting {
