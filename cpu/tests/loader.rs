@@ -658,6 +658,48 @@ fn dielectrics_take_mitsubas_tints() {
 }
 
 #[test]
+fn colours_take_mitsubas_dictionary_form() {
+    // Mitsuba's Python scenes write colours as {"type": "rgb", "value": ...}.
+    let b = bsdfs(
+        "rgb_dict",
+        vec![
+            json!({ "type": "diffuse", "reflectance": { "type": "rgb", "value": [0.2, 0.25, 0.7] } }),
+            json!({ "type": "diffuse", "reflectance": { "type": "rgb", "value": 0.3 } }),
+        ],
+    );
+    assert_eq!(
+        b[0],
+        Bsdf::Diffuse {
+            reflectance: Vec3::new(0.2, 0.25, 0.7)
+        }
+    );
+    assert_eq!(
+        b[1],
+        Bsdf::Diffuse {
+            reflectance: Vec3::splat(0.3)
+        }
+    );
+    for (bad, want) in [
+        (
+            json!({ "type": "diffuse", "reflectance": { "type": "rgb", "value": [2, 0, 0] } }),
+            "must be finite and in [0, 1]",
+        ),
+        (
+            json!({ "type": "diffuse", "reflectance": { "type": "rgb" } }),
+            "takes one \"value\"",
+        ),
+        (
+            json!({ "type": "diffuse", "reflectance": { "type": "bitmap", "filename": "a.png" } }),
+            "must be [r, g, b] or a number",
+        ),
+    ] {
+        let d = material_doc(vec![json!({ "extras": { "bsdf": bad } })]);
+        let e = parse_doc_err(&d, "bad_rgb_dict");
+        assert!(e.contains(want), "{e}");
+    }
+}
+
+#[test]
 fn extras_dielectrics_with_defaults_and_names() {
     let b = bsdfs(
         "extras_dielectric",

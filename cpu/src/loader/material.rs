@@ -638,6 +638,21 @@ fn rgb(obj: &Map<String, Value>, key: &str, lo: f32, hi: f32) -> Result<Option<V
         None => return Ok(None),
         Some(v) => v,
     };
+    // Mitsuba's dictionary form, {"type": "rgb", "value": [r, g, b]} (or a
+    // number), as its Python scenes write colours: the value inside.
+    let v = match v {
+        Value::Object(o) if o.get("type").and_then(Value::as_str) == Some("rgb") => {
+            match (o.get("value"), o.len()) {
+                (Some(inner), 2) => inner,
+                _ => {
+                    return Err(format!(
+                        "\"{key}\": an {{\"type\": \"rgb\"}} object takes one \"value\", got {v}"
+                    ));
+                }
+            }
+        }
+        v => v,
+    };
     let c = match v {
         Value::Number(n) => Vec3::splat(n.as_f64().unwrap_or(f64::NAN) as f32),
         Value::Array(a) if a.len() == 3 => {
