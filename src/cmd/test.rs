@@ -244,7 +244,6 @@ pub fn load(path: &Path) -> Result<Vec<Case>> {
     Ok(cases)
 }
 
-/// Run this binary with `args`: (exit code, stdout, stderr's last line).
 /// Run glint with `args`: its exit status, stdout, its last line on stderr
 /// that is not a warning, and its warnings (`FILE: ...`).
 fn glint(args: &[OsString]) -> Result<(i32, String, String, Vec<String>)> {

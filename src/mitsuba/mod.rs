@@ -43,6 +43,7 @@ use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
 use glint_cpu::camera::scene_camera;
 use glint_cpu::envmap::EnvMap;
 use glint_cpu::frame::Frame;
+use glint_cpu::loader::dpdu;
 use glint_cpu::scene::{NO_LIGHT, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use glint_cpu::{PunctualLight, RenderOptions, Scene};
 
@@ -347,24 +348,15 @@ fn tangent_uvs(p: [Vec3; 3], ng: Vec3, t: Vec3) -> [[f32; 2]; 3] {
 
 /// Whether Mitsuba 3 orients triangle `p` (texture coordinates `uv` as
 /// written, or none) as glint does (`t`: glint's tangent at each corner):
-/// Mitsuba takes dP/du of the coordinates, or of the barycentric
-/// parameterization (p1 - p0) where there are none or they are
-/// degenerate; glint interpolates its corners' tangents. Both then
-/// project onto the shading normal, so parallel is the same.
+/// Mitsuba takes dP/du of the coordinates (the loader's [`dpdu`]), or of
+/// the barycentric parameterization (p1 - p0) where there are none or
+/// they are degenerate; glint interpolates its corners' tangents. Both
+/// then project onto the shading normal, so parallel is the same.
 fn same_tangent(p: [Vec3; 3], uv: Option<[[f32; 2]; 3]>, t: [Vec3; 3]) -> bool {
-    let (dp0, dp1) = (p[1] - p[0], p[2] - p[0]);
-    let mut dp_du = dp0;
-    if let Some(uv) = uv {
-        let (d0, d1) = (
-            glam::Vec2::from(uv[1]) - glam::Vec2::from(uv[0]),
-            glam::Vec2::from(uv[2]) - glam::Vec2::from(uv[0]),
-        );
-        let det = d0.x * d1.y - d0.y * d1.x;
-        if det != 0.0 {
-            dp_du = (d1.y * dp0 - d0.y * dp1) / det;
-        }
-    }
-    let m = dp_du.normalize_or_zero();
+    let m = uv
+        .map(|uv| dpdu(p, uv.map(glam::Vec2::from)))
+        .filter(|d| *d != Vec3::ZERO)
+        .unwrap_or_else(|| (p[1] - p[0]).normalize_or_zero());
     m != Vec3::ZERO && t.iter().all(|t| t.normalize_or_zero().dot(m) > 1.0 - 1e-5)
 }
 
@@ -387,25 +379,26 @@ fn mesh_of(scene: &Scene, m: u32, emitting: bool, uv_set: Option<u32>) -> Option
         let [a, b, c] = t.vertices();
         let ng = t.geometric_normal().normalize_or_zero();
         // glint's tangent at each corner (the frame of the geometric
-        // normal where the triangle holds none).
-        let tangents = if t.flags & TRI_TANGENTS != 0 {
-            scene.shading_of(i).t.map(|c| Vec3::from_slice(&c[..3]))
-        } else {
-            [Frame::from_normal(ng).s; 3]
-        };
-        let uv = match uv_set {
-            Some(set) => {
+        // normal where the triangle holds none), for an anisotropic lobe.
+        let tangents = aniso.then(|| {
+            if t.flags & TRI_TANGENTS != 0 {
+                scene.shading_of(i).t.map(|c| Vec3::from_slice(&c[..3]))
+            } else {
+                [Frame::from_normal(ng).s; 3]
+            }
+        });
+        let uv = match (uv_set, tangents) {
+            (Some(set), _) => {
                 let uv = &scene.textures.uvs[i].uv;
                 let o = if set == 1 { 2 } else { 0 };
                 Some([0, 1, 2].map(|k| [uv[k][o], uv[k][o + 1]]))
             }
-            None if aniso => {
-                let mean = tangents[0] + tangents[1] + tangents[2];
-                Some(tangent_uvs([a, b, c], ng, mean))
-            }
-            None => None,
+            (None, Some(ts)) => Some(tangent_uvs([a, b, c], ng, ts[0] + ts[1] + ts[2])),
+            (None, None) => None,
         };
-        if aniso && !same_tangent([a, b, c], uv, tangents) {
+        if let Some(ts) = tangents
+            && !same_tangent([a, b, c], uv, ts)
+        {
             mesh.other_frames += 1;
         }
         mesh.uvs.extend(uv.into_iter().flatten());

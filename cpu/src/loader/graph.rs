@@ -715,7 +715,7 @@ fn declared_triangles(root: &gltf::json::Root, mesh: &gltf::Mesh) -> u64 {
 /// `Triangle::InteractionFromIntersection`): solve
 /// [dp02 dp12] = [dpdu dpdv] [[du02 du12] [dv02 dv12]]. Zero when the UV
 /// mapping is degenerate or not finite.
-fn dpdu(p: [Vec3; 3], uv: [Vec2; 3]) -> Vec3 {
+pub fn dpdu(p: [Vec3; 3], uv: [Vec2; 3]) -> Vec3 {
     let (duv02, duv12) = (uv[0] - uv[2], uv[1] - uv[2]);
     let (dp02, dp12) = (p[0] - p[2], p[1] - p[2]);
     let det = duv02.x * duv12.y - duv02.y * duv12.x;

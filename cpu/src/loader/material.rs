@@ -336,7 +336,8 @@ const ROUGH_KEYS: &[&str] = &[
     "sample_visible",
 ];
 
-/// `dielectric`'s and `roughdielectric`'s own parameters.
+/// The dielectrics' own parameters (`dielectric`, `roughdielectric`,
+/// `thindielectric`).
 const DIELECTRIC_KEYS: [&str; 4] = [
     "int_ior",
     "ext_ior",
@@ -359,15 +360,7 @@ fn bsdf_parameters(ty: &str) -> Result<(&'static [&'static str], bool), String> 
         "roughconductor" => (&["eta", "k", "material", "specular_reflectance"], true),
         "dielectric" => (&DIELECTRIC_KEYS, false),
         "roughdielectric" => (&DIELECTRIC_KEYS, true),
-        "thindielectric" => (
-            &[
-                "int_ior",
-                "ext_ior",
-                "specular_reflectance",
-                "specular_transmittance",
-            ],
-            false,
-        ),
+        "thindielectric" => (&DIELECTRIC_KEYS, false),
         "plastic" => (
             &[
                 "diffuse_reflectance",
@@ -431,11 +424,15 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
                 .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
         }),
         "conductor" | "roughconductor" => Ok(Bsdf::Conductor(parse_conductor(obj, roughness)?)),
-        "thindielectric" => Ok(Bsdf::ThinDielectric {
-            eta: relative_ior(obj, DEFAULT_INT_IOR)?,
-            reflectance: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
-            transmittance: rgb(obj, "specular_transmittance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
-        }),
+        "thindielectric" => {
+            let eta = relative_ior(obj, DEFAULT_INT_IOR)?;
+            let tint = parse_tint(obj)?;
+            Ok(Bsdf::ThinDielectric {
+                eta,
+                reflectance: tint.reflect,
+                transmittance: tint.transmit,
+            })
+        }
         "plastic" => Ok(Bsdf::Plastic(parse_plastic(obj)?)),
         "roughplastic" => {
             if roughness.alpha_u != roughness.alpha_v {
@@ -453,19 +450,21 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
             }))
         }
 
-        _ => {
-            let int_ior = ior(obj, "int_ior")?.unwrap_or(DEFAULT_INT_IOR);
-            let ext_ior = ior(obj, "ext_ior")?.unwrap_or(DEFAULT_EXT_IOR);
-            Ok(Bsdf::Dielectric {
-                eta: int_ior / ext_ior,
-                roughness,
-                tint: Tint {
-                    reflect: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
-                    transmit: rgb(obj, "specular_transmittance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
-                },
-            })
-        }
+        _ => Ok(Bsdf::Dielectric {
+            eta: relative_ior(obj, DEFAULT_INT_IOR)?,
+            roughness,
+            tint: parse_tint(obj)?,
+        }),
     }
+}
+
+/// A dielectric's `specular_reflectance` and `specular_transmittance`
+/// (each in [0, 1], default 1), Mitsuba's factors on its two parts.
+fn parse_tint(obj: &Map<String, Value>) -> Result<Tint, String> {
+    Ok(Tint {
+        reflect: rgb(obj, "specular_reflectance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+        transmit: rgb(obj, "specular_transmittance", 0.0, 1.0)?.unwrap_or(Vec3::ONE),
+    })
 }
 
 /// Mitsuba 3's `twosided` around one opaque BSDF (its one nested object,

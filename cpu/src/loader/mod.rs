@@ -43,7 +43,7 @@ use std::time::Instant;
 use glam::{Mat4, Vec3};
 use serde_json::Value;
 
-pub use graph::MAX_TRIANGLES;
+pub use graph::{MAX_TRIANGLES, dpdu};
 pub use material::{
     DEFAULT_ALPHA, DEFAULT_EXT_IOR, DEFAULT_INT_IOR, DEFAULT_REFLECTANCE, bsdf_from_extras,
     conductor_from_f0, gltf_default_material,
