@@ -2,6 +2,7 @@
 //! bounding volume hierarchies"), flattened into tinybvh's node layout.
 
 use glam::Vec3A;
+use rayon::prelude::*;
 
 use super::{BvhNode, MAX_DEPTH, MAX_LEAF_SIZE};
 use crate::scene::Triangle;
@@ -103,108 +104,236 @@ struct Prim {
     index: u32,
 }
 
-/// A node waiting to be split: triangles `prims[first..first + count]`.
-struct Task {
-    node: usize,
-    first: usize,
-    count: usize,
-    depth: usize,
+impl Prim {
+    fn of(t: &Triangle, index: u32) -> Prim {
+        let mut bounds = Aabb::EMPTY;
+        for p in t.vertices() {
+            bounds.grow_point(p.into());
+        }
+        // The loader rejects non-finite positions; should one get here,
+        // it is binned as a point at the origin so it cannot poison the
+        // bounds of its neighbours (the triangle test never hits it).
+        if !(bounds.min.is_finite() && bounds.max.is_finite()) {
+            bounds = Aabb {
+                min: Vec3A::ZERO,
+                max: Vec3A::ZERO,
+            };
+        }
+        Prim { bounds, index }
+    }
 }
 
 pub(super) fn build(tris: &[Triangle], cost: LeafCost) -> (Vec<BvhNode>, Vec<u32>) {
     build_capped(tris, MAX_DEPTH, cost)
 }
 
+/// Subtrees of at least this many triangles split their two halves across
+/// threads (rayon); smaller ones are built on the thread that reaches them.
+const PAR_MIN: usize = 4096;
+
 /// Every leaf ends at depth <= max(max_depth, ceil(log2 n)).
+///
+/// The node layout is depth first, left child first, a node's two children
+/// side by side (allocated when the node is split), so a subtree's nodes
+/// stay close in memory. It is the same whatever the number of threads:
+/// subtrees built in parallel are placed afterwards, in that order.
 fn build_capped(tris: &[Triangle], max_depth: usize, cost: LeafCost) -> (Vec<BvhNode>, Vec<u32>) {
     if tris.is_empty() {
         return (Vec::new(), Vec::new());
     }
-    let mut prims: Vec<Prim> = tris
-        .iter()
-        .zip(0u32..)
-        .map(|(t, index)| {
-            let mut bounds = Aabb::EMPTY;
-            for p in t.vertices() {
-                bounds.grow_point(p.into());
-            }
-            // The loader rejects non-finite positions; should one get here,
-            // it is binned as a point at the origin so it cannot poison the
-            // bounds of its neighbours (the triangle test never hits it).
-            if !(bounds.min.is_finite() && bounds.max.is_finite()) {
-                bounds = Aabb {
-                    min: Vec3A::ZERO,
-                    max: Vec3A::ZERO,
-                };
-            }
-            Prim { bounds, index }
-        })
+    let mut prims: Vec<Prim> = (0..tris.len())
+        .into_par_iter()
+        .map(|i| Prim::of(&tris[i], i as u32))
         .collect();
+    // One pass for the root; every other node's extent comes from its
+    // parent's partition.
+    let mut root = Extent::EMPTY;
+    for p in &prims {
+        root.grow(p);
+    }
+    let ctx = Ctx { max_depth, cost };
+    let tree = grow_parallel(&mut prims, 0, root, 0, ctx);
     // A binary tree with at least one triangle per leaf has at most 2n - 1 nodes.
     let mut nodes = Vec::with_capacity(2 * tris.len() - 1);
     nodes.push(BvhNode::default());
-
-    // Depth-first, left child first: a subtree's nodes stay close in memory.
-    let mut tasks = vec![Task {
-        node: 0,
-        first: 0,
-        count: tris.len(),
-        depth: 0,
-    }];
-    while let Some(task) = tasks.pop() {
-        let range = task.first..task.first + task.count;
-        let mut bounds = Aabb::EMPTY;
-        let mut centroids = Aabb::EMPTY;
-        for p in &prims[range.clone()] {
-            bounds.grow(&p.bounds);
-            centroids.grow_point(p.bounds.centroid());
-        }
-        let node = &mut nodes[task.node];
-        node.aabb_min = bounds.min.into();
-        node.aabb_max = bounds.max.into();
-
-        let split = choose_split(
-            &prims[range.clone()],
-            &bounds,
-            &centroids,
-            task.depth,
-            max_depth,
-            cost,
-        );
-        let left_count = match split {
-            None => {
-                node.left_or_first = task.first as u32;
-                node.tri_count = task.count as u32;
-                continue;
-            }
-            Some(Split::Sah { axis, plane }) => {
-                partition(&mut prims[range], axis, plane, &centroids)
-            }
-            Some(Split::Median { axis }) => {
-                median(&mut prims[range], axis);
-                task.count / 2
-            }
-        };
-        debug_assert!(left_count > 0 && left_count < task.count);
-        let left = nodes.len();
-        nodes[task.node].left_or_first = left as u32;
-        nodes[task.node].tri_count = 0;
-        nodes.push(BvhNode::default());
-        nodes.push(BvhNode::default());
-        tasks.push(Task {
-            node: left + 1,
-            first: task.first + left_count,
-            count: task.count - left_count,
-            depth: task.depth + 1,
-        });
-        tasks.push(Task {
-            node: left,
-            first: task.first,
-            count: left_count,
-            depth: task.depth + 1,
-        });
-    }
+    tree.place(&mut nodes, 0);
     (nodes, prims.iter().map(|p| p.index).collect())
+}
+
+/// What every node of one build shares.
+#[derive(Clone, Copy)]
+struct Ctx {
+    max_depth: usize,
+    cost: LeafCost,
+}
+
+/// A node's triangles' bounds and the bounds of their centroids (what the
+/// binning spans).
+#[derive(Clone, Copy)]
+struct Extent {
+    bounds: Aabb,
+    centroids: Aabb,
+}
+
+impl Extent {
+    const EMPTY: Extent = Extent {
+        bounds: Aabb::EMPTY,
+        centroids: Aabb::EMPTY,
+    };
+
+    #[inline(always)]
+    fn grow(&mut self, p: &Prim) {
+        self.bounds.grow(&p.bounds);
+        self.centroids.grow_point(p.bounds.centroid());
+    }
+
+    /// The node of these triangles, its children or triangles not set.
+    fn node(&self) -> BvhNode {
+        BvhNode {
+            aabb_min: self.bounds.min.into(),
+            aabb_max: self.bounds.max.into(),
+            ..BvhNode::default()
+        }
+    }
+}
+
+/// Splits a node's triangles (`prims`, of depth `depth`) in place: the left
+/// side's count and both sides' extents, or `None` for a leaf.
+fn split_node(
+    prims: &mut [Prim],
+    ext: &Extent,
+    depth: usize,
+    ctx: Ctx,
+) -> Option<(usize, [Extent; 2])> {
+    let split = choose_split(
+        prims,
+        &ext.bounds,
+        &ext.centroids,
+        depth,
+        ctx.max_depth,
+        ctx.cost,
+    )?;
+    let (left_count, sides) = match split {
+        Split::Sah { axis, plane } => partition(prims, axis, plane, &ext.centroids),
+        Split::Median { axis } => {
+            median(prims, axis);
+            let mid = prims.len() / 2;
+            let mut sides = [Extent::EMPTY; 2];
+            for (side, half) in sides.iter_mut().zip([&prims[..mid], &prims[mid..]]) {
+                for p in half {
+                    side.grow(p);
+                }
+            }
+            (mid, sides)
+        }
+    };
+    debug_assert!(left_count > 0 && left_count < prims.len());
+    Some((left_count, sides))
+}
+
+/// Builds the subtree of `prims` (the triangles from `first` on) into
+/// `out`, its root at `slot`.
+fn grow_serial(
+    prims: &mut [Prim],
+    first: usize,
+    ext: Extent,
+    depth: usize,
+    ctx: Ctx,
+    out: &mut Vec<BvhNode>,
+    slot: usize,
+) {
+    let mut node = ext.node();
+    match split_node(prims, &ext, depth, ctx) {
+        None => {
+            node.left_or_first = first as u32;
+            node.tri_count = prims.len() as u32;
+            out[slot] = node;
+        }
+        Some((left_count, [left, right])) => {
+            let children = out.len();
+            node.left_or_first = children as u32;
+            out[slot] = node;
+            out.push(BvhNode::default());
+            out.push(BvhNode::default());
+            let (lp, rp) = prims.split_at_mut(left_count);
+            grow_serial(lp, first, left, depth + 1, ctx, out, children);
+            grow_serial(
+                rp,
+                first + left_count,
+                right,
+                depth + 1,
+                ctx,
+                out,
+                children + 1,
+            );
+        }
+    }
+}
+
+/// A subtree built apart from the tree it belongs to.
+enum Subtree {
+    /// Its nodes in the build's layout, the subtree's root first: child
+    /// references count from that root (the root's children at 1 and 2).
+    Flat(Vec<BvhNode>),
+    /// A node whose two subtrees were built on their own.
+    Split(BvhNode, Box<[Subtree; 2]>),
+}
+
+impl Subtree {
+    /// Writes the subtree into `out`, its root at `slot` and its other
+    /// nodes appended, child references rebased.
+    fn place(self, out: &mut Vec<BvhNode>, slot: usize) {
+        match self {
+            Subtree::Flat(nodes) => {
+                // Local index i >= 1 lands at base + i - 1.
+                let base = out.len() as u32 - 1;
+                let at = out.len();
+                out.extend_from_slice(&nodes[1..]);
+                out[slot] = nodes[0];
+                for i in std::iter::once(slot).chain(at..out.len()) {
+                    if out[i].tri_count == 0 {
+                        out[i].left_or_first += base;
+                    }
+                }
+            }
+            Subtree::Split(mut node, children) => {
+                let at = out.len();
+                node.left_or_first = at as u32;
+                out[slot] = node;
+                out.push(BvhNode::default());
+                out.push(BvhNode::default());
+                let [left, right] = *children;
+                left.place(out, at);
+                right.place(out, at + 1);
+            }
+        }
+    }
+}
+
+/// [`grow_serial`], the two sides of a large node built side by side.
+fn grow_parallel(prims: &mut [Prim], first: usize, ext: Extent, depth: usize, ctx: Ctx) -> Subtree {
+    if prims.len() < PAR_MIN {
+        let mut nodes = vec![BvhNode::default()];
+        grow_serial(prims, first, ext, depth, ctx, &mut nodes, 0);
+        return Subtree::Flat(nodes);
+    }
+    let mut node = ext.node();
+    match split_node(prims, &ext, depth, ctx) {
+        Some((left_count, [left, right])) => {
+            let (lp, rp) = prims.split_at_mut(left_count);
+            let (l, r) = rayon::join(
+                || grow_parallel(lp, first, left, depth + 1, ctx),
+                || grow_parallel(rp, first + left_count, right, depth + 1, ctx),
+            );
+            Subtree::Split(node, Box::new([l, r]))
+        }
+        // (Not reached: the leaf-size cap splits a node this large.)
+        None => {
+            node.left_or_first = first as u32;
+            node.tri_count = prims.len() as u32;
+            Subtree::Flat(vec![node])
+        }
+    }
 }
 
 enum Split {
@@ -372,22 +501,32 @@ fn bin_index(x: f32) -> usize {
     }
 }
 
-/// Moves the triangles left of the plane to the front; returns how many.
-fn partition(prims: &mut [Prim], axis: usize, plane: usize, centroids: &Aabb) -> usize {
+/// Moves the triangles left of the plane to the front; returns how many,
+/// and the extents of the two sides (gathered on the way, so a child needs
+/// no pass of its own for them).
+fn partition(
+    prims: &mut [Prim],
+    axis: usize,
+    plane: usize,
+    centroids: &Aabb,
+) -> (usize, [Extent; 2]) {
     let lo = centroids.min[axis];
     let scale = BINS as f32 / (centroids.max[axis] - lo);
     let is_left = |p: &Prim| bin_of(p.bounds.centroid()[axis], lo, scale) <= plane;
+    let (mut left, mut right) = (Extent::EMPTY, Extent::EMPTY);
     let mut l = 0;
     let mut r = prims.len();
     while l < r {
         if is_left(&prims[l]) {
+            left.grow(&prims[l]);
             l += 1;
         } else {
             r -= 1;
+            right.grow(&prims[l]);
             prims.swap(l, r);
         }
     }
-    l
+    (l, [left, right])
 }
 
 /// Puts the `len / 2` smallest centroids along `axis` first. Ties are broken
@@ -450,6 +589,76 @@ mod tests {
                 }
             }
             assert!(seen.iter().all(|&s| s == 1));
+        }
+    }
+
+    /// Triangles scattered by a small LCG: clusters and gaps, so the SAH
+    /// and the size cap both split.
+    fn scattered(n: usize) -> Vec<Triangle> {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..n)
+            .map(|i| {
+                let c = [next() * 10.0, next() * (1 + i % 7) as f32, next()];
+                let mut v = |k: usize| {
+                    [
+                        c[0] + next() * 0.1,
+                        c[1] + next() * 0.1 * k as f32,
+                        c[2] + next() * 0.1,
+                    ]
+                };
+                Triangle {
+                    p0: v(0),
+                    p1: v(1),
+                    p2: v(2),
+                    ..Default::default()
+                }
+            })
+            .collect()
+    }
+
+    /// The parallel build gives the one-thread layout node for node, on
+    /// any number of threads: subtrees built apart are placed where the
+    /// depth-first allocation puts them.
+    #[test]
+    fn parallel_build_is_the_serial_layout() {
+        let tris = scattered(5 * PAR_MIN + 123);
+        for cost in [LeafCost::Triangles, LeafCost::Blocks] {
+            // The whole tree on one thread, without `grow_parallel`.
+            let mut prims: Vec<Prim> = tris
+                .iter()
+                .zip(0u32..)
+                .map(|(t, i)| Prim::of(t, i))
+                .collect();
+            let mut root = Extent::EMPTY;
+            for p in &prims {
+                root.grow(p);
+            }
+            let ctx = Ctx {
+                max_depth: MAX_DEPTH,
+                cost,
+            };
+            let mut serial = vec![BvhNode::default()];
+            grow_serial(&mut prims, 0, root, 0, ctx, &mut serial, 0);
+            let serial_order: Vec<u32> = prims.iter().map(|p| p.index).collect();
+            assert!(serial.len() > 2 * tris.len() / MAX_LEAF_SIZE);
+            for threads in [1, 2, 5] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let (nodes, order) = pool.install(|| build(&tris, cost));
+                assert_eq!(order, serial_order, "{cost:?}, {threads} threads");
+                assert!(
+                    nodes == serial,
+                    "{cost:?}, {threads} threads: the nodes differ"
+                );
+            }
         }
     }
 
