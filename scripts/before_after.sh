@@ -2,7 +2,8 @@
 # Before/after in one run: the release binary of an earlier commit against this
 # tree's, on the same machine in the same session, renders alternating, so the
 # machine's load falls on both alike. For every bundled scene both commits have:
-#   - a CPU reference from this tree at REF_SPP (cached under the output folder),
+#   - a CPU reference from this tree at REF_SPP (cached under the output folder
+#     by the after binary's digest),
 #   - ROUNDS rounds of: before GPU, after GPU, before CPU, after CPU, each at SPP
 #     with the round's seed, timed by the render's own --stats (render seconds,
 #     set-up and pipeline compilation excluded),
@@ -51,10 +52,13 @@ summary="$out/summary.tsv"
 : > "$summary"
 header="\`${AFTER_BIN:+AFTER_BIN=$AFTER_BIN }scripts/before_after.sh $rev $spp $width $rounds $ref_spp\`: before = $(git rev-parse --short "$rev"), after = $(git rev-parse --short HEAD)$(git diff --quiet HEAD || echo ' with uncommitted changes'), $(date -u +%Y-%m-%d), $(nproc) cores, load average $(cut -d' ' -f1-3 /proc/loadavg) at the start."
 
+after_digest=$(sha256sum "$after" | cut -c1-12)
 for scene in assets/*.gltf assets/*.glb; do
   [ -e "$src/$scene" ] || continue
   name=$(basename "${scene%.*}")
-  ref="$out/$name-ref-$width-$ref_spp.exr"
+  # Named by the after binary's digest: a reference another build made (say,
+  # before a change of a material's colour) would be stale.
+  ref="$out/$name-ref-$width-$ref_spp-$after_digest.exr"
   if [ ! -e "$ref" ]; then
     "$after" render "$scene" --width "$width" --spp "$ref_spp" --backend cpu --seed 1000 -o "$ref" 2> /dev/null
   fi
