@@ -87,6 +87,14 @@ pub struct InfoArgs {
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     pub background: Option<[f32; 3]>,
 
+    /// Energy compensation for every rough model, as `render` takes it
+    /// (a material's own extras.bsdf `multiscatter` wins).
+    #[arg(long, value_enum, value_name = "on|off", default_value_t = OnOff::Off)]
+    pub multiscatter: OnOff,
+
+    #[command(flatten)]
+    pub env: EnvmapArgs,
+
     /// Every warning is an error.
     #[arg(long)]
     pub strict: bool,
@@ -307,28 +315,9 @@ pub struct RenderOpts {
     #[arg(long, value_name = "R,G,B", value_parser = parse_rgb)]
     pub background: Option<[f32; 3]>,
 
-    /// Equirectangular environment light (.exr or .hdr, linear RGB, +Y up),
-    /// importance sampled; replaces the scene's background.
-    #[arg(long, value_name = "FILE")]
-    pub envmap: Option<PathBuf>,
-
-    /// Multiplies the environment map's radiance.
-    #[arg(
-        long,
-        value_name = "S",
-        default_value_t = 1.0,
-        allow_negative_numbers = true
-    )]
-    pub envmap_scale: f32,
-
-    /// Turns the environment map about +Y by this many degrees.
-    #[arg(
-        long,
-        value_name = "DEG",
-        default_value_t = 0.0,
-        allow_negative_numbers = true
-    )]
-    pub envmap_rotate: f32,
+    #[command(flatten)]
+    #[serde(flatten)]
+    pub env: EnvmapArgs,
 
     /// Every warning is an error.
     #[arg(long)]
@@ -423,6 +412,70 @@ impl RenderOpts {
             }
         }
         Ok(args)
+    }
+}
+
+/// The environment map, as `render` and `info` take it.
+#[derive(clap::Args, Clone, Debug, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case")] // clap's long names
+pub struct EnvmapArgs {
+    /// Equirectangular environment light (.exr or .hdr, linear RGB, +Y up),
+    /// importance sampled; replaces the scene's background.
+    #[arg(long, value_name = "FILE")]
+    pub envmap: Option<PathBuf>,
+
+    /// Multiplies the environment map's radiance.
+    #[arg(
+        long,
+        value_name = "S",
+        default_value_t = 1.0,
+        allow_negative_numbers = true
+    )]
+    pub envmap_scale: f32,
+
+    /// Turns the environment map about +Y by this many degrees.
+    #[arg(
+        long,
+        value_name = "DEG",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub envmap_rotate: f32,
+}
+
+impl EnvmapArgs {
+    /// The options' own rules, with whether `--background` is given too:
+    /// not both; a finite scale >= 0 and a finite turn.
+    pub fn check(&self, background: bool) -> anyhow::Result<()> {
+        if self.envmap.is_some() && background {
+            anyhow::bail!(
+                "give --background or --envmap, not both (the environment map is the background)"
+            );
+        }
+        if !(self.envmap_scale.is_finite() && self.envmap_scale >= 0.0) {
+            anyhow::bail!(
+                "--envmap-scale {} is out of range (a finite number >= 0)",
+                self.envmap_scale
+            );
+        }
+        if !self.envmap_rotate.is_finite() {
+            anyhow::bail!(
+                "--envmap-rotate {} is not a finite number of degrees",
+                self.envmap_rotate
+            );
+        }
+        Ok(())
+    }
+
+    /// What the scene preparation takes.
+    pub fn source(&self) -> Option<glint::cpu::prepare::EnvmapSource> {
+        self.envmap
+            .as_ref()
+            .map(|path| glint::cpu::prepare::EnvmapSource {
+                path: path.clone(),
+                scale: self.envmap_scale,
+                rotate_degrees: self.envmap_rotate,
+            })
     }
 }
 
@@ -770,9 +823,11 @@ mod tests {
             blas_parts: 16,
             time_limit: Some(2.5),
             background: Some([0.1, 0.25, 3.0]),
-            envmap: Some(PathBuf::from("sky dir/sky.hdr")),
-            envmap_scale: 0.3,
-            envmap_rotate: -45.5,
+            env: EnvmapArgs {
+                envmap: Some(PathBuf::from("sky dir/sky.hdr")),
+                envmap_scale: 0.3,
+                envmap_rotate: -45.5,
+            },
             strict: true,
             allow_any_path: true,
         };

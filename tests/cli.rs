@@ -776,6 +776,66 @@ fn envmap_file_renders_like_the_same_constant_background() {
     assert_one_line_error(&out, "missing.exr");
 }
 
+/// `glint info` takes the options that change what a scene loads into as
+/// `render` takes them: `--multiscatter` shows on every rough model, an
+/// environment map as the background (its size and turn), and the same
+/// rules hold (not both a background and an environment map, a file
+/// that is not there).
+#[test]
+fn info_takes_the_scene_options_render_takes() {
+    let dir = scratch("info-options");
+    let env = dir.join("sky.exr");
+    image::Rgb32FImage::from_pixel(16, 8, image::Rgb([0.5f32, 0.5, 0.5]))
+        .save(&env)
+        .unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/roughconductor.gltf");
+    let info = |extra: &[&str]| {
+        glint()
+            .arg("info")
+            .arg(&scene)
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let text = |out: &Output| {
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout).into_owned()
+    };
+    let plain = text(&info(&[]));
+    assert!(
+        plain.contains("alpha_u 0.3000 alpha_v 0.0500 eta"),
+        "{plain}"
+    );
+    assert!(!plain.contains("multiscatter"), "{plain}");
+    assert!(plain.contains("background 0.2000,0.2000,0.2500"), "{plain}");
+    let with = text(&info(&[
+        "--multiscatter",
+        "on",
+        "--envmap",
+        env.to_str().unwrap(),
+        "--envmap-rotate",
+        "30",
+    ]));
+    assert!(
+        with.contains("alpha_u 0.3000 alpha_v 0.0500 multiscatter eta"),
+        "{with}"
+    );
+    assert!(
+        with.contains("background an environment map of 16x8 texels turned 30.00 degrees about +Y"),
+        "{with}"
+    );
+    let out = info(&["--envmap", env.to_str().unwrap(), "--background", "1,1,1"]);
+    assert_one_line_error(&out, "not both");
+    let out = info(&["--envmap-scale", "-1"]);
+    assert_one_line_error(&out, "--envmap-scale -1 is out of range");
+    let out = info(&["--envmap", "missing.exr"]);
+    assert_one_line_error(&out, "missing.exr");
+}
+
 /// A closed standard output (`glint info scene | head -1`) ends glint as it
 /// ends a Unix filter: quietly, status 141 (128 + SIGPIPE), not as an
 /// internal error.

@@ -6,15 +6,22 @@ use std::mem::size_of;
 use anyhow::Result;
 use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness};
 use glint::cpu::lights::{GpuEmitter, GpuLight};
+use glint::cpu::prepare::PrepareOptions;
 use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF, MaterialTextures, TexRef};
 use glint::cpu::{Bvh4Node, GpuMaterial, PunctualLight, Scene, Triangle, TriangleShading};
 
-use super::{check_scene_path, load_quiet, one_line};
-use crate::cli::InfoArgs;
+use super::{load_quiet, one_line};
+use crate::cli::{InfoArgs, OnOff};
 
 pub fn run(args: &InfoArgs) -> Result<()> {
-    check_scene_path(&args.scene)?;
-    let prepared = load_quiet(&args.scene, args.allow_any_path, args.background)?;
+    args.env.check(args.background.is_some())?;
+    let options = PrepareOptions {
+        allow_any_path: args.allow_any_path,
+        multiscatter: args.multiscatter == OnOff::On,
+        background: args.background.map(glam::Vec3::from),
+        envmap: args.env.source(),
+    };
+    let prepared = load_quiet(&args.scene, &options)?;
     let (scene, simplified) = (prepared.scene, prepared.simplified);
     if args.strict
         && let Some(w) = scene.warnings.first()
@@ -33,10 +40,15 @@ fn rgb(v: glam::Vec3) -> String {
 }
 
 fn roughness(r: &Roughness) -> String {
-    if r.alpha_u == r.alpha_v {
+    let alpha = if r.alpha_u == r.alpha_v {
         format!("alpha {:.4}", r.alpha_u)
     } else {
         format!("alpha_u {:.4} alpha_v {:.4}", r.alpha_u, r.alpha_v)
+    };
+    if r.multiscatter {
+        format!("{alpha} multiscatter")
+    } else {
+        alpha
     }
 }
 
@@ -360,11 +372,19 @@ fn textures(o: &mut String, s: &Scene) {
 
 fn lights(o: &mut String, s: &Scene) {
     let emitters = s.emitter_triangles().len();
+    let background = match &s.envmap {
+        Some(env) => format!(
+            "an environment map of {}x{} texels turned {:.2} degrees about +Y",
+            env.width,
+            env.height,
+            env.rotation.to_degrees()
+        ),
+        None => rgb(s.background),
+    };
     let _ = writeln!(
         o,
-        "lights: {emitters} emissive triangles, {} punctual, background {}",
+        "lights: {emitters} emissive triangles, {} punctual, background {background}",
         s.lights.len(),
-        rgb(s.background)
     );
     for (i, l) in s.lights.iter().enumerate() {
         let d = match l {

@@ -23,7 +23,7 @@ use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 use glint::backend::{self, Backend, BackendRender, GpuOptions};
 use glint::cpu::exr_file::{RadianceImage, RenderMeta};
-use glint::cpu::prepare::{EnvmapSource, PrepareOptions, Prepared};
+use glint::cpu::prepare::{PrepareOptions, Prepared};
 use glint::cpu::{Film, OutputFormat, RenderOptions, Scene};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -255,48 +255,19 @@ pub fn prepare_options(o: &RenderOpts) -> PrepareOptions {
         allow_any_path: o.allow_any_path,
         multiscatter: o.multiscatter == OnOff::On,
         background: o.background.map(Vec3::from),
-        envmap: o.envmap.as_ref().map(|path| EnvmapSource {
-            path: path.clone(),
-            scale: o.envmap_scale,
-            rotate_degrees: o.envmap_rotate,
-        }),
+        envmap: o.env.source(),
     }
 }
 
 fn check_envmap_opts(o: &RenderOpts) -> Result<()> {
-    if o.envmap.is_some() && o.background.is_some() {
-        bail!("give --background or --envmap, not both (the environment map is the background)");
-    }
-    if !(o.envmap_scale.is_finite() && o.envmap_scale >= 0.0) {
-        bail!(
-            "--envmap-scale {} is out of range (a finite number >= 0)",
-            o.envmap_scale
-        );
-    }
-    if !o.envmap_rotate.is_finite() {
-        bail!(
-            "--envmap-rotate {} is not a finite number of degrees",
-            o.envmap_rotate
-        );
-    }
-    Ok(())
+    o.env.check(o.background.is_some())
 }
 
-/// The prepared scene of `path` with `--allow-any-path` and
-/// `--background` as given and the other options at their defaults,
-/// without printing the warnings (they stay in `Scene::warnings`).
-pub fn load_quiet(
-    path: &Path,
-    allow_any_path: bool,
-    background: Option<[f32; 3]>,
-) -> Result<Prepared> {
+/// The prepared scene of `path` with `options`, without printing the
+/// warnings (they stay in `Scene::warnings`).
+pub fn load_quiet(path: &Path, options: &PrepareOptions) -> Result<Prepared> {
     check_scene_path(path)?;
-    let options = PrepareOptions {
-        allow_any_path,
-        background: background.map(Vec3::from),
-        ..Default::default()
-    };
-    Ok(glint::cpu::prepare::prepare(path, &options)?)
+    Ok(glint::cpu::prepare::prepare(path, options)?)
 }
 
 /// Print each warning as `glint: warning: FILE: ...`; with `strict`, the
