@@ -17,7 +17,7 @@ mod common;
 use glam::{Vec2, Vec3};
 use glint_cpu::bsdf::clearcoat::{decode_coat_normal, encode_coat_normal};
 use glint_cpu::bsdf::coated::CoatParams;
-use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_metal};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, Tint, named_metal};
 use glint_cpu::{GpuMaterial, Material};
 
 use glint::cpu::sampling::Pcg32;
@@ -194,8 +194,10 @@ fn materials() -> Vec<(u32, Bsdf)> {
             6,
             Bsdf::ThinDielectric {
                 eta,
-                reflectance: Vec3::new(1.0, 0.8, 0.6),
-                transmittance: Vec3::new(0.9, 0.7, 0.5),
+                tint: Tint {
+                    reflect: Vec3::new(1.0, 0.8, 0.6),
+                    transmit: Vec3::new(0.9, 0.7, 0.5),
+                },
             },
         ));
     }

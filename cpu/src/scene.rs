@@ -160,15 +160,11 @@ impl From<&Material> for GpuMaterial {
                 g.alpha_v = rp.roughness.alpha_v;
                 g.shadowing = shadowing_bits(&rp.roughness);
             }
-            Bsdf::ThinDielectric {
-                eta,
-                reflectance,
-                transmittance,
-            } => {
+            Bsdf::ThinDielectric { eta, tint } => {
                 g.kind = abi::KIND_THIN_DIELECTRIC;
                 g.eta = [*eta, 0.0, 0.0, 0.0];
-                g.specular = vec4(*reflectance, 0.0);
-                g.k = vec4(*transmittance, 0.0);
+                g.specular = vec4(tint.reflect, 0.0);
+                g.k = vec4(tint.transmit, 0.0);
             }
             Bsdf::Coated {
                 base,

@@ -23,7 +23,7 @@ use glam::{Vec2, Vec3};
 use glint_cpu::bsdf::coated::{CoatParams, coat_albedo};
 use glint_cpu::bsdf::fresnel::fresnel_dielectric;
 use glint_cpu::bsdf::microfacet::{ggx_d, ggx_g2};
-use glint_cpu::bsdf::{Bsdf, Roughness, Shadowing};
+use glint_cpu::bsdf::{Bsdf, Roughness, Shadowing, Tint};
 use rayon::prelude::*;
 
 const ALPHAS: [f32; 7] = [0.0, 0.0011, 0.01, 0.1, 0.3, 0.6, 1.0];
@@ -361,8 +361,10 @@ fn thin_slab_is_the_infinite_bounce_series() {
             let (want_r, want_t) = (r + t * r * t * series, t * t * series);
             let b = Bsdf::ThinDielectric {
                 eta,
-                reflectance: Vec3::ONE,
-                transmittance: Vec3::new(1.0, 0.5, 0.25),
+                tint: Tint {
+                    reflect: Vec3::ONE,
+                    transmit: Vec3::new(1.0, 0.5, 0.25),
+                },
             };
             let wo = dir_cos(mu, PHI_O);
             let (mut mr, mut mt) = (0.0f64, 0.0f64);

@@ -11,7 +11,7 @@ use common::*;
 use glam::{DVec3, Vec2, Vec3};
 use glint_cpu::bsdf::fresnel::*;
 use glint_cpu::bsdf::microfacet::*;
-use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, named_ior, named_metal};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, Tint, named_ior, named_metal};
 use glint_cpu::quadrature::{hemisphere_integrate, hv_two};
 use rayon::prelude::*;
 
@@ -156,8 +156,7 @@ fn property_cases() -> Vec<(String, Bsdf)> {
         "thindielectric".into(),
         Bsdf::ThinDielectric {
             eta: 1.5,
-            reflectance: Vec3::ONE,
-            transmittance: Vec3::ONE,
+            tint: Tint::NONE,
         },
     ));
     v.push((
@@ -659,11 +658,7 @@ fn reference_albedo(bsdf: &Bsdf, wo: Vec3) -> Option<(DVec3, DVec3)> {
             let a = tint.reflect.as_dvec3() * f + tint.transmit.as_dvec3() * (1.0 - f);
             Some((a, DVec3::splat(1e-6)))
         }
-        Bsdf::ThinDielectric {
-            reflectance,
-            transmittance,
-            ..
-        } if *reflectance == Vec3::ONE && *transmittance == Vec3::ONE => {
+        Bsdf::ThinDielectric { tint, .. } if *tint == Tint::NONE => {
             Some((DVec3::ONE, DVec3::splat(1e-6)))
         }
         Bsdf::Conductor(c) if !c.roughness.multiscatter => {

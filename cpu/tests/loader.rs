@@ -474,16 +474,17 @@ fn extras_plastic_and_thindielectric() {
         b[2],
         Bsdf::ThinDielectric {
             eta: DEFAULT_INT_IOR / DEFAULT_EXT_IOR,
-            reflectance: Vec3::ONE,
-            transmittance: Vec3::ONE,
+            tint: Tint::NONE,
         }
     );
     assert_eq!(
         b[3],
         Bsdf::ThinDielectric {
             eta: 1.33,
-            reflectance: Vec3::new(1.0, 0.5, 0.25),
-            transmittance: Vec3::splat(0.5),
+            tint: Tint {
+                reflect: Vec3::new(1.0, 0.5, 0.25),
+                transmit: Vec3::splat(0.5),
+            },
         }
     );
     use glint_cpu::bsdf::roughplastic::RoughPlasticParams;

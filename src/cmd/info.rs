@@ -4,7 +4,7 @@ use std::fmt::Write as _;
 use std::mem::size_of;
 
 use anyhow::Result;
-use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness};
+use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness, Tint};
 use glint::cpu::lights::{GpuEmitter, GpuLight};
 use glint::cpu::prepare::PrepareOptions;
 use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF, MaterialTextures, TexRef};
@@ -138,6 +138,15 @@ fn gltf_channels(mt: &MaterialTextures) -> String {
     )
 }
 
+/// A dielectric's `specular_reflectance` and `specular_transmittance`.
+fn tint_text(tint: &Tint) -> String {
+    format!(
+        "specular_reflectance {} specular_transmittance {}",
+        rgb(tint.reflect),
+        rgb(tint.transmit)
+    )
+}
+
 /// The model a material maps to, Mitsuba 3's names.
 pub fn model(b: &Bsdf) -> String {
     match b {
@@ -153,14 +162,10 @@ pub fn model(b: &Bsdf) -> String {
             } else {
                 format!("roughdielectric eta {eta:.4} {}", roughness(r))
             };
-            if *tint == glint::cpu::bsdf::Tint::NONE {
+            if *tint == Tint::NONE {
                 name
             } else {
-                format!(
-                    "{name} specular_reflectance {} specular_transmittance {}",
-                    rgb(tint.reflect),
-                    rgb(tint.transmit)
-                )
+                format!("{name} {}", tint_text(tint))
             }
         }
         Bsdf::Plastic(p) => format!(
@@ -182,15 +187,9 @@ pub fn model(b: &Bsdf) -> String {
                 ""
             }
         ),
-        Bsdf::ThinDielectric {
-            eta,
-            reflectance,
-            transmittance,
-        } => format!(
-            "thindielectric eta {eta:.4} specular_reflectance {} specular_transmittance {}",
-            rgb(*reflectance),
-            rgb(*transmittance)
-        ),
+        Bsdf::ThinDielectric { eta, tint } => {
+            format!("thindielectric eta {eta:.4} {}", tint_text(tint))
+        }
         Bsdf::Coated {
             base,
             coat,

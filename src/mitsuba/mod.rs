@@ -39,7 +39,7 @@ use std::path::Path;
 
 use anyhow::{Context, Result};
 use glam::{Mat4, Vec3};
-use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, Tint};
 use glint_cpu::camera::scene_camera;
 use glint_cpu::envmap::EnvMap;
 use glint_cpu::frame::Frame;
@@ -143,6 +143,11 @@ fn principled_warning(what: &str, model: &str) -> String {
     format!("{what}: the glTF {model} written as Mitsuba's principled (another layering model)")
 }
 
+/// A dielectric's `specular_reflectance` and `specular_transmittance`.
+fn tint_xml(tint: &Tint) -> String {
+    rgb("specular_reflectance", tint.reflect) + &rgb("specular_transmittance", tint.transmit)
+}
+
 /// A material's BSDF as Mitsuba XML.
 fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
     match bsdf {
@@ -159,9 +164,8 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
             tint,
         } => {
             let mut iors = format!("{}{}", float("int_ior", *eta), float("ext_ior", 1.0));
-            if *tint != glint_cpu::bsdf::Tint::NONE {
-                iors += &rgb("specular_reflectance", tint.reflect);
-                iors += &rgb("specular_transmittance", tint.transmit);
+            if *tint != Tint::NONE {
+                iors += &tint_xml(tint);
             }
             if roughness.is_smooth() {
                 format!(r#"<bsdf type="dielectric">{iors}</bsdf>"#)
@@ -194,16 +198,11 @@ fn bsdf_xml(bsdf: &Bsdf, what: &str, warnings: &mut Vec<String>) -> String {
                 g.replace("alpha_u", "alpha")
             )
         }
-        Bsdf::ThinDielectric {
-            eta,
-            reflectance,
-            transmittance,
-        } => format!(
-            r#"<bsdf type="thindielectric">{}{}{}{}</bsdf>"#,
+        Bsdf::ThinDielectric { eta, tint } => format!(
+            r#"<bsdf type="thindielectric">{}{}{}</bsdf>"#,
             float("int_ior", *eta),
             float("ext_ior", 1.0),
-            rgb("specular_reflectance", *reflectance),
-            rgb("specular_transmittance", *transmittance)
+            tint_xml(tint)
         ),
         Bsdf::Coated {
             base,

@@ -134,8 +134,8 @@ pub enum Bsdf {
     ThinDielectric {
         /// int_ior / ext_ior.
         eta: f32,
-        reflectance: Vec3,
-        transmittance: Vec3,
+        /// Its `specular_reflectance` and `specular_transmittance`.
+        tint: Tint,
     },
     /// The glTF non-metal: a GGX dielectric coat over a Lambertian `base`,
     /// energy conserving by albedo scaling (`coated.rs`). Two-sided.
@@ -202,7 +202,8 @@ impl LaneSample<f32> {
 /// Mitsuba 3's `specular_reflectance` and `specular_transmittance` of a
 /// dielectric: factors on the reflected and on the transmitted part of
 /// its value (and of a sample's weight), its sampling unchanged, as
-/// Mitsuba's `dielectric` and `roughdielectric` apply them. 1 (none) by
+/// Mitsuba's `dielectric`, `roughdielectric` and `thindielectric` apply
+/// them. 1 (none) by
 /// default; not physical unless 1, but Mitsuba scenes use them (tinted
 /// glass without a medium).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -306,11 +307,9 @@ impl Bsdf {
             }),
             Bsdf::Plastic(p) => plastic_sample(p, wo, uc, u),
             Bsdf::RoughPlastic(p) => roughplastic_sample(p, wo, uc, u),
-            Bsdf::ThinDielectric {
-                eta,
-                reflectance,
-                transmittance,
-            } => thin_sample(*eta, *reflectance, *transmittance, wo, uc, u),
+            Bsdf::ThinDielectric { eta, tint } => {
+                thin_sample(*eta, tint.reflect, tint.transmit, wo, uc, u)
+            }
             Bsdf::Coated { coat, .. } | Bsdf::Metallic { coat, .. } => match coat.clearcoat() {
                 None => self.sample_under_clearcoat(wo, uc, u),
                 Some(cc) => clearcoat::clearcoat_sample(

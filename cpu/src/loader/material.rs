@@ -424,15 +424,10 @@ pub fn bsdf_from_extras_with(v: &Value, multiscatter_default: bool) -> Result<Bs
                 .unwrap_or(Vec3::splat(DEFAULT_REFLECTANCE)),
         }),
         "conductor" | "roughconductor" => Ok(Bsdf::Conductor(parse_conductor(obj, roughness)?)),
-        "thindielectric" => {
-            let eta = relative_ior(obj, DEFAULT_INT_IOR)?;
-            let tint = parse_tint(obj)?;
-            Ok(Bsdf::ThinDielectric {
-                eta,
-                reflectance: tint.reflect,
-                transmittance: tint.transmit,
-            })
-        }
+        "thindielectric" => Ok(Bsdf::ThinDielectric {
+            eta: relative_ior(obj, DEFAULT_INT_IOR)?,
+            tint: parse_tint(obj)?,
+        }),
         "plastic" => Ok(Bsdf::Plastic(parse_plastic(obj)?)),
         "roughplastic" => {
             if roughness.alpha_u != roughness.alpha_v {

@@ -338,7 +338,7 @@ pub fn sidak(alpha: f64, tests: usize) -> f64 {
 }
 
 use glint_cpu::bsdf::coated::{CoatParams, coated_coat_probability};
-use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, fresnel};
+use glint_cpu::bsdf::{Bsdf, ConductorParams, Roughness, Shadowing, Tint, fresnel};
 
 pub fn rough(alpha_u: f32, alpha_v: f32, shadowing: Shadowing) -> Roughness {
     Roughness {
@@ -668,8 +668,7 @@ pub fn chi2_cases() -> Vec<Case> {
             name: format!("thindielectric cos={c}"),
             bsdf: Bsdf::ThinDielectric {
                 eta: 1.5,
-                reflectance: Vec3::ONE,
-                transmittance: Vec3::ONE,
+                tint: Tint::NONE,
             },
             wo: dir_cos(c, PHI_O),
         });
