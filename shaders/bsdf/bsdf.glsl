@@ -402,39 +402,38 @@ bool dielectric_sample(float eta, Material m, vec3 wo, float uc, vec2 u, out Bsd
 // ----------------------------------------------------------------- metallic
 
 // metallic.rs: the conductor with probability w, the coated non-metal of
-// base and m.coat with 1 - w (Mitsuba 3's blendbsdf).
-// A lobe of weight exactly zero (metallic 0 or 1) is not evaluated: its
-// term added nothing (metallic.rs, `lobes`).
-vec3 metallic_eval(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
-    vec3 f_c = w != 0.0 ? conductor_eval(m, wo, wi) : vec3(0.0);
-    vec3 f_n = 1.0 - w != 0.0 ? coated_eval(base, m, wo, wi) : vec3(0.0);
-    return w * f_c + (1.0 - w) * f_n;
-}
-
-float metallic_pdf(float w, vec3 base, Material m, vec3 wo, vec3 wi) {
-    float pdf_c = w != 0.0 ? conductor_pdf(m, wo, wi) : 0.0;
-    float pdf_n = 1.0 - w != 0.0 ? coated_pdf(base, m, wo, wi) : 0.0;
-    return w * pdf_c + (1.0 - w) * pdf_n;
-}
-
+// base and m.coat with 1 - w (Mitsuba 3's blendbsdf); its f and density are
+// gltf_inner_eval's and gltf_inner_pdf's below. A lobe of weight exactly
+// zero (metallic 0 or 1) is not evaluated: its term added nothing
+// (metallic.rs, `lobes`).
 bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
                      out BsdfSample s) {
-    vec3 wi;
+    // One call of each lobe's sample (lavapipe's compile time grows with
+    // every inlined copy); w = 0 is the non-metal alone, its sample as it is.
+    bool metal = uc < w;
+    bool ok;
+    if (metal) {
+        ok = conductor_sample(m, wo, u, s);
+    } else {
+        float ucn = w == 0.0 ? uc : clamp((uc - w) / (1.0 - w), 0.0, ONE_MINUS_EPS);
+        ok = coated_sample(base, m, wo, ucn, u, s);
+    }
+    if (!ok || w == 0.0) {
+        return ok;
+    }
+    if (s.delta) {
+        s.pdf = metal ? w : (1.0 - w) * s.pdf;
+        return true;
+    }
+    vec3 wi = s.wi;
+    vec3 f_s = s.weight * (s.pdf / abs(wi.z));
     float pdf_c;
     vec3 f_c;
     float pdf_n;
     vec3 f_n;
-    if (uc < w) {
-        if (!conductor_sample(m, wo, u, s)) {
-            return false;
-        }
-        if (s.delta) {
-            s.pdf = w;
-            return true;
-        }
-        wi = s.wi;
+    if (metal) {
         pdf_c = s.pdf;
-        f_c = s.weight * (s.pdf / abs(wi.z));
+        f_c = f_s;
         pdf_n = 0.0;
         f_n = vec3(0.0);
         if (1.0 - w != 0.0) {
@@ -442,23 +441,10 @@ bool metallic_sample(float w, vec3 base, Material m, vec3 wo, float uc, vec2 u,
             f_n = coated_eval(base, m, wo, wi);
         }
     } else {
-        float ucn = clamp((uc - w) / (1.0 - w), 0.0, ONE_MINUS_EPS);
-        if (!coated_sample(base, m, wo, ucn, u, s)) {
-            return false;
-        }
-        if (s.delta) {
-            s.pdf = (1.0 - w) * s.pdf;
-            return true;
-        }
-        wi = s.wi;
         pdf_n = s.pdf;
-        f_n = s.weight * (s.pdf / abs(wi.z));
-        pdf_c = 0.0;
-        f_c = vec3(0.0);
-        if (w != 0.0) {
-            pdf_c = conductor_pdf(m, wo, wi);
-            f_c = conductor_eval(m, wo, wi);
-        }
+        f_n = f_s;
+        pdf_c = conductor_pdf(m, wo, wi);
+        f_c = conductor_eval(m, wo, wi);
     }
     float pdf = w * pdf_c + (1.0 - w) * pdf_n;
     if (!(pdf > 0.0) || isinf(pdf)) {
@@ -576,22 +562,33 @@ float cc_coat_pdf(Material m, vec3 wo, vec3 wi) {
     return ggx_pdf_visible(wo_c, h, a, a) / (4.0 * d);
 }
 
-// The glTF material under its clear coat.
+// The glTF material under its clear coat: the coated non-metal, or the
+// metallic blend of a conductor and the coated non-metal. Each with one
+// call of coated_* (lavapipe's compile time grows with every inlined copy):
+// the non-metal is the blend's non-metal part, alone.
+bool gltf_is_coated(Material m) {
+    return HAS(F_COATED) && (!HAS(F_METALLIC) || m.kind == KIND_COATED);
+}
+
 vec3 gltf_inner_eval(Material m, vec3 wo, vec3 wi) {
-    return m.kind == KIND_COATED ? coated_eval(m.reflectance.xyz, m, wo, wi)
-                                 : metallic_eval(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+    bool coated = gltf_is_coated(m);
+    float w = coated ? 0.0 : m.reflectance.w;
+    vec3 f_c = w != 0.0 ? conductor_eval(m, wo, wi) : vec3(0.0);
+    vec3 f_n = 1.0 - w != 0.0 ? coated_eval(m.reflectance.xyz, m, wo, wi) : vec3(0.0);
+    return coated ? f_n : w * f_c + (1.0 - w) * f_n;
 }
 
 float gltf_inner_pdf(Material m, vec3 wo, vec3 wi) {
-    return m.kind == KIND_COATED ? coated_pdf(m.reflectance.xyz, m, wo, wi)
-                                 : metallic_pdf(m.reflectance.w, m.reflectance.xyz, m, wo, wi);
+    bool coated = gltf_is_coated(m);
+    float w = coated ? 0.0 : m.reflectance.w;
+    float pdf_c = w != 0.0 ? conductor_pdf(m, wo, wi) : 0.0;
+    float pdf_n = 1.0 - w != 0.0 ? coated_pdf(m.reflectance.xyz, m, wo, wi) : 0.0;
+    return coated ? pdf_n : w * pdf_c + (1.0 - w) * pdf_n;
 }
 
 bool gltf_inner_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
-    if (m.kind == KIND_COATED) {
-        return coated_sample(m.reflectance.xyz, m, wo, uc, u, s);
-    }
-    return metallic_sample(m.reflectance.w, m.reflectance.xyz, m, wo, uc, u, s);
+    return metallic_sample(gltf_is_coated(m) ? 0.0 : m.reflectance.w, m.reflectance.xyz, m, wo,
+                           uc, u, s);
 }
 
 vec3 gltf_eval(Material m, vec3 wo, vec3 wi) {
@@ -612,49 +609,64 @@ float gltf_pdf(Material m, vec3 wo, vec3 wi) {
     return p * cc_coat_pdf(m, wo, wi) + (1.0 - p) * inner;
 }
 
-bool gltf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
-    if (m.extra.y <= 0.0) {
-        return gltf_inner_sample(m, wo, uc, u, s);
-    }
-    s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
-    if (wo.z == 0.0) {
+// The clear coat's own lobe picked (probability p; w_o its transmission
+// at wo, on side `side`): its sample, the inner material evaluated there.
+bool cc_coat_sample(Material m, vec3 wo, vec2 u, float side, float p, float w_o,
+                    inout BsdfSample s) {
+    // In the coat's frame, on the front side.
+    vec3 up = cc_local(m, cc_front(wo, side));
+    if (up.z <= 0.0) {
         return false;
     }
-    float side = cc_side(wo);
-    float p = cc_p_coat(m, wo);
-    float w_o = cc_through(m, wo, side);
-    if (uc < p) {
-        // In the coat's frame, on the front side.
-        vec3 up = cc_local(m, cc_front(wo, side));
-        if (up.z <= 0.0) {
-            return false;
-        }
-        if (cc_smooth(m)) {
-            float f = m.extra.y * fresnel_dielectric(up.z, CLEARCOAT_IOR);
-            s = BsdfSample(cc_front(cc_world(m, vec3(-up.x, -up.y, up.z)), side), p, vec3(f / p), 1.0, true);
-            return true;
-        }
-        float a = max(m.extra.z, MIN_ALPHA);
-        vec3 wm = ggx_sample_visible(up, a, a, u);
-        float d = dot(up, wm);
-        vec3 wi_c = reflect_dir(up, wm);
-        if (wi_c.z <= 0.0 || d <= 0.0 || !(ggx_g1(up, a, a) > 0.0)) {
-            return false;
-        }
-        float pdf_c = ggx_pdf_visible(up, wm, a, a) / (4.0 * d);
-        vec3 wi = cc_front(cc_world(m, wi_c), side);
-        float f_c = cc_shading_value(m, m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(wm, a, a)
-            * ggx_g2(up, wi_c, a, a, false) / (4.0 * up.z * wi_c.z), wi_c, wi.z);
-        float pdf = p * pdf_c + (1.0 - p) * gltf_inner_pdf(m, wo, wi);
-        if (!(pdf > 0.0) || isinf(pdf)) {
-            return false;
-        }
-        vec3 f = vec3(f_c) + gltf_inner_eval(m, wo, wi) * (w_o * cc_through(m, wi, side));
-        s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
+    if (cc_smooth(m)) {
+        float f = m.extra.y * fresnel_dielectric(up.z, CLEARCOAT_IOR);
+        s = BsdfSample(cc_front(cc_world(m, vec3(-up.x, -up.y, up.z)), side), p, vec3(f / p), 1.0, true);
         return true;
     }
-    if (!gltf_inner_sample(m, wo, clamp((uc - p) / (1.0 - p), 0.0, ONE_MINUS_EPS), u, s)) {
+    float a = max(m.extra.z, MIN_ALPHA);
+    vec3 wm = ggx_sample_visible(up, a, a, u);
+    float d = dot(up, wm);
+    vec3 wi_c = reflect_dir(up, wm);
+    if (wi_c.z <= 0.0 || d <= 0.0 || !(ggx_g1(up, a, a) > 0.0)) {
         return false;
+    }
+    float pdf_c = ggx_pdf_visible(up, wm, a, a) / (4.0 * d);
+    vec3 wi = cc_front(cc_world(m, wi_c), side);
+    float f_c = cc_shading_value(m, m.extra.y * fresnel_dielectric(d, CLEARCOAT_IOR) * ggx_d(wm, a, a)
+        * ggx_g2(up, wi_c, a, a, false) / (4.0 * up.z * wi_c.z), wi_c, wi.z);
+    float pdf = p * pdf_c + (1.0 - p) * gltf_inner_pdf(m, wo, wi);
+    if (!(pdf > 0.0) || isinf(pdf)) {
+        return false;
+    }
+    vec3 f = vec3(f_c) + gltf_inner_eval(m, wo, wi) * (w_o * cc_through(m, wi, side));
+    s = BsdfSample(wi, pdf, f * (abs(wi.z) / pdf), 1.0, false);
+    return true;
+}
+
+bool gltf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
+    // One call of the inner material's sample (lavapipe's compile time
+    // grows with every inlined copy): without a clear coat, its sample as
+    // it is.
+    bool cc = m.extra.y > 0.0;
+    float side = 0.0;
+    float p = 0.0;
+    float w_o = 0.0;
+    if (cc) {
+        s = BsdfSample(vec3(0.0), 0.0, vec3(0.0), 1.0, false);
+        if (wo.z == 0.0) {
+            return false;
+        }
+        side = cc_side(wo);
+        p = cc_p_coat(m, wo);
+        w_o = cc_through(m, wo, side);
+        if (uc < p) {
+            return cc_coat_sample(m, wo, u, side, p, w_o, s);
+        }
+    }
+    float uci = cc ? clamp((uc - p) / (1.0 - p), 0.0, ONE_MINUS_EPS) : uc;
+    bool ok = gltf_inner_sample(m, wo, uci, u, s);
+    if (!ok || !cc) {
+        return ok;
     }
     float w_i = cc_through(m, s.wi, side);
     if (s.delta) {
@@ -687,6 +699,11 @@ vec3 dielectric_tint(Material m, vec3 wo, vec3 wi) {
     return wo.z * wi.z > 0.0 ? m.specular.xyz : m.reflectance.xyz;
 }
 
+// The glTF models, coated non-metal and metal: one branch, so that each
+// call site inlines gltf_* once (lavapipe's compile time grows with every
+// inlined copy).
+#define IS_GLTF(m) ((HAS(F_COATED) && (m).kind == KIND_COATED) || (HAS(F_METALLIC) && (m).kind == KIND_METALLIC))
+
 vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
     if (HAS(F_DIFFUSE) && m.kind == KIND_DIFFUSE) {
         return diffuse_eval(m.reflectance.xyz, wo, wi);
@@ -694,7 +711,7 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return conductor_eval(m, wo, wi);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_eval(m.eta.x, m, wo, wi) * dielectric_tint(m, wo, wi);
-    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+    } else if (IS_GLTF(m)) {
         return gltf_eval(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_eval(m, wo, wi);
@@ -702,8 +719,6 @@ vec3 bsdf_eval(Material m, vec3 wo, vec3 wi) {
         return roughplastic_eval(m, wo, wi);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return vec3(0.0);
-    } else if (HAS(F_METALLIC) && m.kind == KIND_METALLIC) {
-        return gltf_eval(m, wo, wi);
     }
     return vec3(BSDF_UNKNOWN_KIND);
 }
@@ -715,7 +730,7 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return conductor_pdf(m, wo, wi);
     } else if (HAS(F_DIELECTRIC) && m.kind == KIND_DIELECTRIC) {
         return dielectric_pdf(m.eta.x, m, wo, wi);
-    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+    } else if (IS_GLTF(m)) {
         return gltf_pdf(m, wo, wi);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_pdf(m, wo, wi);
@@ -723,8 +738,6 @@ float bsdf_pdf(Material m, vec3 wo, vec3 wi) {
         return roughplastic_pdf(m, wo, wi);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return 0.0;
-    } else if (HAS(F_METALLIC) && m.kind == KIND_METALLIC) {
-        return gltf_pdf(m, wo, wi);
     }
     return BSDF_UNKNOWN_KIND;
 }
@@ -738,7 +751,7 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         bool ok = dielectric_sample(m.eta.x, m, wo, uc, u, s);
         s.weight *= dielectric_tint(m, wo, s.wi);
         return ok;
-    } else if (HAS(F_COATED) && m.kind == KIND_COATED) {
+    } else if (IS_GLTF(m)) {
         return gltf_sample(m, wo, uc, u, s);
     } else if (HAS(F_PLASTIC) && m.kind == KIND_PLASTIC) {
         return plastic_sample(m, wo, uc, u, s);
@@ -746,8 +759,6 @@ bool bsdf_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
         return roughplastic_sample(m, wo, uc, u, s);
     } else if (HAS(F_THIN_DIELECTRIC) && m.kind == KIND_THIN_DIELECTRIC) {
         return thin_sample(m, wo, uc, s);
-    } else if (HAS(F_METALLIC) && m.kind == KIND_METALLIC) {
-        return gltf_sample(m, wo, uc, u, s);
     }
     s.wi = vec3(0.0, 0.0, 1.0);
     s.weight = vec3(BSDF_UNKNOWN_KIND);

@@ -275,34 +275,38 @@ bool thinwall_sample(vec3 tint, Material m, vec3 wo, float uc, vec2 u, out BsdfS
 // transmission with t = m.extra.x.
 vec3 coated_eval(vec3 base, Material m, vec3 wo, vec3 wi) {
     float t = m.extra.x;
+    vec3 f = opaque_eval(base, m, wo, wi);
     if (t <= 0.0) {
-        return opaque_eval(base, m, wo, wi);
+        return f;
     }
-    return (1.0 - t) * opaque_eval(base, m, wo, wi) + t * thinwall_eval(base, m, wo, wi);
+    return (1.0 - t) * f + t * thinwall_eval(base, m, wo, wi);
 }
 
 float coated_pdf(vec3 base, Material m, vec3 wo, vec3 wi) {
     float t = m.extra.x;
+    float pdf = opaque_pdf(base, m, wo, wi);
     if (t <= 0.0) {
-        return opaque_pdf(base, m, wo, wi);
+        return pdf;
     }
-    return (1.0 - t) * opaque_pdf(base, m, wo, wi) + t * thinwall_pdf(m, wo, wi);
+    return (1.0 - t) * pdf + t * thinwall_pdf(m, wo, wi);
 }
 
 bool coated_sample(vec3 base, Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
     float t = m.extra.x;
-    if (t <= 0.0) {
-        return opaque_sample(base, m, wo, uc, u, s);
-    }
-    bool thin = uc < t;
+    bool blend = t > 0.0;
+    bool thin = blend && uc < t;
+    // One call of each part's sample (lavapipe's compile time grows with
+    // every inlined copy): without transmission, the opaque part's sample
+    // with uc as it is.
     bool ok;
     if (thin) {
         ok = thinwall_sample(base, m, wo, min(uc / t, ONE_MINUS_EPS), u, s);
     } else {
-        ok = opaque_sample(base, m, wo, clamp((uc - t) / (1.0 - t), 0.0, ONE_MINUS_EPS), u, s);
+        float uco = blend ? clamp((uc - t) / (1.0 - t), 0.0, ONE_MINUS_EPS) : uc;
+        ok = opaque_sample(base, m, wo, uco, u, s);
     }
-    if (!ok) {
-        return false;
+    if (!ok || !blend) {
+        return ok;
     }
     if (s.delta) {
         s.pdf *= thin ? t : 1.0 - t;
