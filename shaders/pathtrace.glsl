@@ -22,14 +22,14 @@
 // The alpha-test hook (MASK, BLEND) at bvh.glsl's leaf triangle test, for
 // the ray (o, d).
 bool bvh_present(uint tri, float u, float v, vec3 o, vec3 d) {
-    return params.masked == 0u || alpha_pass(floatBitsToUint(triangles[tri].p0.w), tri, u, v, o, d);
+    return !HAS(F_ALPHA_MASKS) || params.masked == 0u || alpha_pass(floatBitsToUint(triangles[tri].p0.w), tri, u, v, o, d);
 }
 #define BVH_PRESENT(tri, u, v, o, d) bvh_present(tri, u, v, o, d)
 #if defined(GLINT_RAY_QUERY)
-#define RQ_MASKED (params.masked)
+#define RQ_MASKED (HAS(F_ALPHA_MASKS) ? params.masked : 0u)
 #include "ray_query.glsl"
 #elif defined(GLINT_RAY_TRACING)
-#define RQ_MASKED (params.masked)
+#define RQ_MASKED (HAS(F_ALPHA_MASKS) ? params.masked : 0u)
 #include "rt/trace.glsl"
 #else
 #include "bvh.glsl"
@@ -252,7 +252,7 @@ vec3 path_sample(uint x, uint y, uint s, inout uint rays) {
         SurfaceFrame sf = surface(hit.tri, hit.u, hit.v);
         uint material = floatBitsToUint(tri.p0.w);
         Material m = materials[material];
-        if (params.textured != 0u) {
+        if (HAS(F_TEXTURES) && params.textured != 0u) {
             apply_textures(material, hit.tri, hit.u, hit.v, wo, sf, m);
         }
         vec3 wo_local = frame_to_local(sf.frame, wo);

@@ -670,10 +670,15 @@ device_constants! { FEATURE_CONSTANTS;
     F_COATED: u32 = 1 << 14;
     F_PLASTIC: u32 = 1 << 15;
     F_THIN_DIELECTRIC: u32 = 1 << 16;
-    /// ... and a normal map somewhere (the fold, `bsdf::fold`).
+    /// ... a normal map somewhere (the fold, `bsdf::fold`) ...
     F_NORMAL_MAP: u32 = 1 << 17;
+    /// ... textures (`Params.textured`: the per-hit material, textured
+    /// emission) and alpha masks (`Params.masked`: the alpha test in
+    /// traversal).
+    F_TEXTURES: u32 = 1 << 18;
+    F_ALPHA_MASKS: u32 = 1 << 19;
     /// Every feature.
-    F_ALL: u32 = (1 << 18) - 1;
+    F_ALL: u32 = (1 << 20) - 1;
 }
 
 device_struct! {

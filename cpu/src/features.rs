@@ -57,11 +57,17 @@ impl Features {
     /// A normal-mapped material: where its BSDF has no transmission, it
     /// folds at the geometric surface ([`crate::bsdf::fold`]).
     pub const NORMAL_MAP: u32 = abi::F_NORMAL_MAP;
+    /// Textures (the kernel's `Params.textured`): the material is
+    /// recomputed per hit, emission scaled by its texture.
+    pub const TEXTURES: u32 = abi::F_TEXTURES;
+    /// Alpha-masked or blended materials (`Params.masked`): traversal runs
+    /// the alpha test.
+    pub const ALPHA_MASKS: u32 = abi::F_ALPHA_MASKS;
 
     /// Every feature: the generic kernel.
     pub const ALL: Features = Features(abi::F_ALL);
 
-    const NAMES: [(u32, &'static str); 18] = [
+    const NAMES: [(u32, &'static str); 20] = [
         (Self::DIFFUSE, "diffuse"),
         (Self::CONDUCTOR, "conductor"),
         (Self::DIELECTRIC, "dielectric"),
@@ -80,6 +86,8 @@ impl Features {
         (Self::PLASTIC, "plastic"),
         (Self::THIN_DIELECTRIC, "thindielectric"),
         (Self::NORMAL_MAP, "normal-map"),
+        (Self::TEXTURES, "textures"),
+        (Self::ALPHA_MASKS, "alpha-masks"),
     ];
 
     pub fn has(self, bit: u32) -> bool {
@@ -199,6 +207,14 @@ impl Features {
         }
         if scene.background.max_element() > 0.0 || scene.envmap.is_some() {
             f |= Self::BACKGROUND;
+        }
+        // The kernel's Params.textured and Params.masked, as
+        // `gpu_scene_data` sets them.
+        if !scene.textures.is_empty() {
+            f |= Self::TEXTURES;
+        }
+        if scene.textures.has_masks() {
+            f |= Self::ALPHA_MASKS;
         }
         if opts.max_depth != 1 {
             f |= Self::BOUNCES;

@@ -112,7 +112,7 @@ bool emitted(Triangle t, uint tri, float u, float v, vec3 w, out vec3 le) {
     if (!(front || (floatBitsToUint(t.p2.w) & TRI_DOUBLE_SIDED) != 0u)) {
         return false;
     }
-    if (params.textured != 0u) {
+    if (HAS(F_TEXTURES) && params.textured != 0u) {
         le *= emission_factor(material, tri, u, v);
     }
     return true;

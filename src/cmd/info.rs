@@ -428,14 +428,7 @@ fn geometry(o: &mut String, s: &Scene) {
     // What the specialised GPU kernel is built for (at the default
     // options: unbounded depth, NEE on), plus the data it reads.
     let f = glint::cpu::features::Features::of(s, &glint::cpu::RenderOptions::new(1, 1));
-    let mut features: Vec<&str> = f.names();
-    if !t.is_empty() {
-        features.push("textures");
-    }
-    if t.has_masks() {
-        features.push("alpha-masks");
-    }
-    let _ = writeln!(o, "kernel features: {}", features.join(", "));
+    let _ = writeln!(o, "kernel features: {}", f.names().join(", "));
     let rows = [
         ("triangles", s.triangles.len() * size_of::<Triangle>()),
         ("bvh nodes", s.bvh.nodes.len() * size_of::<Bvh4Node>()),
