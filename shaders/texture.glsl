@@ -9,6 +9,7 @@
 #ifndef GLINT_TEXTURE_GLSL
 #define GLINT_TEXTURE_GLSL
 
+#include "features.glsl"
 #include "texture_types.glsl"
 #include "bsdf/material.glsl"
 #include "bsdf/fresnel.glsl"
@@ -167,6 +168,9 @@ void conductor_from_f0(inout Material g, vec3 f0, float alpha, uint multiscatter
 // scale, extra.xyz transmission, clear coat weight and alpha): only the
 // textured parameters are replaced.
 void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, float v) {
+    if (!HAS(F_EXTENSION_TEXTURES)) {
+        return;
+    }
     if (mt.transmission.texture != NO_TEXTURE) {
         r.extra.x = mt.mr_factor.z * texture_lookup(mt.transmission, tri, u, v, false).x;
     }
@@ -309,7 +313,7 @@ float encode_coat_normal(vec2 xy) {
 float clearcoat_normal_code(MaterialTextures mt, uint tri, float u, float v, vec3 ng,
                             vec3 us, vec3 ut, vec3 un, vec3 fs, vec3 ft, vec3 fn) {
     vec3 n = un;
-    if (mt.clearcoat_normal.texture != NO_TEXTURE) {
+    if (HAS(F_EXTENSION_TEXTURES) && mt.clearcoat_normal.texture != NO_TEXTURE) {
         vec3 c = texture_lookup(mt.clearcoat_normal, tri, u, v, false).xyz;
         float sign_b = triangle_uvs[tri].extra.x;
         n = perturb_normal(c, mt.clearcoat_normal.scale, un, us, ut * sign_b);

@@ -677,8 +677,11 @@ device_constants! { FEATURE_CONSTANTS;
     /// traversal).
     F_TEXTURES: u32 = 1 << 18;
     F_ALPHA_MASKS: u32 = 1 << 19;
+    /// ... and the KHR extensions' textures (transmission, clear coat, its
+    /// roughness and normal, specular, specular colour).
+    F_EXTENSION_TEXTURES: u32 = 1 << 20;
     /// Every feature.
-    F_ALL: u32 = (1 << 20) - 1;
+    F_ALL: u32 = (1 << 21) - 1;
 }
 
 device_struct! {

@@ -63,11 +63,15 @@ impl Features {
     /// Alpha-masked or blended materials (`Params.masked`): traversal runs
     /// the alpha test.
     pub const ALPHA_MASKS: u32 = abi::F_ALPHA_MASKS;
+    /// A texture in a KHR extension's slot (transmission, clear coat, its
+    /// roughness and normal, specular, specular colour): rare in real
+    /// files, and each slot's lookup is compiled apart.
+    pub const EXTENSION_TEXTURES: u32 = abi::F_EXTENSION_TEXTURES;
 
     /// Every feature: the generic kernel.
     pub const ALL: Features = Features(abi::F_ALL);
 
-    const NAMES: [(u32, &'static str); 20] = [
+    const NAMES: [(u32, &'static str); 21] = [
         (Self::DIFFUSE, "diffuse"),
         (Self::CONDUCTOR, "conductor"),
         (Self::DIELECTRIC, "dielectric"),
@@ -88,6 +92,7 @@ impl Features {
         (Self::NORMAL_MAP, "normal-map"),
         (Self::TEXTURES, "textures"),
         (Self::ALPHA_MASKS, "alpha-masks"),
+        (Self::EXTENSION_TEXTURES, "extension-textures"),
     ];
 
     pub fn has(self, bit: u32) -> bool {
@@ -156,6 +161,20 @@ impl Features {
             // take the transmission away).
             if textures.is_some_and(|t| t.normal.is_some()) {
                 f |= Self::NORMAL_MAP;
+            }
+            if textures.is_some_and(|t| {
+                [
+                    &t.transmission,
+                    &t.clearcoat,
+                    &t.clearcoat_roughness,
+                    &t.specular,
+                    &t.specular_color,
+                    &t.clearcoat_normal,
+                ]
+                .iter()
+                .any(|r| r.is_some())
+            }) {
+                f |= Self::EXTENSION_TEXTURES;
             }
             match &m.bsdf {
                 Bsdf::Diffuse { .. } => f |= Self::DIFFUSE,

@@ -26,6 +26,7 @@ mod builder;
 use builder::{Doc, temp_dir};
 use glam::Vec3;
 use glint_cpu::RenderOptions;
+use glint_cpu::features::Features;
 use glint_cpu::loader::load;
 use serde_json::{Value, json};
 
@@ -76,6 +77,16 @@ fn textured_plate(test: &str, material: Value, textures: &[(&str, &str, [u8; 4])
         max_depth: 3,
         ..RenderOptions::new(4, 4)
     };
+    // The GPU kernel compiles the KHR extensions' texture slots only with
+    // this feature: it must be set exactly where such a slot is filled.
+    let khr = textures
+        .iter()
+        .any(|(object, ..)| object.starts_with("KHR_"));
+    assert_eq!(
+        Features::of(&s, &o).has(Features::EXTENSION_TEXTURES),
+        khr,
+        "{test}: extension-textures"
+    );
     let f = glint_cpu::render(&s, &o, &|_, _| {}).unwrap().0;
     let mut sum = Vec3::ZERO;
     for y in 0..4 {
