@@ -134,6 +134,37 @@ impl Features {
         }
     }
 
+    /// What a material's textures need: the per-hit metallic blend, the
+    /// normal map's fold, the KHR extensions' slots.
+    fn texture_bits(bsdf: &Bsdf, textures: Option<&crate::texture::MaterialTextures>) -> u32 {
+        let Some(t) = textures else {
+            return 0;
+        };
+        let mut f = 0;
+        // A textured glTF material is recomputed per hit as the metallic
+        // blend, whatever its factors map to.
+        if t.mode == crate::texture::MAP_GLTF && !matches!(bsdf, Bsdf::Dielectric { .. }) {
+            f |= Self::METALLIC;
+        }
+        // Whether the fold applies is decided per hit (a texture may take
+        // the transmission away).
+        if t.normal.is_some() {
+            f |= Self::NORMAL_MAP;
+        }
+        let extension_slots = [
+            &t.transmission,
+            &t.clearcoat,
+            &t.clearcoat_roughness,
+            &t.specular,
+            &t.specular_color,
+            &t.clearcoat_normal,
+        ];
+        if extension_slots.iter().any(|r| r.is_some()) {
+            f |= Self::EXTENSION_TEXTURES;
+        }
+        f
+    }
+
     /// What rendering `scene` with `opts` needs.
     pub fn of(scene: &Scene, opts: &RenderOptions) -> Features {
         let mut f = 0u32;
@@ -151,31 +182,7 @@ impl Features {
             .filter(|(_, (_, u))| **u)
         {
             let textures = scene.textures.material(i as u32);
-            // A textured glTF material is recomputed per hit as the
-            // metallic blend, whatever its factors map to.
-            let per_hit_blend = textures.is_some_and(|t| t.mode == crate::texture::MAP_GLTF);
-            if per_hit_blend && !matches!(m.bsdf, Bsdf::Dielectric { .. }) {
-                f |= Self::METALLIC;
-            }
-            // Whether the fold applies is decided per hit (a texture may
-            // take the transmission away).
-            if textures.is_some_and(|t| t.normal.is_some()) {
-                f |= Self::NORMAL_MAP;
-            }
-            if textures.is_some_and(|t| {
-                [
-                    &t.transmission,
-                    &t.clearcoat,
-                    &t.clearcoat_roughness,
-                    &t.specular,
-                    &t.specular_color,
-                    &t.clearcoat_normal,
-                ]
-                .iter()
-                .any(|r| r.is_some())
-            }) {
-                f |= Self::EXTENSION_TEXTURES;
-            }
+            f |= Self::texture_bits(&m.bsdf, textures);
             match &m.bsdf {
                 Bsdf::Diffuse { .. } => f |= Self::DIFFUSE,
                 Bsdf::Plastic(_) => f |= Self::PLASTIC,
