@@ -6,21 +6,20 @@ use std::mem::size_of;
 use anyhow::Result;
 use glint::cpu::bsdf::{Bsdf, ConductorParams, Roughness, Tint};
 use glint::cpu::lights::{GpuEmitter, GpuLight};
-use glint::cpu::prepare::PrepareOptions;
 use glint::cpu::texture::{MAP_EXTRAS, MAP_GLTF, MaterialTextures, TexRef};
 use glint::cpu::{Bvh4Node, GpuMaterial, PunctualLight, Scene, Triangle, TriangleShading};
 
-use super::{load_quiet, one_line};
-use crate::cli::{InfoArgs, OnOff};
+use super::{load_quiet, one_line, scene_options};
+use crate::cli::InfoArgs;
 
 pub fn run(args: &InfoArgs) -> Result<()> {
     args.env.check(args.background.is_some())?;
-    let options = PrepareOptions {
-        allow_any_path: args.allow_any_path,
-        multiscatter: args.multiscatter == OnOff::On,
-        background: args.background.map(glam::Vec3::from),
-        envmap: args.env.source(),
-    };
+    let options = scene_options(
+        args.allow_any_path,
+        args.multiscatter,
+        args.background,
+        &args.env,
+    );
     let prepared = load_quiet(&args.scene, &options)?;
     let (scene, simplified) = (prepared.scene, prepared.simplified);
     if args.strict

@@ -244,23 +244,30 @@ pub fn source_key(inputs: &[PathBuf], o: &RenderOpts) -> Result<glint::cache::So
 /// The library's one scene preparation ([`glint::cpu::prepare`]) with the
 /// options as the CLI gives them, checked first; warnings not printed.
 pub fn prepare(path: &Path, o: &RenderOpts) -> Result<Prepared> {
-    check_envmap_opts(o)?;
+    o.env.check(o.background.is_some())?;
     check_scene_path(path)?;
     Ok(glint::cpu::prepare::prepare(path, &prepare_options(o))?)
 }
 
 /// What of `o` changes the scene.
 pub fn prepare_options(o: &RenderOpts) -> PrepareOptions {
-    PrepareOptions {
-        allow_any_path: o.allow_any_path,
-        multiscatter: o.multiscatter == OnOff::On,
-        background: o.background.map(Vec3::from),
-        envmap: o.env.source(),
-    }
+    scene_options(o.allow_any_path, o.multiscatter, o.background, &o.env)
 }
 
-fn check_envmap_opts(o: &RenderOpts) -> Result<()> {
-    o.env.check(o.background.is_some())
+/// The scene preparation's options from the flags `render` and `info`
+/// share.
+pub fn scene_options(
+    allow_any_path: bool,
+    multiscatter: OnOff,
+    background: Option<[f32; 3]>,
+    env: &crate::cli::EnvmapArgs,
+) -> PrepareOptions {
+    PrepareOptions {
+        allow_any_path,
+        multiscatter: multiscatter == OnOff::On,
+        background: background.map(Vec3::from),
+        envmap: env.source(),
+    }
 }
 
 /// The prepared scene of `path` with `options`, without printing the
