@@ -34,6 +34,10 @@ pub struct Variant {
     pub control: ControlOpts,
 }
 
+/// A variant's resolved backend, and its own scene and key where its
+/// options load the scene differently from the shared ones.
+type VariantScene = (Backend, Option<(Scene, SourceKey)>);
+
 /// Parse `NAME=OPTIONS` with OPTIONS laid over the shared options.
 pub fn parse_variant(spec: &str, shared: &RenderOpts) -> Result<Variant> {
     let Some((name, options)) = spec.split_once('=') else {
@@ -490,16 +494,19 @@ fn warn_on_reference_key(
 /// into (`--multiscatter`, `--background`, `--envmap`), with its key (the
 /// reference stays the shared options' scene); None where it renders the
 /// shared one. The files they read join `inputs`. A variant's GPU-only
-/// options on the CPU backend are warned of here, once.
+/// options on the CPU backend are warned of here, once, and each variant's
+/// backend resolved (`auto` asks Vulkan for a GPU once, not once a budget).
 fn variant_scenes(
     args: &ConvergeArgs,
     variants: &[Variant],
     inputs: &mut Vec<std::path::PathBuf>,
-) -> Result<Vec<Option<(Scene, SourceKey)>>> {
+) -> Result<Vec<VariantScene>> {
     let mut own = Vec::with_capacity(variants.len());
     for v in variants {
-        super::check_gpu_only(&args.scene, &v.opts, v.backend)?;
-        own.push(
+        let backend = super::check_gpu_only(&args.scene, &v.opts, v.backend)?
+            .resolve(v.opts.device.as_deref());
+        own.push((
+            backend,
             if super::prepare_options(&v.opts) != super::prepare_options(&args.opts) {
                 let (s, files) = super::load_with_inputs(&args.scene, &v.opts)?;
                 let key = super::source_key(&files, &v.opts)?;
@@ -508,7 +515,7 @@ fn variant_scenes(
             } else {
                 None
             },
-        );
+        ));
     }
     Ok(own)
 }
@@ -554,11 +561,11 @@ fn run_in(args: &ConvergeArgs, budgets: &[Budget], variants: &[Variant], dir: &P
     let mut rows = Vec::new();
     let mut devices = Vec::new();
     let mut films: Vec<(Film, RenderMeta)> = Vec::new();
-    for (v, own) in variants.iter().zip(&own) {
+    for (v, (backend, own)) in variants.iter().zip(&own) {
         let (scene, source) = own.as_ref().map_or((&scene, source), |(s, k)| (s, *k));
         for &b in budgets {
             let opts = variant_options(scene, &args.scene, v, b, (rw, rh), &ref_name)?;
-            let r: BackendRender = render_on(v.backend, &args.scene, &v.opts, scene, &opts)?;
+            let r: BackendRender = render_on(*backend, &args.scene, &v.opts, scene, &opts)?;
             let means = r.film.means();
             let img = ImageRef::new(opts.width, opts.height, &means)?;
             let m = metrics::compute(&img, &reference_img)?;

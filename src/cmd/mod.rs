@@ -293,8 +293,10 @@ pub fn report_warnings(path: &Path, scene: &Scene, strict: bool) -> Result<()> {
 /// `--traversal hardware` `--ray-tracing` and `--blas-parts`) given to a
 /// render on `backend` that runs on the CPU: one warning line saying they
 /// are ignored (the error with `--strict`). `Auto` is resolved only when
-/// such an option was given (it asks Vulkan for a GPU).
-pub fn check_gpu_only(path: &Path, o: &RenderOpts, backend: Backend) -> Result<()> {
+/// such an option was given (it asks Vulkan for a GPU). Returns `backend`,
+/// resolved where this resolved it, so that the render does not ask Vulkan
+/// again.
+pub fn check_gpu_only(path: &Path, o: &RenderOpts, backend: Backend) -> Result<Backend> {
     use crate::cli::{KernelArg, RayTracingArg, TraversalArg};
     let hardware = o.traversal == TraversalArg::Hardware;
     let given: Vec<&str> = [
@@ -310,8 +312,12 @@ pub fn check_gpu_only(path: &Path, o: &RenderOpts, backend: Backend) -> Result<(
     .into_iter()
     .filter_map(|(g, name)| g.then_some(name))
     .collect();
-    if given.is_empty() || backend.resolve(o.device.as_deref()) != Backend::Cpu {
-        return Ok(());
+    if given.is_empty() {
+        return Ok(backend);
+    }
+    let backend = backend.resolve(o.device.as_deref());
+    if backend != Backend::Cpu {
+        return Ok(backend);
     }
     let w = format!(
         "{} {} to the GPU backend only: ignored on the CPU backend",
@@ -322,7 +328,7 @@ pub fn check_gpu_only(path: &Path, o: &RenderOpts, backend: Backend) -> Result<(
         bail!("{}: {w} (--strict)", path.display());
     }
     eprintln!("glint: warning: {}: {w}", path.display());
-    Ok(())
+    Ok(backend)
 }
 
 /// Settle the render options for `scene` (camera, image size, methods).

@@ -169,7 +169,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
         .map(|s| outputs.reserve(s))
         .transpose()?;
 
-    super::check_gpu_only(&args.scene.scene, &args.scene.opts, args.backend)?;
+    let backend = super::check_gpu_only(&args.scene.scene, &args.scene.opts, args.backend)?;
     let (scene, inputs) = load_with_inputs(&args.scene.scene, &args.scene.opts)?;
     // Before anything renders: no output may overwrite what the scene read
     // (its buffers and images, the environment map).
@@ -192,13 +192,7 @@ pub fn run(args: &RenderArgs) -> Result<()> {
     opts.target_error = args.control.target_error;
     opts.adaptive = args.control.adaptive;
     let load_seconds = start.elapsed().as_secs_f64();
-    let r = render_on(
-        args.backend,
-        &args.scene.scene,
-        &args.scene.opts,
-        &scene,
-        &opts,
-    )?;
+    let r = render_on(backend, &args.scene.scene, &args.scene.opts, &scene, &opts)?;
 
     let meta = source.map(|s| shard::render_meta(s, &scene, &opts, shard, r.film.spp));
     for (&slot, &format) in image_slots.iter().zip(&formats) {
