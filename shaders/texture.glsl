@@ -164,32 +164,64 @@ void conductor_from_f0(inout Material g, vec3 f0, float alpha, uint multiscatter
     g.shadowing = SHADOWING_CORRELATED | multiscatter;
 }
 
+// The coat's KHR texture slots, by textured_coat's bit: transmission,
+// clear coat, its roughness, specular, specular colour.
+TexRef coat_slot(MaterialTextures mt, uint i) {
+    if (i == 0u) {
+        return mt.transmission;
+    } else if (i == 1u) {
+        return mt.clearcoat;
+    } else if (i == 2u) {
+        return mt.clearcoat_roughness;
+    } else if (i == 3u) {
+        return mt.specular;
+    }
+    return mt.specular_color;
+}
+
 // texture::textured_coat on the record's coat (coat.xyz the specular
 // scale, extra.xyz transmission, clear coat weight and alpha): only the
-// textured parameters are replaced.
+// textured parameters are replaced. The filled slots' lookups go through
+// one texture_lookup call in a loop over their bits, which the compiler
+// cannot unroll: lavapipe inlines every call, and five call sites were five
+// copies of the bilinear lookup (the generic kernel compiles cold in 69 s
+// instead of 83 s; docs/benchmarks.md). The early return keeps materials
+// without these slots as fast as before. Each field is written by one slot,
+// so the order is free; the specular scale multiplies as before (factor,
+// then colour).
 void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, float v) {
     if (!HAS(F_EXTENSION_TEXTURES)) {
         return;
     }
-    if (mt.transmission.texture != NO_TEXTURE) {
-        r.extra.x = mt.mr_factor.z * texture_lookup(mt.transmission, tri, u, v, false).x;
+    uint filled = (mt.transmission.texture != NO_TEXTURE ? 1u : 0u)
+        | (mt.clearcoat.texture != NO_TEXTURE ? 2u : 0u)
+        | (mt.clearcoat_roughness.texture != NO_TEXTURE ? 4u : 0u)
+        | (mt.specular.texture != NO_TEXTURE ? 8u : 0u)
+        | (mt.specular_color.texture != NO_TEXTURE ? 16u : 0u);
+    if (filled == 0u) {
+        return;
     }
-    if (mt.clearcoat.texture != NO_TEXTURE) {
-        r.extra.y = mt.coat_factor.x * texture_lookup(mt.clearcoat, tri, u, v, false).x;
-    }
-    if (mt.clearcoat_roughness.texture != NO_TEXTURE) {
-        float cr = mt.coat_factor.y * texture_lookup(mt.clearcoat_roughness, tri, u, v, false).y;
-        r.extra.z = cr * cr;
-    }
-    if (mt.specular.texture != NO_TEXTURE || mt.specular_color.texture != NO_TEXTURE) {
-        float factor = mt.coat_factor.z;
-        if (mt.specular.texture != NO_TEXTURE) {
-            factor *= texture_lookup(mt.specular, tri, u, v, false).w;
+    bool specular = (filled & 24u) != 0u;
+    float factor = mt.coat_factor.z;
+    vec3 color = mt.specular_color_factor.xyz;
+    while (filled != 0u) {
+        uint i = uint(findLSB(filled));
+        filled &= filled - 1u;
+        vec4 t = texture_lookup(coat_slot(mt, i), tri, u, v, i == 4u);
+        if (i == 0u) {
+            r.extra.x = mt.mr_factor.z * t.x;
+        } else if (i == 1u) {
+            r.extra.y = mt.coat_factor.x * t.x;
+        } else if (i == 2u) {
+            float cr = mt.coat_factor.y * t.y;
+            r.extra.z = cr * cr;
+        } else if (i == 3u) {
+            factor *= t.w;
+        } else {
+            color *= t.xyz;
         }
-        vec3 color = mt.specular_color_factor.xyz;
-        if (mt.specular_color.texture != NO_TEXTURE) {
-            color *= texture_lookup(mt.specular_color, tri, u, v, true).xyz;
-        }
+    }
+    if (specular) {
         r.coat.xyz = min(factor * color, vec3(1.0));
     }
 }
