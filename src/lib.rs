@@ -3,6 +3,7 @@
 pub use glint_cpu as cpu;
 
 pub mod backend;
+pub mod build_id;
 pub mod cache;
 pub mod chart;
 pub mod gpu;

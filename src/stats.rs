@@ -51,6 +51,8 @@ impl Stats<'_> {
         };
         let mut v = json!({
             "glint_version": env!("CARGO_PKG_VERSION"),
+            // The executable's build ID (null where none was found).
+            "glint_build": glint::build_id::build_id(),
             "backend": self.backend,
             "device": self.device,
             "scene": self.scene,

@@ -123,6 +123,16 @@ fn exr_records_attributes_variance_and_a_success_line() {
         (8, 7, "sobol", "0/1")
     );
     assert_eq!(meta.version, env!("CARGO_PKG_VERSION"));
+    // The build that rendered it: the executable's build ID (Debian's
+    // linker writes one).
+    #[cfg(target_os = "linux")]
+    assert!(
+        meta.build
+            .as_ref()
+            .is_some_and(|b| b.len() == 16 && b.bytes().all(|c| c.is_ascii_hexdigit())),
+        "{:?}",
+        meta.build
+    );
     assert_eq!(meta.samples, [(0, 8)]);
     let var = img.variance.as_ref().unwrap();
     assert!(var.iter().any(|v| v.x > 0.0) && var.iter().all(|v| v.min_element() >= 0.0));
@@ -290,12 +300,45 @@ fn merge_refuses_what_does_not_fit() {
     assert_one_line_error(&merge(&[&s0, &big]), "16x16 but");
     assert_one_line_error(&merge(&[&s0, &png]), "x.png");
     assert!(!out.exists());
-    assert_ok(&merge(&[&s0, &s1]));
+    let merged = merge(&[&s0, &s1]);
+    assert_ok(&merged);
+    assert!(!stderr(&merged).contains("warning"), "{}", stderr(&merged));
     let m = RadianceImage::read(&out).unwrap().meta.unwrap();
     assert_eq!(
         (m.spp, m.shard.as_str(), m.samples.clone()),
         (4, "0/1", vec![(0, 4)])
     );
+    // The shards' build is the merge's; shards of another build of the same
+    // version, or of another version, merge with one warning naming both,
+    // and the merge then records no build.
+    let build = RadianceImage::read(&s0).unwrap().meta.unwrap().build;
+    assert_eq!(m.build, build);
+    let rewritten = |name: &str, f: &dyn Fn(&mut RenderMeta)| {
+        let mut img = RadianceImage::read(&s1).unwrap();
+        f(img.meta.as_mut().unwrap());
+        let p = dir.join(name);
+        img.write_file(&p).unwrap();
+        p
+    };
+    let other_build = rewritten("build.exr", &|m| m.build = Some("0123456789abcdef".into()));
+    let other_version = rewritten("version.exr", &|m| m.version = "0.0.9".into());
+    if let Some(b) = &build {
+        let warned = merge(&[&s0, &other_build]);
+        assert_ok(&warned);
+        let err = stderr(&warned);
+        assert_eq!(err.matches("glint: warning:").count(), 1, "{err}");
+        assert!(
+            err.contains("build.exr: rendered by build 0123456789abcdef")
+                && err.contains(&format!("s0.exr by build {b}")),
+            "{err}"
+        );
+        assert_eq!(RadianceImage::read(&out).unwrap().meta.unwrap().build, None);
+    }
+    let warned = merge(&[&s0, &other_version]);
+    assert_ok(&warned);
+    let err = stderr(&warned);
+    assert_eq!(err.matches("glint: warning:").count(), 1, "{err}");
+    assert!(err.contains("written by glint 0.0.9"), "{err}");
     // Shards that hold nothing, or are not I/N.
     assert_one_line_error(&render(&out, 8, 4, &["--shard", "0/8"]), "holds no samples");
     assert_one_line_error(&render(&out, 8, 4, &["--shard", "4/4"]), "is not I/N");
@@ -328,6 +371,7 @@ fn render_exr(
         sampler: sampler.name().into(),
         shard: "0/1".into(),
         version: env!("CARGO_PKG_VERSION").into(),
+        build: None,
         samples: vec![(0, spp)],
         scene: None,
         files: None,
@@ -510,6 +554,7 @@ fn diff_exit_status_and_guards() {
                 sampler: "independent".into(),
                 shard: "0/1".into(),
                 version: "0".into(),
+                build: None,
                 samples: vec![(0, spp)],
                 scene: None,
                 files: None,

@@ -254,6 +254,7 @@ fn write_exr(p: &Path, w: u32, mean: Vec3, variance: Option<Vec3>, seed: u64) {
             sampler: "independent".into(),
             shard: "0/1".into(),
             version: "0".into(),
+            build: None,
             samples: vec![(0, 64)],
             scene: Some("k".into()),
             files: None,

@@ -10,6 +10,7 @@
 //! | `glint.sampler` | string | `RenderOptions::sampler.name()` |
 //! | `glint.shard` | string | `I/N` for shard I of N, `0/1` for a whole render, `I,J,.../N` for a merge of some shards |
 //! | `glint.version` | string | the glint version that wrote the file |
+//! | `glint.build` | string | the build of glint that rendered it: the executable's build ID, 16 hex digits (`glint merge` tells builds of one version apart by it); absent where none was found, in older files, and in a merge of shards of different builds |
 //! | `glint.samples` | string | the sample indices held, half-open ranges `a-b,c-d` (merge's overlap check) |
 //! | `glint.scene` | string | a content key of the scene's files and the image-defining options (merge's same-scene check, `glint test`'s reference check) |
 //! | `glint.files` | string | the part of `glint.scene` that the scene's files and the options changing what they load give (`glint test` says which part differs) |
@@ -41,6 +42,9 @@ pub struct RenderMeta {
     /// `I/N`, `0/1` for a whole render.
     pub shard: String,
     pub version: String,
+    /// The build that rendered it (the executable's build ID); absent in
+    /// older files and where the platform gives none.
+    pub build: Option<String>,
     /// Sample indices held, as half-open ranges, sorted, disjoint.
     pub samples: Vec<(u32, u32)>,
     /// Content key of the scene and the options that define the image
@@ -187,6 +191,7 @@ pub mod attr {
     pub const SAMPLER: &str = "glint.sampler";
     pub const SHARD: &str = "glint.shard";
     pub const VERSION: &str = "glint.version";
+    pub const BUILD: &str = "glint.build";
     pub const SAMPLES: &str = "glint.samples";
     pub const SCENE: &str = "glint.scene";
     pub const FILES: &str = "glint.files";
@@ -297,6 +302,9 @@ impl RadianceImage {
             put(attr::SAMPLER, text(&m.sampler));
             put(attr::SHARD, text(&m.shard));
             put(attr::VERSION, text(&m.version));
+            if let Some(b) = &m.build {
+                put(attr::BUILD, text(b));
+            }
             put(attr::SAMPLES, text(&format_ranges(&m.samples)));
             if let Some(k) = &m.scene {
                 put(attr::SCENE, text(k));
@@ -456,6 +464,7 @@ fn parse_meta(other: &HashMap<Text, AttributeValue>) -> Result<Option<RenderMeta
         sampler: text(attr::SAMPLER)?,
         shard: text(attr::SHARD)?,
         version: text(attr::VERSION)?,
+        build: get(attr::BUILD).map(|_| text(attr::BUILD)).transpose()?,
         samples,
         scene: get(attr::SCENE).map(|_| text(attr::SCENE)).transpose()?,
         files: get(attr::FILES).map(|_| text(attr::FILES)).transpose()?,
@@ -483,6 +492,7 @@ mod tests {
             sampler: "independent".into(),
             shard: "1/4".into(),
             version: "0.1.0".into(),
+            build: Some("0123456789abcdef".into()),
             samples: vec![(4, 8)],
             scene: Some("00ff".into()),
             files: Some("0f".into()),
@@ -516,6 +526,7 @@ mod tests {
             sampler: "sobol".into(),
             shard: "0/1".into(),
             version: "0.1.0".into(),
+            build: None,
             samples: vec![(0, 2)],
             scene: Some("ab".into()),
             files: None,

@@ -126,6 +126,14 @@ fn check(shards: &[Shard]) -> Result<()> {
                 "glint: warning: {p}: written by glint {} but {f} by glint {}",
                 b.version, a.version
             );
+        } else if let (Some(x), Some(y)) = (&a.build, &b.build)
+            && x != y
+        {
+            eprintln!(
+                "glint: warning: {p}: rendered by build {y} of glint {} but {f} by build {x} \
+                 (different builds of one version may render differently)",
+                b.version
+            );
         }
     }
     // Overlap: every pair of sample ranges, sorted by start.
@@ -257,6 +265,11 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         sampler: first.sampler.clone(),
         shard,
         version: env!("CARGO_PKG_VERSION").to_string(),
+        // The shards' build where they share one.
+        build: first
+            .build
+            .clone()
+            .filter(|b| shards.iter().all(|s| s.meta.build.as_ref() == Some(b))),
         samples: samples.clone(),
         scene: first.scene.clone(),
         files: first.files.clone(),

@@ -105,6 +105,7 @@ pub fn render_meta(
         sampler: opts.sampler.name().to_string(),
         shard: shard.to_string(),
         version: env!("CARGO_PKG_VERSION").to_string(),
+        build: glint::build_id::build_id().map(String::from),
         samples: vec![(opts.sample_start, opts.sample_start + spp)],
         scene: Some(image_key(source, scene, opts)),
         files: Some(source.to_string()),
