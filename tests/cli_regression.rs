@@ -339,6 +339,20 @@ fn merge_refuses_what_does_not_fit() {
     let err = stderr(&warned);
     assert_eq!(err.matches("glint: warning:").count(), 1, "{err}");
     assert!(err.contains("written by glint 0.0.9"), "{err}");
+    assert_eq!(
+        RadianceImage::read(&out).unwrap().meta.unwrap().version,
+        env!("CARGO_PKG_VERSION")
+    );
+    // Shards all of another version keep it.
+    let other_version0 = dir.join("version0.exr");
+    let mut img = RadianceImage::read(&s0).unwrap();
+    img.meta.as_mut().unwrap().version = "0.0.9".into();
+    img.write_file(&other_version0).unwrap();
+    assert_ok(&merge(&[&other_version0, &other_version]));
+    assert_eq!(
+        RadianceImage::read(&out).unwrap().meta.unwrap().version,
+        "0.0.9"
+    );
     // Shards that hold nothing, or are not I/N.
     assert_one_line_error(&render(&out, 8, 4, &["--shard", "0/8"]), "holds no samples");
     assert_one_line_error(&render(&out, 8, 4, &["--shard", "4/4"]), "is not I/N");

@@ -9,7 +9,7 @@
 //! | `glint.seed` | string | the random seed (decimal; a u64 does not fit an EXR int) |
 //! | `glint.sampler` | string | `RenderOptions::sampler.name()` |
 //! | `glint.shard` | string | `I/N` for shard I of N, `0/1` for a whole render, `I,J,.../N` for a merge of some shards |
-//! | `glint.version` | string | the glint version that wrote the file |
+//! | `glint.version` | string | the glint version that rendered it (a merge: the shards' where they share one, else the merging glint's) |
 //! | `glint.build` | string | the build of glint that rendered it: the executable's build ID, 16 hex digits (`glint merge` tells builds of one version apart by it); absent where none was found, in older files, and in a merge of shards of different builds |
 //! | `glint.samples` | string | the sample indices held, half-open ranges `a-b,c-d` (merge's overlap check) |
 //! | `glint.scene` | string | a content key of the scene's files and the image-defining options (merge's same-scene check, `glint test`'s reference check) |

@@ -264,8 +264,13 @@ pub fn run(args: &MergeArgs) -> Result<()> {
         seed: first.seed,
         sampler: first.sampler.clone(),
         shard,
-        version: env!("CARGO_PKG_VERSION").to_string(),
-        // The shards' build where they share one.
+        // The version and build that rendered the samples, where the shards
+        // share one (the merging binary's version otherwise).
+        version: if shards.iter().all(|s| s.meta.version == first.version) {
+            first.version.clone()
+        } else {
+            env!("CARGO_PKG_VERSION").to_string()
+        },
         build: first
             .build
             .clone()
