@@ -19,6 +19,16 @@ pub fn build_id() -> Option<&'static str> {
         .as_deref()
 }
 
+/// `glint --version`'s text: the version and, where found, the build
+/// (`0.1.0 (build 0123456789abcdef)`).
+pub fn long_version() -> &'static str {
+    static TEXT: OnceLock<String> = OnceLock::new();
+    TEXT.get_or_init(|| match build_id() {
+        Some(b) => format!("{} (build {b})", env!("CARGO_PKG_VERSION")),
+        None => env!("CARGO_PKG_VERSION").to_string(),
+    })
+}
+
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect()
 }

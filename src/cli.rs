@@ -11,6 +11,7 @@ use serde::Serialize;
 #[command(
     name = "glint",
     version,
+    long_version = glint::build_id::long_version(),
     about = "Headless physically based renderer: Vulkan compute path tracer with a CPU reference",
     // A later option overrides an earlier one (converge's variants append
     // their options to the shared ones).

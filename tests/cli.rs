@@ -157,6 +157,23 @@ fn renders_png_and_exr_with_stats() {
         assert!(v.get(key).is_some(), "stats lack {key}: {v}");
     }
     assert_eq!(v["backend"], "cpu");
+    // The build the stats name is the one `--version` names (and the
+    // EXR's glint.build, checked in cli_regression).
+    let version = glint().arg("--version").output().unwrap();
+    let version = String::from_utf8_lossy(&version.stdout).trim().to_string();
+    assert!(
+        version.starts_with(concat!("glint ", env!("CARGO_PKG_VERSION"))),
+        "{version}"
+    );
+    match v["glint_build"].as_str() {
+        Some(b) => assert!(
+            version.ends_with(&format!("(build {b})")),
+            "{version} / {b}"
+        ),
+        None => assert!(!version.contains("build"), "{version}"),
+    }
+    #[cfg(target_os = "linux")]
+    assert!(v["glint_build"].is_string(), "{v}");
     assert_eq!(
         (v["width"].as_u64(), v["height"].as_u64()),
         (Some(48), Some(32))
