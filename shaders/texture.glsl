@@ -193,11 +193,12 @@ void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, flo
     if (!HAS(F_EXTENSION_TEXTURES)) {
         return;
     }
-    uint filled = (mt.transmission.texture != NO_TEXTURE ? 1u : 0u)
-        | (mt.clearcoat.texture != NO_TEXTURE ? 2u : 0u)
-        | (mt.clearcoat_roughness.texture != NO_TEXTURE ? 4u : 0u)
-        | (mt.specular.texture != NO_TEXTURE ? 8u : 0u)
-        | (mt.specular_color.texture != NO_TEXTURE ? 16u : 0u);
+    uint filled = 0u;
+    for (uint i = 0u; i < 5u; i++) {
+        if (coat_slot(mt, i).texture != NO_TEXTURE) {
+            filled |= 1u << i;
+        }
+    }
     if (filled == 0u) {
         return;
     }

@@ -151,15 +151,7 @@ impl Features {
         if t.normal.is_some() {
             f |= Self::NORMAL_MAP;
         }
-        let extension_slots = [
-            &t.transmission,
-            &t.clearcoat,
-            &t.clearcoat_roughness,
-            &t.specular,
-            &t.specular_color,
-            &t.clearcoat_normal,
-        ];
-        if extension_slots.iter().any(|r| r.is_some()) {
+        if t.has_coat_textures() || t.clearcoat_normal.is_some() {
             f |= Self::EXTENSION_TEXTURES;
         }
         f

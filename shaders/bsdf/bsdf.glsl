@@ -571,19 +571,17 @@ bool gltf_is_coated(Material m) {
 }
 
 vec3 gltf_inner_eval(Material m, vec3 wo, vec3 wi) {
-    bool coated = gltf_is_coated(m);
-    float w = coated ? 0.0 : m.reflectance.w;
+    float w = gltf_is_coated(m) ? 0.0 : m.reflectance.w;
     vec3 f_c = w != 0.0 ? conductor_eval(m, wo, wi) : vec3(0.0);
     vec3 f_n = 1.0 - w != 0.0 ? coated_eval(m.reflectance.xyz, m, wo, wi) : vec3(0.0);
-    return coated ? f_n : w * f_c + (1.0 - w) * f_n;
+    return w * f_c + (1.0 - w) * f_n;
 }
 
 float gltf_inner_pdf(Material m, vec3 wo, vec3 wi) {
-    bool coated = gltf_is_coated(m);
-    float w = coated ? 0.0 : m.reflectance.w;
+    float w = gltf_is_coated(m) ? 0.0 : m.reflectance.w;
     float pdf_c = w != 0.0 ? conductor_pdf(m, wo, wi) : 0.0;
     float pdf_n = 1.0 - w != 0.0 ? coated_pdf(m.reflectance.xyz, m, wo, wi) : 0.0;
-    return coated ? pdf_n : w * pdf_c + (1.0 - w) * pdf_n;
+    return w * pdf_c + (1.0 - w) * pdf_n;
 }
 
 bool gltf_inner_sample(Material m, vec3 wo, float uc, vec2 u, out BsdfSample s) {
