@@ -68,12 +68,66 @@ pub fn dielectric_sample(
     if dielectric_is_smooth(eta, r) {
         return lanes::smooth_sample(eta, wo.into(), uc).single();
     }
-    let mut s =
-        lanes::rough_sample(&RoughDielectric::of(eta, r), wo.into(), uc, u.into()).single()?;
+    let mut s = rough_sample(&RoughDielectric::of(eta, r), wo, uc, u)?;
     if r.multiscatter {
         s.weight *= dielectric_ms_scale(eta, r, wo);
     }
     Some(s)
+}
+
+/// [`lanes::rough_sample`] with its selects as branches: the lobe that
+/// `uc` does not pick is not computed. The same operations on the picked
+/// side, so the same bits as the one-lane instantiation.
+#[inline]
+fn rough_sample(c: &RoughDielectric<f32>, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
+    use crate::bsdf::fresnel::lanes::{fresnel_dielectric, refract_dir};
+    use crate::bsdf::microfacet::lanes::{
+        ggx_g1, ggx_g2, ggx_pdf_visible, ggx_sample_visible, reflect_dir,
+    };
+    if wo.z == 0.0 {
+        return None;
+    }
+    let wo = crate::lanes::V3::from(wo);
+    let wm = ggx_sample_visible(wo, c.ax, c.ay, u.into());
+    let dot_o = wo.dot(wm);
+    let pr = fresnel_dielectric(dot_o, c.eta);
+    let (wi, pdf, etap) = if uc < pr {
+        let wr = reflect_dir(wo, wm);
+        if wr.z * wo.z <= 0.0 {
+            return None;
+        }
+        let pdf_wm = ggx_pdf_visible(wo, wm, c.ax, c.ay);
+        (wr, pdf_wm / (4.0 * dot_o.abs()) * pr, 1.0)
+    } else {
+        let (refracts, wt, etap) = refract_dir(wo, wm, c.eta);
+        let dot_i = wt.dot(wm);
+        let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
+        if !refracts || wt.z * wo.z >= 0.0 || denom <= 0.0 {
+            return None;
+        }
+        let pdf_wm = ggx_pdf_visible(wo, wm, c.ax, c.ay);
+        (wt, pdf_wm * (dot_i.abs() / denom) * (1.0 - pr), etap)
+    };
+    if !(pdf > 0.0 && pdf < f32::INFINITY) {
+        return None;
+    }
+    let g1 = ggx_g1(wo, c.ax, c.ay);
+    if g1 <= 0.0 || !lanes::half_vector(c.eta, wo, wi).valid {
+        return None;
+    }
+    let g2 = ggx_g2(wo, wi, c.ax, c.ay, c.separable);
+    let w = if uc < pr {
+        g2 / g1
+    } else {
+        g2 / g1 / (etap * etap)
+    };
+    Some(BsdfSample {
+        wi: wi.into(),
+        weight: Vec3::splat(w),
+        pdf,
+        delta: false,
+        eta: etap,
+    })
 }
 
 /// A rough dielectric's parameters, one per lane (without the
