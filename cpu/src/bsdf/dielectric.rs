@@ -77,7 +77,8 @@ pub fn dielectric_sample(
 
 /// [`lanes::rough_sample`] with its selects as branches: the lobe that
 /// `uc` does not pick is not computed. The same operations on the picked
-/// side, so the same bits as the one-lane instantiation.
+/// side, so the same bits as the one-lane instantiation; each early return
+/// is a term of its validity mask, NaN included (`!(x > 0)`, not `x <= 0`).
 #[inline]
 fn rough_sample(c: &RoughDielectric<f32>, wo: Vec3, uc: f32, u: Vec2) -> Option<BsdfSample> {
     use crate::bsdf::fresnel::lanes::{fresnel_dielectric, refract_dir};
@@ -102,7 +103,7 @@ fn rough_sample(c: &RoughDielectric<f32>, wo: Vec3, uc: f32, u: Vec2) -> Option<
         let (refracts, wt, etap) = refract_dir(wo, wm, c.eta);
         let dot_i = wt.dot(wm);
         let denom = (dot_i + dot_o / etap) * (dot_i + dot_o / etap);
-        if !refracts || wt.z * wo.z >= 0.0 || denom <= 0.0 {
+        if !refracts || wt.z * wo.z >= 0.0 || !(denom > 0.0) {
             return None;
         }
         let pdf_wm = ggx_pdf_visible(wo, wm, c.ax, c.ay);
@@ -112,7 +113,7 @@ fn rough_sample(c: &RoughDielectric<f32>, wo: Vec3, uc: f32, u: Vec2) -> Option<
         return None;
     }
     let g1 = ggx_g1(wo, c.ax, c.ay);
-    if g1 <= 0.0 || !lanes::half_vector(c.eta, wo, wi).valid {
+    if !(g1 > 0.0) || !lanes::half_vector(c.eta, wo, wi).valid {
         return None;
     }
     let g2 = ggx_g2(wo, wi, c.ax, c.ay, c.separable);
