@@ -202,7 +202,7 @@ void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, flo
     if (filled == 0u) {
         return;
     }
-    bool specular = (filled & 24u) != 0u;
+    bool specular = (filled & ((1u << 3u) | (1u << 4u))) != 0u; // specular, its colour
     float factor = mt.coat_factor.z;
     vec3 color = mt.specular_color_factor.xyz;
     while (filled != 0u) {

@@ -116,12 +116,9 @@ fn rough_sample(c: &RoughDielectric<f32>, wo: Vec3, uc: f32, u: Vec2) -> Option<
     if !(g1 > 0.0) || !lanes::half_vector(c.eta, wo, wi).valid {
         return None;
     }
-    let g2 = ggx_g2(wo, wi, c.ax, c.ay, c.separable);
-    let w = if uc < pr {
-        g2 / g1
-    } else {
-        g2 / g1 / (etap * etap)
-    };
+    // etap is 1 for a reflection, and x / 1 is x exactly: the lanes'
+    // g2 / g1 there.
+    let w = ggx_g2(wo, wi, c.ax, c.ay, c.separable) / g1 / (etap * etap);
     Some(BsdfSample {
         wi: wi.into(),
         weight: Vec3::splat(w),
