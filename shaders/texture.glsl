@@ -164,16 +164,22 @@ void conductor_from_f0(inout Material g, vec3 f0, float alpha, uint multiscatter
     g.shadowing = SHADOWING_CORRELATED | multiscatter;
 }
 
-// The coat's KHR texture slots, by textured_coat's bit: transmission,
-// clear coat, its roughness, specular, specular colour.
+// The coat's KHR texture slots, by textured_coat's bit.
+const uint SLOT_TRANSMISSION = 0u;
+const uint SLOT_CLEARCOAT = 1u;
+const uint SLOT_CLEARCOAT_ROUGHNESS = 2u;
+const uint SLOT_SPECULAR = 3u;
+const uint SLOT_SPECULAR_COLOR = 4u;
+const uint COAT_SLOTS = 5u;
+
 TexRef coat_slot(MaterialTextures mt, uint i) {
-    if (i == 0u) {
+    if (i == SLOT_TRANSMISSION) {
         return mt.transmission;
-    } else if (i == 1u) {
+    } else if (i == SLOT_CLEARCOAT) {
         return mt.clearcoat;
-    } else if (i == 2u) {
+    } else if (i == SLOT_CLEARCOAT_ROUGHNESS) {
         return mt.clearcoat_roughness;
-    } else if (i == 3u) {
+    } else if (i == SLOT_SPECULAR) {
         return mt.specular;
     }
     return mt.specular_color;
@@ -194,7 +200,7 @@ void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, flo
         return;
     }
     uint filled = 0u;
-    for (uint i = 0u; i < 5u; i++) {
+    for (uint i = 0u; i < COAT_SLOTS; i++) {
         if (coat_slot(mt, i).texture != NO_TEXTURE) {
             filled |= 1u << i;
         }
@@ -202,21 +208,21 @@ void textured_coat(MaterialTextures mt, inout Material r, uint tri, float u, flo
     if (filled == 0u) {
         return;
     }
-    bool specular = (filled & ((1u << 3u) | (1u << 4u))) != 0u; // specular, its colour
+    bool specular = (filled & ((1u << SLOT_SPECULAR) | (1u << SLOT_SPECULAR_COLOR))) != 0u;
     float factor = mt.coat_factor.z;
     vec3 color = mt.specular_color_factor.xyz;
     while (filled != 0u) {
         uint i = uint(findLSB(filled));
         filled &= filled - 1u;
-        vec4 t = texture_lookup(coat_slot(mt, i), tri, u, v, i == 4u);
-        if (i == 0u) {
+        vec4 t = texture_lookup(coat_slot(mt, i), tri, u, v, i == SLOT_SPECULAR_COLOR);
+        if (i == SLOT_TRANSMISSION) {
             r.extra.x = mt.mr_factor.z * t.x;
-        } else if (i == 1u) {
+        } else if (i == SLOT_CLEARCOAT) {
             r.extra.y = mt.coat_factor.x * t.x;
-        } else if (i == 2u) {
+        } else if (i == SLOT_CLEARCOAT_ROUGHNESS) {
             float cr = mt.coat_factor.y * t.y;
             r.extra.z = cr * cr;
-        } else if (i == 3u) {
+        } else if (i == SLOT_SPECULAR) {
             factor *= t.w;
         } else {
             color *= t.xyz;
