@@ -4,6 +4,7 @@
 
 mod cli;
 mod cmd;
+mod cpu_check;
 mod stats;
 
 use std::process::ExitCode;
@@ -29,6 +30,10 @@ fn install_signal_handlers() {
 }
 
 fn main() -> ExitCode {
+    if let Some(why) = cpu_check::refusal() {
+        eprintln!("glint: {why}");
+        return ExitCode::FAILURE;
+    }
     install_panic_hook();
     install_signal_handlers();
     let cli = match Cli::try_parse() {
