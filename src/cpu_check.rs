@@ -47,96 +47,129 @@ mod x86 {
         Avx512,
     }
 
-    /// Where CPUID reports a feature: (leaf, subleaf, register 0-3 for
-    /// eax, ebx, ecx, edx, bit).
+    /// The CPUID words that hold the features below.
+    #[derive(Clone, Copy)]
+    pub(super) enum Word {
+        /// Leaf 1, ecx.
+        L1Ecx,
+        /// Leaf 7 subleaf 0, ebx.
+        L7Ebx,
+        /// Leaf 7 subleaf 0, ecx.
+        L7Ecx,
+        /// Leaf 0x8000_0001, ecx.
+        Ext1Ecx,
+    }
+
     pub(super) struct Feature {
         pub name: &'static str,
         pub built_for: bool,
-        pub at: (u32, u32, usize, u32),
+        pub word: Word,
+        pub bit: u32,
         pub state: State,
     }
 
     macro_rules! features {
-        ($(($f:tt, $leaf:expr, $sub:expr, $reg:expr, $bit:expr, $state:ident)),* $(,)?) => {
+        ($(($f:tt, $word:ident, $bit:expr, $state:ident)),* $(,)?) => {
             [$(Feature {
                 name: $f,
                 built_for: cfg!(target_feature = $f),
-                at: ($leaf, $sub, $reg, $bit),
+                word: Word::$word,
+                bit: $bit,
                 state: State::$state,
             }),*]
         };
     }
-
-    const ECX: usize = 2;
-    const EBX: usize = 1;
 
     /// The x86-64 features past the baseline that LLVM's CPU models enable
     /// (x86-64-v2 .. v4 and what `native` adds on current CPUs) with their
     /// CPUID bits (Intel SDM vol. 2A, CPUID).
     pub(super) fn table() -> [Feature; 32] {
         features![
-            ("sse3", 1, 0, ECX, 0, Sse),
-            ("pclmulqdq", 1, 0, ECX, 1, Sse),
-            ("ssse3", 1, 0, ECX, 9, Sse),
-            ("fma", 1, 0, ECX, 12, Avx),
-            ("cmpxchg16b", 1, 0, ECX, 13, Sse),
-            ("sse4.1", 1, 0, ECX, 19, Sse),
-            ("sse4.2", 1, 0, ECX, 20, Sse),
-            ("movbe", 1, 0, ECX, 22, Sse),
-            ("popcnt", 1, 0, ECX, 23, Sse),
-            ("aes", 1, 0, ECX, 25, Sse),
-            ("xsave", 1, 0, ECX, 26, Sse),
-            ("avx", 1, 0, ECX, 28, Avx),
-            ("f16c", 1, 0, ECX, 29, Avx),
-            ("rdrand", 1, 0, ECX, 30, Sse),
-            ("bmi1", 7, 0, EBX, 3, Sse),
-            ("avx2", 7, 0, EBX, 5, Avx),
-            ("bmi2", 7, 0, EBX, 8, Sse),
-            ("avx512f", 7, 0, EBX, 16, Avx512),
-            ("avx512dq", 7, 0, EBX, 17, Avx512),
-            ("rdseed", 7, 0, EBX, 18, Sse),
-            ("adx", 7, 0, EBX, 19, Sse),
-            ("avx512ifma", 7, 0, EBX, 21, Avx512),
-            ("avx512cd", 7, 0, EBX, 28, Avx512),
-            ("sha", 7, 0, EBX, 29, Sse),
-            ("avx512bw", 7, 0, EBX, 30, Avx512),
-            ("avx512vl", 7, 0, EBX, 31, Avx512),
-            ("avx512vbmi", 7, 0, ECX, 1, Avx512),
-            ("avx512vbmi2", 7, 0, ECX, 6, Avx512),
-            ("avx512vnni", 7, 0, ECX, 11, Avx512),
-            ("avx512bitalg", 7, 0, ECX, 12, Avx512),
-            ("avx512vpopcntdq", 7, 0, ECX, 14, Avx512),
-            ("lzcnt", 0x8000_0001, 0, ECX, 5, Sse),
+            ("sse3", L1Ecx, 0, Sse),
+            ("pclmulqdq", L1Ecx, 1, Sse),
+            ("ssse3", L1Ecx, 9, Sse),
+            ("fma", L1Ecx, 12, Avx),
+            ("cmpxchg16b", L1Ecx, 13, Sse),
+            ("sse4.1", L1Ecx, 19, Sse),
+            ("sse4.2", L1Ecx, 20, Sse),
+            ("movbe", L1Ecx, 22, Sse),
+            ("popcnt", L1Ecx, 23, Sse),
+            ("aes", L1Ecx, 25, Sse),
+            ("xsave", L1Ecx, 26, Sse),
+            ("avx", L1Ecx, 28, Avx),
+            ("f16c", L1Ecx, 29, Avx),
+            ("rdrand", L1Ecx, 30, Sse),
+            ("bmi1", L7Ebx, 3, Sse),
+            ("avx2", L7Ebx, 5, Avx),
+            ("bmi2", L7Ebx, 8, Sse),
+            ("avx512f", L7Ebx, 16, Avx512),
+            ("avx512dq", L7Ebx, 17, Avx512),
+            ("rdseed", L7Ebx, 18, Sse),
+            ("adx", L7Ebx, 19, Sse),
+            ("avx512ifma", L7Ebx, 21, Avx512),
+            ("avx512cd", L7Ebx, 28, Avx512),
+            ("sha", L7Ebx, 29, Sse),
+            ("avx512bw", L7Ebx, 30, Avx512),
+            ("avx512vl", L7Ebx, 31, Avx512),
+            ("avx512vbmi", L7Ecx, 1, Avx512),
+            ("avx512vbmi2", L7Ecx, 6, Avx512),
+            ("avx512vnni", L7Ecx, 11, Avx512),
+            ("avx512bitalg", L7Ecx, 12, Avx512),
+            ("avx512vpopcntdq", L7Ecx, 14, Avx512),
+            ("lzcnt", Ext1Ecx, 5, Sse),
         ]
     }
 
-    /// Whether this CPU (and its OS) has `f`. (`__cpuid` is a safe
-    /// function in newer Rust than the workspace's rust-version.)
-    #[allow(unused_unsafe)]
-    pub(super) fn has(f: &Feature) -> bool {
-        let (leaf, sub, reg, bit) = f.at;
-        // SAFETY: CPUID exists on every x86-64 CPU; a leaf past the highest
-        // one is not asked.
-        let max = unsafe { __cpuid(leaf & 0x8000_0000).eax };
-        if leaf > max {
-            return false;
-        }
-        let r = unsafe { __cpuid_count(leaf, sub) };
-        let words = [r.eax, r.ebx, r.ecx, r.edx];
-        words[reg] & (1 << bit) != 0 && state_saved(f.state)
+    /// This CPU's answers, asked once: the words above and XCR0 (0 where
+    /// the OS has not enabled XSAVE).
+    pub(super) struct Cpu {
+        words: [u32; 4],
+        xcr0: u64,
     }
 
-    #[allow(unused_unsafe)]
-    fn state_saved(state: State) -> bool {
-        let need = match state {
-            State::Sse => return true,
-            State::Avx => 0b110,
-            State::Avx512 => 0b1110_0110,
-        };
-        // SAFETY: CPUID as above; XGETBV only where OSXSAVE (leaf 1, ecx
-        // bit 27) says the OS enabled it.
-        let osxsave = unsafe { __cpuid(1).ecx } & (1 << 27) != 0;
-        osxsave && unsafe { xcr0() } & need == need
+    impl Cpu {
+        /// (`__cpuid` is a safe function in newer Rust than the
+        /// workspace's rust-version.)
+        #[allow(unused_unsafe)]
+        pub(super) fn read() -> Self {
+            // SAFETY: CPUID exists on every x86-64 CPU; no leaf past the
+            // highest one is asked.
+            let (max, max_ext) = unsafe { (__cpuid(0).eax, __cpuid(0x8000_0000).eax) };
+            let l1_ecx = unsafe { __cpuid(1).ecx };
+            let l7 = (max >= 7).then(|| unsafe { __cpuid_count(7, 0) });
+            let ext1_ecx = if max_ext >= 0x8000_0001 {
+                unsafe { __cpuid(0x8000_0001).ecx }
+            } else {
+                0
+            };
+            // XGETBV only where OSXSAVE (leaf 1, ecx bit 27) says the OS
+            // enabled it.
+            let xcr0 = if l1_ecx & (1 << 27) != 0 {
+                // SAFETY: as just said.
+                unsafe { xcr0() }
+            } else {
+                0
+            };
+            Self {
+                words: [
+                    l1_ecx,
+                    l7.map_or(0, |r| r.ebx),
+                    l7.map_or(0, |r| r.ecx),
+                    ext1_ecx,
+                ],
+                xcr0,
+            }
+        }
+
+        /// Whether this CPU, and its OS's saved register state, have `f`.
+        pub(super) fn has(&self, f: &Feature) -> bool {
+            let need = match f.state {
+                State::Sse => 0,
+                State::Avx => 0b110,
+                State::Avx512 => 0b1110_0110,
+            };
+            self.words[f.word as usize] & (1 << f.bit) != 0 && self.xcr0 & need == need
+        }
     }
 
     #[target_feature(enable = "xsave")]
@@ -146,9 +179,14 @@ mod x86 {
     }
 
     pub(super) fn built_for_but_missing() -> Vec<&'static str> {
-        table()
+        let built: Vec<Feature> = table().into_iter().filter(|f| f.built_for).collect();
+        if built.is_empty() {
+            return Vec::new(); // a baseline build asks the CPU nothing
+        }
+        let cpu = Cpu::read();
+        built
             .iter()
-            .filter(|f| f.built_for && !has(f))
+            .filter(|f| !cpu.has(f))
             .map(|f| f.name)
             .collect()
     }
@@ -183,6 +221,7 @@ mod tests {
                 }
             };
         }
+        let cpu = x86::Cpu::read();
         for f in x86::table() {
             if f.built_for {
                 continue; // std answers true without asking
@@ -222,7 +261,7 @@ mod tests {
                 "avx512vpopcntdq",
                 "lzcnt"
             );
-            assert_eq!(x86::has(&f), std, "{}", f.name);
+            assert_eq!(cpu.has(&f), std, "{}", f.name);
         }
     }
 
