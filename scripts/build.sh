@@ -7,7 +7,8 @@
 #
 # It is built for this machine's CPU (`-C target-cpu=native`: its AVX2, FMA
 # or AVX-512 in all the code, not only in the kernels that detect them at run
-# time), another 5-12% on the CPU backend with the same images bit for bit:
+# time), another 4-16% on the CPU backend on a Zen 4 with AVX-512, with the
+# same images bit for bit:
 # Rust never fuses or reorders floating-point operations, whatever the
 # instruction set (docs/benchmarks.md, "Built for the machine's CPU"). The
 # binary refuses, in one line, to run on a CPU that lacks what it was built
