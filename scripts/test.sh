@@ -25,3 +25,14 @@ fi
 command -v chromium >/dev/null 2>&1 && export GLINT_REQUIRE_BROWSER=1
 export GLINT_VALIDATION=1
 cargo test --workspace --locked "$@"
+# The lanes once more as scripts/build.sh compiles them, for this machine's
+# CPU: there F32x8's operations are AVX2 instructions (cpu/src/lanes.rs,
+# `ymm_or!`) rather than loops, and the wave shades its Lambertian vertices
+# in lanes by default. Every lane and every bundled scene must still give
+# the scalar code's bits (cpu/tests/lanes.rs). Its own target folder, so the
+# suite's build above is not rebuilt with other flags.
+if grep -qw avx2 /proc/cpuinfo 2>/dev/null; then
+  native=(env RUSTFLAGS="${RUSTFLAGS:-} -C target-cpu=native" CARGO_TARGET_DIR=target/native-test)
+  "${native[@]}" cargo test -p glint-cpu --locked --test lanes "$@"
+  "${native[@]}" cargo test -p glint-cpu --locked --lib "$@" -- lanes::
+fi

@@ -14,13 +14,14 @@ impl Frame {
     /// A frame around unit normal `n`, tangent chosen by Duff et al. 2017
     /// ("Building an Orthonormal Basis, Revisited"): continuous except at
     /// n.z = -1 exactly, branch-free, and written identically in GLSL.
+    #[inline]
     pub fn from_normal(n: Vec3) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
-        Self { s, t, n }
+        let f = lanes::Frame::<f32>::from_normal(n.into());
+        Self {
+            s: f.s.into(),
+            t: f.t.into(),
+            n,
+        }
     }
 
     /// A frame around unit normal `n` whose `s` axis follows `tangent`
@@ -49,6 +50,43 @@ impl Frame {
     #[inline]
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
+    }
+}
+
+/// The frames over any [`crate::lanes::Lane`] type (one source with the
+/// scalar [`Frame::from_normal`], and the same formulas as its `to_local`
+/// and `to_world`).
+pub mod lanes {
+    use crate::lanes::{Lane, V3};
+
+    #[derive(Clone, Copy, Debug)]
+    pub struct Frame<L> {
+        pub s: V3<L>,
+        pub t: V3<L>,
+        pub n: V3<L>,
+    }
+
+    impl<L: Lane> Frame<L> {
+        /// [`super::Frame::from_normal`] in every lane.
+        #[inline(always)]
+        pub fn from_normal(n: V3<L>) -> Self {
+            let sign = L::one().copysign(n.z);
+            let a = -L::one() / (sign + n.z);
+            let b = n.x * n.y * a;
+            let s = V3::new(L::one() + sign * n.x * n.x * a, sign * b, -sign * n.x);
+            let t = V3::new(b, sign + n.y * n.y * a, -n.y);
+            Self { s, t, n }
+        }
+
+        #[inline(always)]
+        pub fn to_local(&self, v: V3<L>) -> V3<L> {
+            V3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+        }
+
+        #[inline(always)]
+        pub fn to_world(&self, v: V3<L>) -> V3<L> {
+            self.s.scale(v.x) + self.t.scale(v.y) + self.n.scale(v.z)
+        }
     }
 }
 

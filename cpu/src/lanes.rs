@@ -97,6 +97,9 @@ pub trait Lane:
     /// i32's range (0 for NaN), as a truncating conversion gives it, so it
     /// rounds as the scalar code's `y as usize` does.
     fn trunc_i32(self) -> Self;
+    /// `f32::copysign` per lane: the magnitude of `self`, the sign bit of
+    /// `sign` (-0.0 and NaN's sign bit included).
+    fn copysign(self, sign: Self) -> Self;
     /// `t` in the lanes where `m` holds, else `f`, for masks.
     #[inline(always)]
     fn select_mask(m: Self::Mask, t: Self::Mask, f: Self::Mask) -> Self::Mask {
@@ -191,6 +194,10 @@ impl Lane for f32 {
     fn trunc_i32(self) -> Self {
         self as i32 as f32
     }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        f32::copysign(self, sign)
+    }
 }
 
 /// Eight `f32` lanes (see the module notes).
@@ -206,66 +213,159 @@ pub struct Mask8(pub [u32; 8]);
 impl Mask8 {
     /// The lanes `0..n` (n <= 8).
     pub fn first(n: usize) -> Self {
-        Self(std::array::from_fn(|i| if i < n { !0 } else { 0 }))
+        Self(build8(|i| if i < n { !0 } else { 0 }))
     }
 
     #[inline(always)]
     pub fn test(self, i: usize) -> bool {
         self.0[i] != 0
     }
+
+    /// The lanes whose bit is set in `bits` (bit k: lane k).
+    #[inline(always)]
+    pub fn from_bits(bits: u8) -> Self {
+        Self(build8(|i| mask_of(bits >> i & 1 != 0)))
+    }
 }
 
-// Lane by lane, by index: `array::map` goes through closures that LLVM
-// does not always inline (measured: calls in the AVX2 copy), from_fn does.
+/// The lanes of mask `m` as bits (bit k: lane k), the form
+/// [`live_lanes`] walks.
+#[inline(always)]
+pub fn mask_bits<L: Lane>(m: L::Mask) -> u8 {
+    (0..L::LANES).fold(0, |b, i| b | u8::from(L::mask_lane(m, i)) << i)
+}
+
+/// `[f(0), f(1), ..., f(7)]`, written out: `array::map` and
+/// `array::from_fn` go through closures and a drop guard that LLVM leaves
+/// out of line in a large function (measured: `try_from_fn` calls, compiled
+/// without AVX2, from the wave's AVX2 copy), which the eight calls here
+/// never are.
+#[inline(always)]
+pub fn build8<T>(mut f: impl FnMut(usize) -> T) -> [T; 8] {
+    [f(0), f(1), f(2), f(3), f(4), f(5), f(6), f(7)]
+}
+
+// Lane by lane, by index ([`build8`]).
 macro_rules! lanewise {
     ($f:expr; $($a:expr),+) => {
-        std::array::from_fn(|i| $f($($a.0[i]),+))
+        build8(|i| $f($($a.0[i]),+))
     };
 }
 
+/// `$ymm` (with `core::arch`'s AVX intrinsics in scope and the lanes
+/// loaded by [`ymm::ld`]) in a build that enables AVX2 for every
+/// function (`-C target-cpu=native`, scripts/build.sh), else `$arr`, the
+/// loop over the lanes: LLVM vectorises the loops of a small function, but
+/// in a large one (a wave's vertex) it left two to four instructions per
+/// lane operation (128-bit halves, shuffles, spills); the intrinsics are
+/// one each. Both round as the scalar code does (IEEE add, sub, mul, div,
+/// sqrt; ordered comparisons).
+macro_rules! ymm_or {
+    ($ymm:expr, $arr:expr) => {{
+        #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+        #[allow(unused_unsafe)]
+        // SAFETY: the build enables AVX2 (the cfg), and `ymm` only
+        // reinterprets 32-byte arrays.
+        let r = unsafe {
+            #[allow(unused_imports)]
+            use std::arch::x86_64::*;
+            #[allow(unused_imports)]
+            use ymm::*;
+            $ymm
+        };
+        #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+        let r = $arr;
+        r
+    }};
+}
+
+/// Lanes as AVX registers and back ([`ymm_or!`]).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+mod ymm {
+    use std::arch::x86_64::__m256;
+
+    use super::{F32x8, Mask8};
+
+    #[inline(always)]
+    pub fn ld(a: F32x8) -> __m256 {
+        // SAFETY: 32 bytes to 32 bytes.
+        unsafe { std::mem::transmute::<[f32; 8], __m256>(a.0) }
+    }
+    #[inline(always)]
+    pub fn st(v: __m256) -> F32x8 {
+        // SAFETY: 32 bytes to 32 bytes, any bits a float.
+        F32x8(unsafe { std::mem::transmute::<__m256, [f32; 8]>(v) })
+    }
+    #[inline(always)]
+    pub fn ldm(m: Mask8) -> __m256 {
+        // SAFETY: 32 bytes to 32 bytes.
+        unsafe { std::mem::transmute::<[u32; 8], __m256>(m.0) }
+    }
+    #[inline(always)]
+    pub fn stm(v: __m256) -> Mask8 {
+        // SAFETY: 32 bytes to 32 bytes.
+        Mask8(unsafe { std::mem::transmute::<__m256, [u32; 8]>(v) })
+    }
+}
+
 macro_rules! f32x8_op {
-    ($tr:ident, $m:ident, $op:tt) => {
+    ($tr:ident, $m:ident, $op:tt, $ymm:ident) => {
         impl $tr for F32x8 {
             type Output = Self;
             #[inline(always)]
             fn $m(self, o: Self) -> Self {
-                Self(lanewise!(|a: f32, b: f32| a $op b; self, o))
+                ymm_or!(
+                    st($ymm(ld(self), ld(o))),
+                    Self(lanewise!(|a: f32, b: f32| a $op b; self, o))
+                )
             }
         }
     };
 }
-f32x8_op!(Add, add, +);
-f32x8_op!(Sub, sub, -);
-f32x8_op!(Mul, mul, *);
-f32x8_op!(Div, div, /);
+f32x8_op!(Add, add, +, _mm256_add_ps);
+f32x8_op!(Sub, sub, -, _mm256_sub_ps);
+f32x8_op!(Mul, mul, *, _mm256_mul_ps);
+f32x8_op!(Div, div, /, _mm256_div_ps);
 
 impl Neg for F32x8 {
     type Output = Self;
     #[inline(always)]
     fn neg(self) -> Self {
-        Self(lanewise!(|a: f32| -a; self))
+        ymm_or!(
+            st(_mm256_xor_ps(ld(self), _mm256_set1_ps(-0.0))),
+            Self(lanewise!(|a: f32| -a; self))
+        )
     }
 }
 
 macro_rules! mask8_op {
-    ($tr:ident, $m:ident, $op:tt) => {
+    ($tr:ident, $m:ident, $op:tt, $ymm:ident) => {
         impl $tr for Mask8 {
             type Output = Self;
             #[inline(always)]
             fn $m(self, o: Self) -> Self {
-                Self(lanewise!(|a: u32, b: u32| a $op b; self, o))
+                ymm_or!(
+                    stm($ymm(ldm(self), ldm(o))),
+                    Self(lanewise!(|a: u32, b: u32| a $op b; self, o))
+                )
             }
         }
     };
 }
-mask8_op!(BitAnd, bitand, &);
-mask8_op!(BitOr, bitor, |);
+mask8_op!(BitAnd, bitand, &, _mm256_and_ps);
+mask8_op!(BitOr, bitor, |, _mm256_or_ps);
 
 impl Not for Mask8 {
     type Output = Self;
     #[inline(always)]
     fn not(self) -> Self {
-        Self(lanewise!(|a: u32| !a; self))
+        ymm_or!(
+            stm(_mm256_xor_ps(
+                ldm(self),
+                _mm256_castsi256_ps(_mm256_set1_epi32(-1))
+            )),
+            Self(lanewise!(|a: u32| !a; self))
+        )
     }
 }
 
@@ -303,6 +403,69 @@ fn sin_cos_poly(x: f32) -> (f32, f32) {
     (sin, cos)
 }
 
+/// [`sin_cos_poly`] in AVX2 registers: the same operations in the same
+/// order, so the same bits, for every lane whose quadrant fits an i32
+/// (|x| < 3e9; the truncating conversion gives i32::MIN past that where
+/// `as i32` saturates, a difference only lanes of garbage see).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn sin_cos_ymm(x: F32x8) -> (F32x8, F32x8) {
+    use std::arch::x86_64::*;
+    use ymm::{ld, st};
+    // SAFETY: the build enables AVX2 (the cfg).
+    #[allow(unused_unsafe)]
+    unsafe {
+        let x = ld(x);
+        let s1 = _mm256_set1_ps;
+        let t = _mm256_mul_ps(x, s1(std::f32::consts::FRAC_2_PI));
+        let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(t, _mm256_setzero_ps());
+        let half = _mm256_blendv_ps(s1(0.5), s1(-0.5), neg);
+        let k = _mm256_cvttps_epi32(_mm256_add_ps(t, half));
+        let q = _mm256_cvtepi32_ps(k);
+        let r = _mm256_sub_ps(
+            _mm256_sub_ps(
+                _mm256_sub_ps(x, _mm256_mul_ps(q, s1(PIO2_1))),
+                _mm256_mul_ps(q, s1(PIO2_2)),
+            ),
+            _mm256_mul_ps(q, s1(PIO2_3)),
+        );
+        let r2 = _mm256_mul_ps(r, r);
+        // r + r * r2 * (S0 + r2 * (S1 + r2 * S2))
+        let ps = _mm256_add_ps(
+            s1(SIN_C[0]),
+            _mm256_mul_ps(
+                r2,
+                _mm256_add_ps(s1(SIN_C[1]), _mm256_mul_ps(r2, s1(SIN_C[2]))),
+            ),
+        );
+        let s = _mm256_add_ps(r, _mm256_mul_ps(_mm256_mul_ps(r, r2), ps));
+        // 1 - 0.5 r2 + r2 * r2 * (C0 + r2 * (C1 + r2 * C2))
+        let pc = _mm256_add_ps(
+            s1(COS_C[0]),
+            _mm256_mul_ps(
+                r2,
+                _mm256_add_ps(s1(COS_C[1]), _mm256_mul_ps(r2, s1(COS_C[2]))),
+            ),
+        );
+        let c = _mm256_add_ps(
+            _mm256_sub_ps(s1(1.0), _mm256_mul_ps(s1(0.5), r2)),
+            _mm256_mul_ps(_mm256_mul_ps(r2, r2), pc),
+        );
+        let bit = |v: __m256i, b: i32| {
+            let set = _mm256_set1_epi32(b);
+            _mm256_castsi256_ps(_mm256_cmpeq_epi32(_mm256_and_si256(v, set), set))
+        };
+        let odd = bit(k, 1);
+        let a = _mm256_blendv_ps(s, c, odd);
+        let b = _mm256_blendv_ps(c, s, odd);
+        let sign = s1(-0.0);
+        let sin = _mm256_blendv_ps(a, _mm256_xor_ps(a, sign), bit(k, 2));
+        let k1 = _mm256_add_epi32(k, _mm256_set1_epi32(1));
+        let cos = _mm256_blendv_ps(b, _mm256_xor_ps(b, sign), bit(k1, 2));
+        (st(sin), st(cos))
+    }
+}
+
 impl Lane for F32x8 {
     type Mask = Mask8;
     const LANES: usize = 8;
@@ -312,37 +475,61 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn lt(self, o: Self) -> Mask8 {
-        Mask8(lanewise!(|a: f32, b: f32| mask_of(a < b); self, o))
+        ymm_or!(
+            stm(_mm256_cmp_ps::<_CMP_LT_OQ>(ld(self), ld(o))),
+            Mask8(lanewise!(|a: f32, b: f32| mask_of(a < b); self, o))
+        )
     }
     #[inline(always)]
     fn le(self, o: Self) -> Mask8 {
-        Mask8(lanewise!(|a: f32, b: f32| mask_of(a <= b); self, o))
+        ymm_or!(
+            stm(_mm256_cmp_ps::<_CMP_LE_OQ>(ld(self), ld(o))),
+            Mask8(lanewise!(|a: f32, b: f32| mask_of(a <= b); self, o))
+        )
     }
     #[inline(always)]
     fn gt(self, o: Self) -> Mask8 {
-        Mask8(lanewise!(|a: f32, b: f32| mask_of(a > b); self, o))
+        ymm_or!(
+            stm(_mm256_cmp_ps::<_CMP_GT_OQ>(ld(self), ld(o))),
+            Mask8(lanewise!(|a: f32, b: f32| mask_of(a > b); self, o))
+        )
     }
     #[inline(always)]
     fn ge(self, o: Self) -> Mask8 {
-        Mask8(lanewise!(|a: f32, b: f32| mask_of(a >= b); self, o))
+        ymm_or!(
+            stm(_mm256_cmp_ps::<_CMP_GE_OQ>(ld(self), ld(o))),
+            Mask8(lanewise!(|a: f32, b: f32| mask_of(a >= b); self, o))
+        )
     }
     #[inline(always)]
     fn eq(self, o: Self) -> Mask8 {
-        Mask8(lanewise!(|a: f32, b: f32| mask_of(a == b); self, o))
+        ymm_or!(
+            stm(_mm256_cmp_ps::<_CMP_EQ_OQ>(ld(self), ld(o))),
+            Mask8(lanewise!(|a: f32, b: f32| mask_of(a == b); self, o))
+        )
     }
     #[inline(always)]
     fn select(m: Mask8, t: Self, f: Self) -> Self {
-        Self(std::array::from_fn(|i| {
-            f32::from_bits((t.0[i].to_bits() & m.0[i]) | (f.0[i].to_bits() & !m.0[i]))
-        }))
+        ymm_or!(
+            st(_mm256_blendv_ps(ld(f), ld(t), ldm(m))),
+            Self(build8(|i| {
+                f32::from_bits((t.0[i].to_bits() & m.0[i]) | (f.0[i].to_bits() & !m.0[i]))
+            }))
+        )
     }
     #[inline(always)]
     fn sqrt(self) -> Self {
-        Self(lanewise!(f32::sqrt; self))
+        ymm_or!(
+            st(_mm256_sqrt_ps(ld(self))),
+            Self(lanewise!(f32::sqrt; self))
+        )
     }
     #[inline(always)]
     fn abs(self) -> Self {
-        Self(lanewise!(f32::abs; self))
+        ymm_or!(
+            st(_mm256_andnot_ps(_mm256_set1_ps(-0.0), ld(self))),
+            Self(lanewise!(f32::abs; self))
+        )
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
@@ -358,11 +545,10 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn sin_cos(self) -> (Self, Self) {
-        let sc: [(f32, f32); 8] = lanewise!(sin_cos_poly; self);
-        (
-            Self(std::array::from_fn(|i| sc[i].0)),
-            Self(std::array::from_fn(|i| sc[i].1)),
-        )
+        ymm_or!(sin_cos_ymm(self), {
+            let sc: [(f32, f32); 8] = lanewise!(sin_cos_poly; self);
+            (Self(build8(|i| sc[i].0)), Self(build8(|i| sc[i].1)))
+        })
     }
     #[inline(always)]
     fn lane(self, i: usize) -> f32 {
@@ -370,7 +556,7 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn from_fn(f: impl FnMut(usize) -> f32) -> Self {
-        Self(std::array::from_fn(f))
+        Self(build8(f))
     }
     #[inline(always)]
     fn mask_lane(m: Mask8, i: usize) -> bool {
@@ -378,15 +564,34 @@ impl Lane for F32x8 {
     }
     #[inline(always)]
     fn all(m: Mask8) -> bool {
-        m.0.iter().fold(!0, |a, &b| a & b) != 0
+        ymm_or!(
+            _mm256_movemask_ps(ldm(m)) == 0xff,
+            m.0.iter().fold(!0, |a, &b| a & b) != 0
+        )
     }
     #[inline(always)]
     fn none(m: Mask8) -> bool {
-        m.0.iter().fold(0, |a, &b| a | b) == 0
+        ymm_or!(
+            _mm256_movemask_ps(ldm(m)) == 0,
+            m.0.iter().fold(0, |a, &b| a | b) == 0
+        )
     }
     #[inline(always)]
     fn trunc_i32(self) -> Self {
         Self(lanewise!(|a: f32| a as i32 as f32; self))
+    }
+    #[inline(always)]
+    fn copysign(self, sign: Self) -> Self {
+        ymm_or!(
+            {
+                let bit = _mm256_set1_ps(-0.0);
+                st(_mm256_or_ps(
+                    _mm256_andnot_ps(bit, ld(self)),
+                    _mm256_and_ps(bit, ld(sign)),
+                ))
+            },
+            Self(lanewise!(f32::copysign; self, sign))
+        )
     }
 }
 
@@ -637,9 +842,9 @@ impl From<Vec2> for V2<f32> {
 impl From<[Vec3; 8]> for V3<F32x8> {
     fn from(v: [Vec3; 8]) -> Self {
         Self::new(
-            F32x8(std::array::from_fn(|i| v[i].x)),
-            F32x8(std::array::from_fn(|i| v[i].y)),
-            F32x8(std::array::from_fn(|i| v[i].z)),
+            F32x8(build8(|i| v[i].x)),
+            F32x8(build8(|i| v[i].y)),
+            F32x8(build8(|i| v[i].z)),
         )
     }
 }
@@ -647,8 +852,8 @@ impl From<[Vec3; 8]> for V3<F32x8> {
 impl From<[Vec2; 8]> for V2<F32x8> {
     fn from(v: [Vec2; 8]) -> Self {
         Self {
-            x: F32x8(std::array::from_fn(|i| v[i].x)),
-            y: F32x8(std::array::from_fn(|i| v[i].y)),
+            x: F32x8(build8(|i| v[i].x)),
+            y: F32x8(build8(|i| v[i].y)),
         }
     }
 }

@@ -21,7 +21,45 @@ pub fn pcg4d(v: [u32; 4]) -> [u32; 4] {
 /// [`pcg4d`] over any [`crate::lanes::ULane`] type (one source with the
 /// scalar form).
 pub mod lanes {
+    use crate::film::Mis;
     use crate::lanes::{Lane, ULane, V2};
+
+    /// a / s where s (a + b, or their squares' sum) is positive and finite;
+    /// 1 where `a` is infinite; else 0.
+    #[inline(always)]
+    fn heuristic<L: Lane>(a: L, num: L, sum: L) -> L {
+        let inf = L::splat(f32::INFINITY);
+        let ok = sum.gt(L::zero()) & sum.abs().lt(inf);
+        L::select(
+            ok,
+            num / sum,
+            L::select(a.abs().eq(inf), L::one(), L::zero()),
+        )
+    }
+
+    /// [`super::power_heuristic`].
+    #[inline(always)]
+    pub fn power_heuristic<L: Lane>(a: L, b: L) -> L {
+        let a2 = a * a;
+        let b2 = b * b;
+        heuristic(a, a2, a2 + b2)
+    }
+
+    /// [`super::balance_heuristic`].
+    #[inline(always)]
+    pub fn balance_heuristic<L: Lane>(a: L, b: L) -> L {
+        heuristic(a, a, a + b)
+    }
+
+    /// [`super::mis_light`].
+    #[inline(always)]
+    pub fn mis_light<L: Lane>(mode: Mis, light_pdf: L, bsdf_pdf: L) -> L {
+        match mode {
+            Mis::Power => power_heuristic(light_pdf, bsdf_pdf),
+            Mis::Balance => balance_heuristic(light_pdf, bsdf_pdf),
+            Mis::None => L::one(),
+        }
+    }
 
     /// [`super::square_to_uniform_triangle`].
     #[inline(always)]
@@ -267,39 +305,20 @@ pub fn sample_cdf(cdf: impl Fn(u32) -> f32, n: u32, u: f32) -> u32 {
 /// Mitsuba 3's path tracer uses the same.
 #[inline]
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
-    let a2 = a * a;
-    let b2 = b * b;
-    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
-        a2 / (a2 + b2)
-    } else if a.is_infinite() {
-        1.0
-    } else {
-        0.0
-    }
+    lanes::power_heuristic(a, b)
 }
 
 /// Balance heuristic (Veach 1997, eq. 9.10): a / (a + b).
 #[inline]
 pub fn balance_heuristic(a: f32, b: f32) -> f32 {
-    let s = a + b;
-    if s > 0.0 && s.is_finite() {
-        a / s
-    } else if a.is_infinite() {
-        1.0
-    } else {
-        0.0
-    }
+    lanes::balance_heuristic(a, b)
 }
 
 /// MIS weight of a light sample with density `light_pdf`, against BSDF
 /// sampling with density `bsdf_pdf` of the same direction.
 #[inline]
 pub fn mis_light(mode: Mis, light_pdf: f32, bsdf_pdf: f32) -> f32 {
-    match mode {
-        Mis::Power => power_heuristic(light_pdf, bsdf_pdf),
-        Mis::Balance => balance_heuristic(light_pdf, bsdf_pdf),
-        Mis::None => 1.0,
-    }
+    lanes::mis_light(mode, light_pdf, bsdf_pdf)
 }
 
 /// MIS weight of a BSDF sample that found an emitter the same vertex also

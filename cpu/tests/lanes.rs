@@ -843,8 +843,9 @@ fn batched_samples_are_the_scalar_sampler_s() {
 /// sampler) bit for bit, with the same rays, at every SIMD level, on every
 /// bundled scene, waves cut short included (21 spp: 8 + 8 + 5), with depth
 /// limits, a first sample off the batches' grid, no light sampling and the
-/// independent sampler: the wave and the wide sampler change the speed,
-/// not the image.
+/// independent sampler, with the Lambertian vertices shaded one at a time
+/// and in lanes (`PathTracer::wide_shading`): the wave, the wide sampler
+/// and the wide vertices change the speed, not the image.
 #[test]
 fn batched_render_is_the_unbatched_render_bit_for_bit() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
@@ -884,12 +885,14 @@ fn batched_render_is_the_unbatched_render_bit_for_bit() {
     ];
     for name in &names {
         let scene = glint_cpu::loader::load(&root.join(name)).unwrap();
-        for (opts, level) in variants
+        for ((opts, level), wide) in variants
             .iter()
             .flat_map(|o| SimdLevel::available().into_iter().map(move |l| (o, l)))
+            .flat_map(|c| [(c, false), (c, true)])
         {
             let mut pt = glint_cpu::PathTracer::new(&scene, opts).unwrap();
             pt.simd = level;
+            pt.wide_shading = wide;
             let (film, stats) = pt.render(opts.spp, &|_, _| {});
             let mut rays = 0;
             for y in 0..16 {
@@ -900,10 +903,16 @@ fn batched_render_is_the_unbatched_render_bit_for_bit() {
                         acc + if l.is_finite() { l } else { Vec3::ZERO }
                     });
                     let got = film.sum[film.index(x, y)];
-                    assert_eq!(got, sum, "{name} {opts:?} at {level:?}, pixel ({x}, {y})");
+                    assert_eq!(
+                        got, sum,
+                        "{name} {opts:?} at {level:?}, wide shading {wide}, pixel ({x}, {y})"
+                    );
                 }
             }
-            assert_eq!(stats.rays, rays, "{name} {opts:?} at {level:?}");
+            assert_eq!(
+                stats.rays, rays,
+                "{name} {opts:?} at {level:?}, wide {wide}"
+            );
         }
     }
 }

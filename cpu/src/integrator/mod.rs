@@ -54,6 +54,7 @@
 
 mod gpu;
 mod wave;
+mod wide;
 
 pub use wave::WaveSampler;
 
@@ -294,6 +295,11 @@ pub struct PathTracer<'a> {
     /// The instructions the wide sampler runs on ([`SampleBatch`]):
     /// `SimdLevel::detect()`, settable so tests can compare the levels.
     pub simd: SimdLevel,
+    /// Whether a wave shades its Lambertian vertices eight per instruction
+    /// (`integrator/wide.rs`): by default where the build makes the lanes
+    /// AVX2 instructions ([`wide::LANES_IN_REGISTERS`]); settable so tests
+    /// run both paths in any build. The same bits either way.
+    pub wide_shading: bool,
 }
 
 /// The MIS weight of an emitter a BSDF-sampled ray found: 1 unless the
@@ -424,6 +430,7 @@ impl<'a> PathTracer<'a> {
             plan: PassPlan::of(opts),
             masks: scene.textures.has_masks(),
             simd: SimdLevel::detect(),
+            wide_shading: wide::LANES_IN_REGISTERS,
         })
     }
 
@@ -435,16 +442,14 @@ impl<'a> PathTracer<'a> {
         // The triangle's packed shading data (Scene::set_shading).
         let mut off = (t.flags >> TRI_SHADING_SHIFT) as usize;
         let at = |k: usize| Vec3::from_slice(&self.scene.shading[k][..3]);
-        let lerp = |o: usize| w * at(o) + u * at(o + 1) + v * at(o + 2);
         if t.flags & TRI_NORMALS != 0 {
-            let n = lerp(off).normalize_or_zero();
+            // The shading normal lives on the geometric normal's side,
+            // so the BSDF's +z is a dielectric's outside.
+            let n = [at(off).into(), at(off + 1).into(), at(off + 2).into()];
+            ns = wide::shading_normal::<f32>(ng.into(), n, u, v).into();
             off += 3;
-            if n != Vec3::ZERO {
-                // The shading normal lives on the geometric normal's side,
-                // so the BSDF's +z is a dielectric's outside.
-                ns = if n.dot(ng) < 0.0 { -n } else { n };
-            }
         }
+        let lerp = |o: usize| w * at(o) + u * at(o + 1) + v * at(o + 2);
         let frame = if t.flags & TRI_TANGENTS != 0 {
             Frame::from_normal_tangent(ns, lerp(off))
         } else {

@@ -10,6 +10,7 @@
 
 use glam::Vec3;
 
+use super::wide::WIDE_MIN;
 use super::{Arrival, PathState, PathTracer};
 use crate::bvh::{PACKET, Ray};
 use crate::lanes::live_lanes;
@@ -105,7 +106,27 @@ impl PathTracer<'_> {
                 break;
             }
             let bounce = rng.bounces(depth, live);
-            for k in live_lanes(live) {
+            // Lambertian vertices eight per instruction where enough
+            // paths stand on them, the rest one at a time.
+            let wide = if self.wide_shading {
+                self.diffuse_lanes_of(&arrivals, &bounce, live)
+            } else {
+                0
+            };
+            let mut one_by_one = live;
+            if wide.count_ones() >= WIDE_MIN {
+                one_by_one &= !wide;
+                live &= !self.diffuse_vertices(
+                    &mut paths,
+                    &mut ray_of,
+                    &arrivals,
+                    &bounce,
+                    wide,
+                    depth,
+                    rays,
+                );
+            }
+            for k in live_lanes(one_by_one) {
                 let Some(at) = &arrivals[k] else { continue };
                 if !self.vertex(&mut paths[k], &mut ray_of[k], at, &bounce[k], depth, rays) {
                     live &= !(1 << k);

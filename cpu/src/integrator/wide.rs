@@ -1,0 +1,322 @@
+//! A wave's Lambertian vertices shaded eight paths per instruction (issue
+//! 24 item 3): where several of a wave's live paths stand on untextured
+//! Lambertian surfaces and draw an emitter light sample, their vertices'
+//! arithmetic (the geometric and shading normals, the frame, the emitter
+//! light sample, the BSDF's value, density and sample, the MIS weight, the
+//! next direction and the light-leak rule) runs in lanes, from the
+//! lane-generic functions whose one-lane instantiations the scalar
+//! [`PathTracer::vertex`] calls; the steps that branch or traverse (the
+//! ray offsets, the shadow rays, Russian roulette) then run path by path
+//! as [`PathTracer::vertex`] runs them. Every path gets the same numbers,
+//! so the same bits, as the scalar vertex gives it (`cpu/tests/lanes.rs`
+//! renders every bundled scene both ways).
+
+use glam::{Vec2, Vec3};
+
+use super::{Arrival, PathState, PathTracer, offset_origin};
+use crate::bsdf::Bsdf;
+use crate::bsdf::diffuse::lanes::{diffuse_eval, diffuse_pdf, diffuse_sample};
+use crate::bvh::Ray;
+use crate::film::Mis;
+use crate::frame::lanes::Frame;
+use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes, mask_bits};
+use crate::lights::{LightSample, Lights, background_direction_frame};
+use crate::sampling::lanes::mis_light;
+use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
+use crate::sobol::BounceSamples;
+
+/// The fewest eligible paths for which a wave shades its Lambertian
+/// vertices in lanes (measured: docs/benchmarks.md).
+pub const WIDE_MIN: u32 = 3;
+
+/// Whether this build's lanes are AVX2 instructions (`lanes.rs`'s
+/// `ymm_or!`: a build for the machine's CPU, scripts/build.sh): only then
+/// do the wave's vertices in lanes pay. In a baseline build LLVM leaves
+/// two to four instructions per lane operation in a function this large,
+/// and the vertices cost 1-9% more than one at a time (docs/benchmarks.md).
+pub const LANES_IN_REGISTERS: bool = cfg!(all(target_arch = "x86_64", target_feature = "avx2"));
+
+/// The shading normal at barycentrics (u, v) of a triangle whose vertex
+/// normals are `n` (geometric normal `ng`): their interpolation,
+/// normalised, turned to `ng`'s side; `ng` where it is zero (or not a
+/// number). The scalar `PathTracer::surface` is its one-lane form.
+#[inline(always)]
+pub(super) fn shading_normal<L: Lane>(ng: V3<L>, n: [V3<L>; 3], u: L, v: L) -> V3<L> {
+    let w = L::one() - u - v;
+    let n = (n[0].scale(w) + n[1].scale(u) + n[2].scale(v)).normalize_or_zero();
+    let zero = n.x.eq(L::zero()) & n.y.eq(L::zero()) & n.z.eq(L::zero());
+    let turned = V3::select(n.dot(ng).lt(L::zero()), -n, n);
+    V3::select(zero, ng, turned)
+}
+
+/// Whether two masks agree in each lane.
+#[inline(always)]
+fn agree<L: Lane>(a: L::Mask, b: L::Mask) -> L::Mask {
+    (a & b) | (!a & !b)
+}
+
+/// One path's vertex, as the lanes read it.
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct DiffuseIn {
+    /// The triangle's vertices.
+    v: [Vec3; 3],
+    /// Its vertex normals (zero where it has none).
+    n: [Vec3; 3],
+    has_n: bool,
+    /// The hit's barycentrics.
+    u: f32,
+    v_: f32,
+    p: Vec3,
+    wo: Vec3,
+    rho: Vec3,
+    u_idx: f32,
+    u_light: Vec2,
+    u_bsdf: Vec2,
+}
+
+/// What the lanes found for each path (valid in the lanes they shaded).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct DiffuseOut {
+    ng: [Vec3; 8],
+    ns: [Vec3; 8],
+    /// The lanes whose light sample has a nonzero f |cos|: their shadow
+    /// ray is traced.
+    nee: u8,
+    light_wi: [Vec3; 8],
+    light_dist: [f32; 8],
+    /// f |cos| Le / pdf times the MIS weight: what a clear shadow ray adds.
+    light: [Vec3; 8],
+    /// The lanes whose BSDF sample goes on (valid, no leak).
+    next: u8,
+    wi: [Vec3; 8],
+    pdf: [f32; 8],
+}
+
+/// Eight lanes of `f(lane's input)`.
+macro_rules! gather {
+    ($inp:expr, |$d:ident| $e:expr) => {
+        F32x8(crate::lanes::build8(|l| {
+            let $d = &$inp[l];
+            $e
+        }))
+    };
+}
+
+macro_rules! gather3 {
+    ($inp:expr, |$d:ident| $e:expr) => {
+        V3::new(
+            gather!($inp, |$d| $e.x),
+            gather!($inp, |$d| $e.y),
+            gather!($inp, |$d| $e.z),
+        )
+    };
+}
+
+/// The lanes' arithmetic of the vertices in `live` (bits), eight per
+/// instruction (compiled for the wave's [`crate::lanes::SimdLevel`]).
+#[inline(always)]
+fn diffuse_lanes(
+    lights: &Lights,
+    scene: &Scene,
+    mis: Mis,
+    inp: &[DiffuseIn; 8],
+    live: u8,
+) -> DiffuseOut {
+    type L = F32x8;
+    let live = Mask8::from_bits(live);
+    let v = [
+        gather3!(inp, |d| d.v[0]),
+        gather3!(inp, |d| d.v[1]),
+        gather3!(inp, |d| d.v[2]),
+    ];
+    let (u, vb) = (gather!(inp, |d| d.u), gather!(inp, |d| d.v_));
+    let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+    let has_n = gather!(inp, |d| f32::from(u8::from(d.has_n))).gt(L::zero());
+    let ns = if L::none(has_n) {
+        ng
+    } else {
+        let n = [
+            gather3!(inp, |d| d.n[0]),
+            gather3!(inp, |d| d.n[1]),
+            gather3!(inp, |d| d.n[2]),
+        ];
+        V3::select(has_n, shading_normal(ng, n, u, vb), ng)
+    };
+    let frame = Frame::from_normal(ns);
+    let wo = frame.to_local(gather3!(inp, |d| d.wo));
+    let rho = gather3!(inp, |d| d.rho);
+    let p = gather3!(inp, |d| d.p);
+    let u_light = V2 {
+        x: gather!(inp, |d| d.u_light.x),
+        y: gather!(inp, |d| d.u_light.y),
+    };
+    let ls = lights.sample_emitter_lanes(scene, p, gather!(inp, |d| d.u_idx), u_light, live);
+    // Next-event estimation's arithmetic (`PathTracer::next_event`).
+    let wi_l = frame.to_local(ls.wi);
+    let sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
+    let f = diffuse_eval(rho, wo, wi_l).scale(wi_l.z.abs());
+    let positive = f.x.gt(L::zero()) | f.y.gt(L::zero()) | f.z.gt(L::zero());
+    let nee = ls.valid & sides & positive;
+    let w = mis_light(mis, ls.pdf, diffuse_pdf(wo, wi_l));
+    let light = (f * ls.weight).scale(w);
+    // The BSDF's sample (`next_direction`).
+    let u_bsdf = V2 {
+        x: gather!(inp, |d| d.u_bsdf.x),
+        y: gather!(inp, |d| d.u_bsdf.y),
+    };
+    let bs = diffuse_sample(rho, wo, u_bsdf);
+    let wi = frame.to_world(bs.wi).normalize();
+    let leaks = !agree::<L>(wi.dot(ng).gt(L::zero()), bs.wi.z.gt(L::zero()));
+    let next = live & bs.valid & !leaks;
+    let lanes3 = |x: V3<L>| -> [Vec3; 8] { crate::lanes::build8(|l| x.lane(l)) };
+    DiffuseOut {
+        ng: lanes3(ng),
+        ns: lanes3(ns),
+        nee: mask_bits::<L>(nee),
+        light_wi: lanes3(ls.wi),
+        light_dist: ls.dist.0,
+        light: lanes3(light),
+        next: mask_bits::<L>(next),
+        wi: lanes3(wi),
+        pdf: bs.pdf.0,
+    }
+}
+
+impl PathTracer<'_> {
+    /// The lanes of `live` whose vertex the lanes can shade: an
+    /// untextured Lambertian surface without tangents whose bounce draws
+    /// an emitter light sample. (None where next-event estimation is off
+    /// or the scene has no emitters.)
+    pub(super) fn diffuse_lanes_of(
+        &self,
+        arrivals: &[Option<Arrival>; 8],
+        bounce: &[BounceSamples; 8],
+        live: u8,
+    ) -> u8 {
+        let area = self.lights.probs.area;
+        if !self.nee || !(area > 0.0) {
+            return 0;
+        }
+        let scene = self.scene;
+        let mut wide = 0u8;
+        for k in live_lanes(live) {
+            let Some(at) = &arrivals[k] else { continue };
+            let tri = &scene.triangles[at.hit.tri as usize];
+            if matches!(
+                scene.materials[at.material as usize].bsdf,
+                Bsdf::Diffuse { .. }
+            ) && tri.flags & TRI_TANGENTS == 0
+                && bounce[k].light_cat < area
+                && scene.textures.material(at.material).is_none()
+            {
+                wide |= 1 << k;
+            }
+        }
+        wide
+    }
+
+    /// The vertices of the lanes in `wide` (see [`Self::diffuse_lanes_of`])
+    /// at bounce `depth`: [`PathTracer::vertex`] for each, its arithmetic
+    /// eight paths per instruction. Returns the lanes whose path ends.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn diffuse_vertices(
+        &self,
+        paths: &mut [PathState; 8],
+        rays_of: &mut [Ray; 8],
+        arrivals: &[Option<Arrival>; 8],
+        bounce: &[BounceSamples; 8],
+        wide: u8,
+        depth: u32,
+        rays: &mut u64,
+    ) -> u8 {
+        let scene = self.scene;
+        let mut inp = [DiffuseIn::default(); 8];
+        let first = wide.trailing_zeros() as usize;
+        for k in live_lanes(wide) {
+            let Some(at) = &arrivals[k] else { continue };
+            let tri = &scene.triangles[at.hit.tri as usize];
+            let Bsdf::Diffuse { reflectance } = scene.materials[at.material as usize].bsdf else {
+                continue;
+            };
+            let has_n = tri.flags & TRI_NORMALS != 0;
+            let off = (tri.flags >> TRI_SHADING_SHIFT) as usize;
+            let normal = |i: usize| {
+                if has_n {
+                    Vec3::from_slice(&scene.shading[off + i][..3])
+                } else {
+                    Vec3::ZERO
+                }
+            };
+            let u = &bounce[k];
+            inp[k] = DiffuseIn {
+                v: tri.vertices(),
+                n: [normal(0), normal(1), normal(2)],
+                has_n,
+                u: at.hit.u,
+                v_: at.hit.v,
+                p: at.p,
+                wo: at.wo,
+                rho: reflectance,
+                u_idx: u.light_idx,
+                u_light: u.light,
+                u_bsdf: u.bsdf,
+            };
+        }
+        // The lanes not shaded here compute a copy of a shaded one (and
+        // are ignored): no lane's numbers are garbage.
+        for k in 0..8 {
+            if wide & (1 << k) == 0 {
+                inp[k] = inp[first];
+            }
+        }
+        let out = crate::simd_at!(self.simd, fn(
+            lights: &Lights,
+            scene: &Scene,
+            mis: Mis,
+            inp: &[DiffuseIn; 8],
+            live: u8,
+        ) -> DiffuseOut {
+            diffuse_lanes(lights, scene, mis, inp, live)
+        }(&self.lights, scene, self.mis, &inp, wide));
+        let mut ended = 0u8;
+        for k in live_lanes(wide) {
+            let Some(at) = &arrivals[k] else { continue };
+            let path = &mut paths[k];
+            let ng = out.ng[k];
+            if out.nee & (1 << k) != 0 {
+                *rays += 1;
+                let ls = LightSample {
+                    wi: out.light_wi[k],
+                    dist: out.light_dist[k],
+                    weight: Vec3::ZERO,
+                    pdf: 0.0,
+                    delta: false,
+                };
+                let shadow = self.shadow_ray(at.p, at.p_err, ng, &ls);
+                if shadow.tmax > 0.0 && !scene.occluded_with(&shadow, self.masks) {
+                    path.radiance += path.throughput * out.light[k];
+                }
+            }
+            if out.next & (1 << k) == 0 {
+                ended |= 1 << k;
+                continue;
+            }
+            let wi = out.wi[k];
+            path.throughput *= inp[k].rho;
+            path.prev_mis = true;
+            path.prev_delta = false;
+            path.prev_bsdf_pdf = out.pdf[k];
+            path.prev_bg_normal = background_direction_frame(out.ns[k], at.wo, false);
+            path.prev_p = at.p;
+            rays_of[k] = Ray {
+                o: offset_origin(at.p, at.p_err, ng, wi),
+                d: wi,
+                tmax: f32::MAX,
+            };
+            if !self.roulette(path, depth + 1, bounce[k].rr) {
+                ended |= 1 << k;
+            }
+        }
+        ended
+    }
+}
