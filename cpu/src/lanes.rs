@@ -100,6 +100,10 @@ pub trait Lane:
     /// `f32::copysign` per lane: the magnitude of `self`, the sign bit of
     /// `sign` (-0.0 and NaN's sign bit included).
     fn copysign(self, sign: Self) -> Self;
+    /// The next float toward +inf per lane ([`next_float_up`]).
+    fn next_up(self) -> Self;
+    /// The next float toward -inf per lane ([`next_float_down`]).
+    fn next_down(self) -> Self;
     /// `t` in the lanes where `m` holds, else `f`, for masks.
     #[inline(always)]
     fn select_mask(m: Self::Mask, t: Self::Mask, f: Self::Mask) -> Self::Mask {
@@ -198,6 +202,44 @@ impl Lane for f32 {
     fn copysign(self, sign: Self) -> Self {
         f32::copysign(self, sign)
     }
+    #[inline(always)]
+    fn next_up(self) -> Self {
+        next_float_up(self)
+    }
+    #[inline(always)]
+    fn next_down(self) -> Self {
+        next_float_down(self)
+    }
+}
+
+/// The next float toward +inf (pbrt-v4's `NextFloatUp`; -0 steps from +0;
+/// +inf stays).
+#[inline]
+pub fn next_float_up(v: f32) -> f32 {
+    if v.is_infinite() && v > 0.0 {
+        return v;
+    }
+    let mut b = v.to_bits();
+    if b == 0x8000_0000 {
+        b = 0;
+    }
+    b = if v >= 0.0 || b == 0 { b + 1 } else { b - 1 };
+    f32::from_bits(b)
+}
+
+/// The next float toward -inf (pbrt-v4's `NextFloatDown`; +0 steps from
+/// -0; -inf stays).
+#[inline]
+pub fn next_float_down(v: f32) -> f32 {
+    if v.is_infinite() && v < 0.0 {
+        return v;
+    }
+    let mut b = v.to_bits();
+    if b == 0 {
+        b = 0x8000_0000;
+    }
+    b = if v > 0.0 { b - 1 } else { b + 1 };
+    f32::from_bits(b)
 }
 
 /// Eight `f32` lanes (see the module notes).
@@ -581,6 +623,51 @@ impl Lane for F32x8 {
         Self(lanewise!(|a: f32| a as i32 as f32; self))
     }
     #[inline(always)]
+    fn next_up(self) -> Self {
+        ymm_or!(
+            {
+                let v = ld(self);
+                let b = _mm256_castps_si256(v);
+                let i = _mm256_set1_epi32;
+                // -0 steps from +0.
+                let b = _mm256_andnot_si256(_mm256_cmpeq_epi32(b, i(i32::MIN)), b);
+                let up = _mm256_or_ps(
+                    _mm256_cmp_ps::<_CMP_GE_OQ>(v, _mm256_setzero_ps()),
+                    _mm256_castsi256_ps(_mm256_cmpeq_epi32(b, _mm256_setzero_si256())),
+                );
+                let r = _mm256_blendv_ps(
+                    _mm256_castsi256_ps(_mm256_sub_epi32(b, i(1))),
+                    _mm256_castsi256_ps(_mm256_add_epi32(b, i(1))),
+                    up,
+                );
+                let inf = _mm256_cmp_ps::<_CMP_EQ_OQ>(v, _mm256_set1_ps(f32::INFINITY));
+                st(_mm256_blendv_ps(r, v, inf))
+            },
+            Self(lanewise!(next_float_up; self))
+        )
+    }
+    #[inline(always)]
+    fn next_down(self) -> Self {
+        ymm_or!(
+            {
+                let v = ld(self);
+                let b = _mm256_castps_si256(v);
+                let i = _mm256_set1_epi32;
+                // +0 steps from -0.
+                let zero = _mm256_cmpeq_epi32(b, _mm256_setzero_si256());
+                let b = _mm256_or_si256(b, _mm256_and_si256(zero, i(i32::MIN)));
+                let r = _mm256_blendv_ps(
+                    _mm256_castsi256_ps(_mm256_add_epi32(b, i(1))),
+                    _mm256_castsi256_ps(_mm256_sub_epi32(b, i(1))),
+                    _mm256_cmp_ps::<_CMP_GT_OQ>(v, _mm256_setzero_ps()),
+                );
+                let inf = _mm256_cmp_ps::<_CMP_EQ_OQ>(v, _mm256_set1_ps(f32::NEG_INFINITY));
+                st(_mm256_blendv_ps(r, v, inf))
+            },
+            Self(lanewise!(next_float_down; self))
+        )
+    }
+    #[inline(always)]
     fn copysign(self, sign: Self) -> Self {
         ymm_or!(
             {
@@ -768,6 +855,19 @@ impl<L: Lane> V3<L> {
             L::select(m, t.y, f.y),
             L::select(m, t.z, f.z),
         )
+    }
+    /// glam's `abs`.
+    #[inline(always)]
+    pub fn abs(self) -> Self {
+        Self::new(self.x.abs(), self.y.abs(), self.z.abs())
+    }
+    /// glam's `max_element`: max(x, max(y, z)) with max(a, b) = a where
+    /// a > b, else b (so a NaN in z or y wins over smaller components,
+    /// unlike `f32::max`).
+    #[inline(always)]
+    pub fn max_element(self) -> L {
+        let max = |a: L, b: L| L::select(a.gt(b), a, b);
+        max(self.x, max(self.y, self.z))
     }
     /// Lane `i` as a glam vector.
     #[inline(always)]

@@ -1178,3 +1178,131 @@ fn emitter_samples_in_lanes_are_the_scalar_ones() {
         "{valid} valid, {by_angle} by solid angle"
     );
 }
+
+/// A ray-offset test's lanes: p, err, ng, w, the light's distance.
+type Ro = (Vec3, Vec3, Vec3, Vec3, f32);
+
+/// The floats the offsets' bit steps branch on: zeros of both signs,
+/// denormals, the largest floats, infinities and NaN.
+const EDGES: [f32; 12] = [
+    0.0,
+    -0.0,
+    1e-45,
+    -1e-45,
+    f32::MIN_POSITIVE,
+    f32::MAX,
+    -f32::MAX,
+    f32::INFINITY,
+    f32::NEG_INFINITY,
+    f32::NAN,
+    1.0,
+    -3.5,
+];
+
+/// The ray offsets (`offset_origin_lanes`) and the shadow rays
+/// (`shadow_ray_lanes`) that the wave's Lambertian vertices compute in
+/// lanes are `offset_origin`'s and `PathTracer::shadow_ray`'s bits in every
+/// lane, on ordinary points and on the floats the bit steps branch on
+/// (signed zeros, denormals, the largest floats, infinities, NaN), with
+/// normals along the axes (zero offsets), directions on the surface and
+/// lights at infinity; and the lanes' next float up and down are the
+/// scalar steps on the edge cases themselves.
+#[test]
+fn ray_offsets_in_lanes_are_the_scalar_ones() {
+    use glint_cpu::integrator::{
+        next_float_down, next_float_up, offset_origin, offset_origin_lanes, shadow_ray_lanes,
+    };
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
+    let scene = glint_cpu::loader::load(&root.join("cornell.gltf")).unwrap();
+    let pt = glint_cpu::PathTracer::new(&scene, &glint_cpu::RenderOptions::new(8, 8)).unwrap();
+    let mut r = Rand(0x0ff5_e7a1);
+    let mut inputs = |b: usize, i: usize| -> Ro {
+        let mut p = Vec3::new(r.f() - 0.5, r.f() * 4.0, -r.f()) * 10f32.powi((b % 7) as i32 - 3);
+        if b % 3 == 1 {
+            p[(b + i) % 3] = EDGES[(b * 8 + i) % EDGES.len()];
+        }
+        let err = Vec3::new(r.f(), r.f(), r.f()) * 1e-5 * (b % 2) as f32;
+        let mut ng = r.dir();
+        if b % 5 == 2 {
+            ng = [Vec3::X, -Vec3::Y, Vec3::Z][i % 3];
+        }
+        let mut w = r.dir();
+        if b % 5 == 3 {
+            w = ng.cross(r.dir()).normalize_or(Vec3::X);
+        }
+        let dist = if (b + i) % 4 == 0 {
+            f32::INFINITY
+        } else {
+            r.f() * 8.0
+        };
+        (p, err, ng, w, dist)
+    };
+    let split = |l: &[Ro; 8]| {
+        (
+            v3x8(std::array::from_fn(|i| l[i].0)),
+            v3x8(std::array::from_fn(|i| l[i].1)),
+            v3x8(std::array::from_fn(|i| l[i].2)),
+            v3x8(std::array::from_fn(|i| l[i].3)),
+            F32x8(std::array::from_fn(|i| l[i].4)),
+        )
+    };
+    each_level(
+        &mut inputs,
+        |lv, l| {
+            let (p, err, ng, w, _) = split(&l);
+            simd_at!(lv, fn(p: V3<F32x8>, err: V3<F32x8>, ng: V3<F32x8>, w: V3<F32x8>) -> [Vec3; 8] {
+                lanes3(offset_origin_lanes(p, err, ng, w))
+            }(p, err, ng, w))
+        },
+        |(p, err, ng, w, _)| offset_origin(p, err, ng, w),
+        |a, b| same3(*a, *b),
+        "offset_origin",
+    );
+    each_level(
+        &mut inputs,
+        |lv, l| {
+            let (p, err, ng, w, dist) = split(&l);
+            let (o, d, t) = simd_at!(lv, fn(p: V3<F32x8>, err: V3<F32x8>, ng: V3<F32x8>, w: V3<F32x8>, dist: F32x8) -> ([Vec3; 8], [Vec3; 8], [f32; 8]) {
+                let (o, d, t) = shadow_ray_lanes(p, err, ng, w, dist);
+                (lanes3(o), lanes3(d), lanes1(t))
+            }(p, err, ng, w, dist));
+            std::array::from_fn(|i| (o[i], d[i], t[i]))
+        },
+        |(p, err, ng, w, dist)| {
+            let ls = LightSample {
+                wi: w,
+                dist,
+                weight: Vec3::ONE,
+                pdf: 1.0,
+                delta: false,
+            };
+            let ray = pt.shadow_ray(p, err, ng, &ls);
+            (ray.o, ray.d, ray.tmax)
+        },
+        |a, b| same3(a.0, b.0) && same3(a.1, b.1) && same(a.2, b.2),
+        "shadow_ray",
+    );
+    for level in SimdLevel::available() {
+        for chunk in EDGES.chunks(4) {
+            let v: [f32; 8] = std::array::from_fn(|i| {
+                let e = chunk[i % chunk.len()];
+                if i < 4 { e } else { -e }
+            });
+            let (up, down) = simd_at!(level, fn(v: F32x8) -> ([f32; 8], [f32; 8]) {
+                (v.next_up().0, v.next_down().0)
+            }(F32x8(v)));
+            for i in 0..8 {
+                assert!(
+                    same(up[i], next_float_up(v[i])),
+                    "up {:e} at {level:?}",
+                    v[i]
+                );
+                assert!(
+                    same(down[i], next_float_down(v[i])),
+                    "down {:e} at {level:?}",
+                    v[i]
+                );
+            }
+        }
+    }
+}

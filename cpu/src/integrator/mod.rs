@@ -72,7 +72,7 @@ use crate::bvh::Ray;
 use crate::camera::{PinholeCamera, scene_camera};
 use crate::film::{Film, Mis, RenderOptions, RenderStats, SamplerKind, add_sample};
 use crate::frame::Frame;
-use crate::lanes::SimdLevel;
+use crate::lanes::{Lane, SimdLevel, V3};
 use crate::lights::{LightSample, Lights, background_direction_frame, emitted};
 use crate::sampling::{mis_bsdf, mis_light, seed_key};
 use crate::scene::{NO_LIGHT, Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
@@ -171,36 +171,13 @@ pub fn hit_error(p0: Vec3, p1: Vec3, p2: Vec3) -> Vec3 {
     RAY_ERR_GAMMA * p0.abs().max(p1.abs()).max(p2.abs()) + Vec3::splat(RAY_ERR_TRI * extent)
 }
 
-/// The next float toward +inf (pbrt-v4's `NextFloatUp`; -0 steps from +0).
-#[inline]
-pub fn next_float_up(v: f32) -> f32 {
-    if v.is_infinite() && v > 0.0 {
-        return v;
-    }
-    let mut b = v.to_bits();
-    if b == 0x8000_0000 {
-        b = 0;
-    }
-    b = if v >= 0.0 || b == 0 { b + 1 } else { b - 1 };
-    f32::from_bits(b)
-}
-
-/// The next float toward -inf (pbrt-v4's `NextFloatDown`).
-#[inline]
-pub fn next_float_down(v: f32) -> f32 {
-    if v.is_infinite() && v < 0.0 {
-        return v;
-    }
-    let mut b = v.to_bits();
-    if b == 0 {
-        b = 0x8000_0000;
-    }
-    b = if v > 0.0 { b - 1 } else { b + 1 };
-    f32::from_bits(b)
-}
+pub use crate::lanes::{next_float_down, next_float_up};
 
 /// `p` (error bound `err`) moved off its surface to the side of `ng` that
-/// `w` points to: pbrt-v4's `OffsetRayOrigin`.
+/// `w` points to: pbrt-v4's `OffsetRayOrigin`. (Its branches, not
+/// [`offset_origin_lanes`]' selects, for one path: the selects sat in front
+/// of the next traversal and cost 2.5-4%, docs/benchmarks.md, twenty-third
+/// session. The same bits: `cpu/tests/lanes.rs`.)
 #[inline]
 pub fn offset_origin(p: Vec3, err: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     let d = ng.abs().dot(err);
@@ -219,6 +196,27 @@ pub fn offset_origin(p: Vec3, err: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
     po
 }
 
+/// [`offset_origin`] in every lane.
+#[inline(always)]
+pub fn offset_origin_lanes<L: Lane>(p: V3<L>, err: V3<L>, ng: V3<L>, w: V3<L>) -> V3<L> {
+    let d = ng.abs().dot(err);
+    let offset = ng.scale(d);
+    let offset = V3::select(w.dot(ng).lt(L::zero()), -offset, offset);
+    let po = p + offset;
+    let step = |o: L, v: L| {
+        L::select(
+            o.gt(L::zero()),
+            v.next_up(),
+            L::select(o.lt(L::zero()), v.next_down(), v),
+        )
+    };
+    V3::new(
+        step(offset.x, po.x),
+        step(offset.y, po.y),
+        step(offset.z, po.z),
+    )
+}
+
 /// The shadow ray's length short of a light point `q` at distance `len`
 /// from the ray origin: `SHADOW_EPS` of the length plus q's own error
 /// bound (twice gamma(7) |q|: an emitter's point is interpolated as a hit
@@ -226,6 +224,31 @@ pub fn offset_origin(p: Vec3, err: Vec3, ng: Vec3, w: Vec3) -> Vec3 {
 #[inline]
 pub fn shadow_tmax(len: f32, q: Vec3) -> f32 {
     len * (1.0 - SHADOW_EPS) - 2.0 * RAY_ERR_GAMMA * q.abs().max_element()
+}
+
+/// The shadow rays from `p` (error bound `err`, geometric normal `ng`)
+/// toward light samples in direction `wi` at distance `dist`, in every
+/// lane: [`PathTracer::shadow_ray`]'s origin, direction and length.
+#[inline(always)]
+pub fn shadow_ray_lanes<L: Lane>(
+    p: V3<L>,
+    err: V3<L>,
+    ng: V3<L>,
+    wi: V3<L>,
+    dist: L,
+) -> (V3<L>, V3<L>, L) {
+    let o = offset_origin_lanes(p, err, ng, wi);
+    let q = p + wi.scale(dist);
+    let to = q - o;
+    let len = to.length();
+    let finite = dist.abs().lt(L::splat(f32::INFINITY));
+    let tmax =
+        len * L::splat(1.0 - SHADOW_EPS) - L::splat(2.0 * RAY_ERR_GAMMA) * q.abs().max_element();
+    (
+        o,
+        V3::select(finite, to / len, wi),
+        L::select(finite, tmax, L::splat(f32::MAX)),
+    )
 }
 
 /// Where f32 truly runs out for this scene: the ray-offset bound at its

@@ -3,24 +3,26 @@
 //! Lambertian surfaces and draw an emitter light sample, their vertices'
 //! arithmetic (the geometric and shading normals, the frame, the emitter
 //! light sample, the BSDF's value, density and sample, the MIS weight, the
-//! next direction and the light-leak rule) runs in lanes, from the
-//! lane-generic functions whose one-lane instantiations the scalar
-//! [`PathTracer::vertex`] calls; the steps that branch or traverse (the
-//! ray offsets, the shadow rays, Russian roulette) then run path by path
-//! as [`PathTracer::vertex`] runs them. Every path gets the same numbers,
+//! next direction and the light-leak rule, the shadow rays and the next
+//! rays with their offset origins) runs in lanes, from the lane-generic
+//! functions whose one-lane instantiations the scalar [`PathTracer::vertex`]
+//! calls (the ray offset's scalar form keeps its branches, the same bits);
+//! the steps that traverse or end paths (the shadow rays' traversal,
+//! Russian roulette) then run path by path as [`PathTracer::vertex`] runs
+//! them. Every path gets the same numbers,
 //! so the same bits, as the scalar vertex gives it (`cpu/tests/lanes.rs`
 //! renders every bundled scene both ways).
 
 use glam::{Vec2, Vec3};
 
-use super::{Arrival, PathState, PathTracer, offset_origin};
+use super::{Arrival, PathState, PathTracer, offset_origin_lanes, shadow_ray_lanes};
 use crate::bsdf::Bsdf;
 use crate::bsdf::diffuse::lanes::{diffuse_eval, diffuse_pdf, diffuse_sample};
 use crate::bvh::Ray;
 use crate::film::Mis;
 use crate::frame::lanes::Frame;
 use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes, mask_bits};
-use crate::lights::{LightSample, Lights, background_direction_frame};
+use crate::lights::{Lights, background_direction_frame};
 use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::BounceSamples;
@@ -67,6 +69,8 @@ pub(super) struct DiffuseIn {
     u: f32,
     v_: f32,
     p: Vec3,
+    /// The hit point's error bound.
+    p_err: Vec3,
     wo: Vec3,
     rho: Vec3,
     u_idx: f32,
@@ -77,17 +81,19 @@ pub(super) struct DiffuseIn {
 /// What the lanes found for each path (valid in the lanes they shaded).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct DiffuseOut {
-    ng: [Vec3; 8],
     ns: [Vec3; 8],
     /// The lanes whose light sample has a nonzero f |cos|: their shadow
-    /// ray is traced.
+    /// ray (origin, direction, length) is traced.
     nee: u8,
-    light_wi: [Vec3; 8],
-    light_dist: [f32; 8],
+    shadow_o: [Vec3; 8],
+    shadow_d: [Vec3; 8],
+    shadow_tmax: [f32; 8],
     /// f |cos| Le / pdf times the MIS weight: what a clear shadow ray adds.
     light: [Vec3; 8],
     /// The lanes whose BSDF sample goes on (valid, no leak).
     next: u8,
+    /// The next ray: its origin and direction.
+    next_o: [Vec3; 8],
     wi: [Vec3; 8],
     pdf: [f32; 8],
 }
@@ -155,8 +161,9 @@ fn diffuse_lanes(
     let wi_l = frame.to_local(ls.wi);
     let sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
     let f = diffuse_eval(rho, wo, wi_l).scale(wi_l.z.abs());
-    let positive = f.x.gt(L::zero()) | f.y.gt(L::zero()) | f.z.gt(L::zero());
-    let nee = ls.valid & sides & positive;
+    let nee = ls.valid & sides & f.max_element().gt(L::zero());
+    let p_err = gather3!(inp, |d| d.p_err);
+    let (shadow_o, shadow_d, shadow_tmax) = shadow_ray_lanes(p, p_err, ng, ls.wi, ls.dist);
     let w = mis_light(mis, ls.pdf, diffuse_pdf(wo, wi_l));
     let light = (f * ls.weight).scale(w);
     // The BSDF's sample (`next_direction`).
@@ -168,15 +175,17 @@ fn diffuse_lanes(
     let wi = frame.to_world(bs.wi).normalize();
     let leaks = !agree::<L>(wi.dot(ng).gt(L::zero()), bs.wi.z.gt(L::zero()));
     let next = live & bs.valid & !leaks;
+    let next_o = offset_origin_lanes(p, p_err, ng, wi);
     let lanes3 = |x: V3<L>| -> [Vec3; 8] { crate::lanes::build8(|l| x.lane(l)) };
     DiffuseOut {
-        ng: lanes3(ng),
         ns: lanes3(ns),
         nee: mask_bits::<L>(nee),
-        light_wi: lanes3(ls.wi),
-        light_dist: ls.dist.0,
+        shadow_o: lanes3(shadow_o),
+        shadow_d: lanes3(shadow_d),
+        shadow_tmax: shadow_tmax.0,
         light: lanes3(light),
         next: mask_bits::<L>(next),
+        next_o: lanes3(next_o),
         wi: lanes3(wi),
         pdf: bs.pdf.0,
     }
@@ -255,6 +264,7 @@ impl PathTracer<'_> {
                 u: at.hit.u,
                 v_: at.hit.v,
                 p: at.p,
+                p_err: at.p_err,
                 wo: at.wo,
                 rho: reflectance,
                 u_idx: u.light_idx,
@@ -282,17 +292,13 @@ impl PathTracer<'_> {
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
             let path = &mut paths[k];
-            let ng = out.ng[k];
             if out.nee & (1 << k) != 0 {
                 *rays += 1;
-                let ls = LightSample {
-                    wi: out.light_wi[k],
-                    dist: out.light_dist[k],
-                    weight: Vec3::ZERO,
-                    pdf: 0.0,
-                    delta: false,
+                let shadow = Ray {
+                    o: out.shadow_o[k],
+                    d: out.shadow_d[k],
+                    tmax: out.shadow_tmax[k],
                 };
-                let shadow = self.shadow_ray(at.p, at.p_err, ng, &ls);
                 if shadow.tmax > 0.0 && !scene.occluded_with(&shadow, self.masks) {
                     path.radiance += path.throughput * out.light[k];
                 }
@@ -309,7 +315,7 @@ impl PathTracer<'_> {
             path.prev_bg_normal = background_direction_frame(out.ns[k], at.wo, false);
             path.prev_p = at.p;
             rays_of[k] = Ray {
-                o: offset_origin(at.p, at.p_err, ng, wi),
+                o: out.next_o[k],
                 d: wi,
                 tmax: f32::MAX,
             };
