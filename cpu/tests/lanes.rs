@@ -1230,7 +1230,7 @@ fn ray_offsets_in_lanes_are_the_scalar_ones() {
         if b % 5 == 3 {
             w = ng.cross(r.dir()).normalize_or(Vec3::X);
         }
-        let dist = if (b + i) % 4 == 0 {
+        let dist = if (b + i).is_multiple_of(4) {
             f32::INFINITY
         } else {
             r.f() * 8.0
