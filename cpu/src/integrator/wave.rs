@@ -109,7 +109,7 @@ impl PathTracer<'_> {
             // Lambertian vertices eight per instruction where enough
             // paths stand on them, the rest one at a time.
             let wide = if self.wide_shading {
-                self.diffuse_lanes_of(&arrivals, &bounce, live)
+                self.diffuse_lanes_of(&arrivals, live)
             } else {
                 0
             };

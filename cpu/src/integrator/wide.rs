@@ -1,16 +1,16 @@
 //! A wave's Lambertian vertices shaded eight paths per instruction (issue
 //! 24 item 3): where several of a wave's live paths stand on untextured
-//! Lambertian surfaces and draw an emitter light sample, their vertices'
-//! arithmetic (the geometric and shading normals, the frame, the emitter
-//! light sample, the BSDF's value, density and sample, the MIS weight, the
-//! next direction and the light-leak rule, the shadow rays and the next
-//! rays with their offset origins) runs in lanes, from the lane-generic
-//! functions whose one-lane instantiations the scalar [`PathTracer::vertex`]
-//! calls (the ray offset's scalar form keeps its branches, the same bits);
-//! the steps that traverse or end paths (the shadow rays' traversal,
-//! Russian roulette) then run path by path as [`PathTracer::vertex`] runs
-//! them. Every path gets the same numbers,
-//! so the same bits, as the scalar vertex gives it (`cpu/tests/lanes.rs`
+//! Lambertian surfaces, their vertices' arithmetic runs in lanes: the
+//! geometric and shading normals, the frame, the emitter light samples
+//! (the punctual lights' and the background's are drawn lane by lane), the
+//! BSDF's value, density and sample, the MIS weight, the next direction
+//! and the light-leak rule, the shadow rays and the next rays with their
+//! offset origins. It runs the lane-generic functions whose one-lane
+//! instantiations the scalar [`PathTracer::vertex`] calls (the ray
+//! offset's scalar form keeps its branches, the same bits); then the
+//! shadow rays' traversal and Russian roulette run path by path as
+//! [`PathTracer::vertex`] runs them. Every path gets the same numbers, so
+//! the same bits, as the scalar vertex gives it (`cpu/tests/lanes.rs`
 //! renders every bundled scene both ways).
 
 use glam::{Vec2, Vec3};
@@ -22,7 +22,7 @@ use crate::bvh::Ray;
 use crate::film::Mis;
 use crate::frame::lanes::Frame;
 use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes, mask_bits};
-use crate::lights::{Lights, background_direction_frame};
+use crate::lights::{LightSample, Lights, background_direction_frame};
 use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::BounceSamples;
@@ -73,6 +73,7 @@ pub(super) struct DiffuseIn {
     p_err: Vec3,
     wo: Vec3,
     rho: Vec3,
+    u_cat: f32,
     u_idx: f32,
     u_light: Vec2,
     u_bsdf: Vec2,
@@ -118,6 +119,93 @@ macro_rules! gather3 {
     };
 }
 
+/// The lanes' light samples ([`Lights::sample`]) from points `p` (shading
+/// normals `ns`) of the vertices in `live`: the emitter samples in lanes
+/// (`Lights::sample_emitter_lanes`), the punctual lights' and the
+/// background's lane by lane. Where each is valid, and where a delta.
+#[inline(always)]
+fn light_samples(
+    lights: &Lights,
+    scene: &Scene,
+    inp: &[DiffuseIn; 8],
+    live: Mask8,
+    p: V3<F32x8>,
+    ns: V3<F32x8>,
+) -> LightLanes {
+    type L = F32x8;
+    let u_light = V2 {
+        x: gather!(inp, |d| d.u_light.x),
+        y: gather!(inp, |d| d.u_light.y),
+    };
+    let emitter = live & gather!(inp, |d| d.u_cat).lt(L::splat(lights.probs.area));
+    let none = live & !live;
+    let mut ls = if L::none(emitter) {
+        LightLanes {
+            valid: none,
+            wi: p,
+            dist: L::zero(),
+            weight: p,
+            pdf: L::zero(),
+            delta: none,
+        }
+    } else {
+        let u_idx = gather!(inp, |d| d.u_idx);
+        let e = lights.sample_emitter_lanes(scene, p, u_idx, u_light, emitter);
+        LightLanes {
+            valid: e.valid,
+            wi: e.wi,
+            dist: e.dist,
+            weight: e.weight,
+            pdf: e.pdf,
+            delta: none,
+        }
+    };
+    let others = mask_bits::<L>(live & !emitter);
+    if others != 0 {
+        // The scalar samplers, as `PathTracer::vertex` calls them.
+        let mut got = [None::<LightSample>; 8];
+        let (mut some, mut delta) = (0u8, 0u8);
+        for k in live_lanes(others) {
+            let d = &inp[k];
+            let bg = background_direction_frame(ns.lane(k), d.wo, false);
+            got[k] = lights.sample(scene, d.p, bg, d.u_cat, d.u_idx, d.u_light);
+            if let Some(l) = &got[k] {
+                some |= 1 << k;
+                delta |= u8::from(l.delta) << k;
+            }
+        }
+        let none = LightSample {
+            wi: Vec3::Z,
+            dist: 1.0,
+            weight: Vec3::ZERO,
+            pdf: 0.0,
+            delta: false,
+        };
+        let got: [LightSample; 8] = crate::lanes::build8(|k| got[k].unwrap_or(none));
+        let o = Mask8::from_bits(others);
+        ls = LightLanes {
+            valid: L::select_mask(o, Mask8::from_bits(some), ls.valid),
+            wi: V3::select(o, gather3!(got, |l| l.wi), ls.wi),
+            dist: L::select(o, gather!(got, |l| l.dist), ls.dist),
+            weight: V3::select(o, gather3!(got, |l| l.weight), ls.weight),
+            pdf: L::select(o, gather!(got, |l| l.pdf), ls.pdf),
+            delta: Mask8::from_bits(delta),
+        };
+    }
+    ls
+}
+
+/// Light samples in lanes: [`crate::lights::EmitterSamples`] with the
+/// punctual lights' deltas.
+struct LightLanes {
+    valid: Mask8,
+    wi: V3<F32x8>,
+    dist: F32x8,
+    weight: V3<F32x8>,
+    pdf: F32x8,
+    delta: Mask8,
+}
+
 /// The lanes' arithmetic of the vertices in `live` (bits), eight per
 /// instruction (compiled for the wave's [`crate::lanes::SimdLevel`]).
 #[inline(always)]
@@ -152,11 +240,7 @@ fn diffuse_lanes(
     let wo = frame.to_local(gather3!(inp, |d| d.wo));
     let rho = gather3!(inp, |d| d.rho);
     let p = gather3!(inp, |d| d.p);
-    let u_light = V2 {
-        x: gather!(inp, |d| d.u_light.x),
-        y: gather!(inp, |d| d.u_light.y),
-    };
-    let ls = lights.sample_emitter_lanes(scene, p, gather!(inp, |d| d.u_idx), u_light, live);
+    let ls = light_samples(lights, scene, inp, live, p, ns);
     // Next-event estimation's arithmetic (`PathTracer::next_event`).
     let wi_l = frame.to_local(ls.wi);
     let sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
@@ -164,7 +248,11 @@ fn diffuse_lanes(
     let nee = ls.valid & sides & f.max_element().gt(L::zero());
     let p_err = gather3!(inp, |d| d.p_err);
     let (shadow_o, shadow_d, shadow_tmax) = shadow_ray_lanes(p, p_err, ng, ls.wi, ls.dist);
-    let w = mis_light(mis, ls.pdf, diffuse_pdf(wo, wi_l));
+    let w = L::select(
+        ls.delta,
+        L::one(),
+        mis_light(mis, ls.pdf, diffuse_pdf(wo, wi_l)),
+    );
     let light = (f * ls.weight).scale(w);
     // The BSDF's sample (`next_direction`).
     let u_bsdf = V2 {
@@ -193,17 +281,10 @@ fn diffuse_lanes(
 
 impl PathTracer<'_> {
     /// The lanes of `live` whose vertex the lanes can shade: an
-    /// untextured Lambertian surface without tangents whose bounce draws
-    /// an emitter light sample. (None where next-event estimation is off
-    /// or the scene has no emitters.)
-    pub(super) fn diffuse_lanes_of(
-        &self,
-        arrivals: &[Option<Arrival>; 8],
-        bounce: &[BounceSamples; 8],
-        live: u8,
-    ) -> u8 {
-        let area = self.lights.probs.area;
-        if !self.nee || !(area > 0.0) {
+    /// untextured Lambertian surface without tangents. (None where
+    /// next-event estimation is off or the scene has no lights.)
+    pub(super) fn diffuse_lanes_of(&self, arrivals: &[Option<Arrival>; 8], live: u8) -> u8 {
+        if !self.nee || self.lights.is_empty() {
             return 0;
         }
         let scene = self.scene;
@@ -215,7 +296,6 @@ impl PathTracer<'_> {
                 scene.materials[at.material as usize].bsdf,
                 Bsdf::Diffuse { .. }
             ) && tri.flags & TRI_TANGENTS == 0
-                && bounce[k].light_cat < area
                 && scene.textures.material(at.material).is_none()
             {
                 wide |= 1 << k;
@@ -267,6 +347,7 @@ impl PathTracer<'_> {
                 p_err: at.p_err,
                 wo: at.wo,
                 rho: reflectance,
+                u_cat: u.light_cat,
                 u_idx: u.light_idx,
                 u_light: u.light,
                 u_bsdf: u.bsdf,
