@@ -34,5 +34,5 @@ cargo test --workspace --locked "$@"
 if grep -qw avx2 /proc/cpuinfo 2>/dev/null; then
   native=(env RUSTFLAGS="${RUSTFLAGS:-} -C target-cpu=native" CARGO_TARGET_DIR=target/native-test)
   "${native[@]}" cargo test -p glint-cpu --locked --test lanes "$@"
-  "${native[@]}" cargo test -p glint-cpu --locked --lib "$@" -- lanes::
+  "${native[@]}" cargo test -p glint-cpu --locked --lib lanes:: "$@"
 fi
