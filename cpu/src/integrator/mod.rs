@@ -223,7 +223,13 @@ pub fn offset_origin_lanes<L: Lane>(p: V3<L>, err: V3<L>, ng: V3<L>, w: V3<L>) -
 /// point is).
 #[inline]
 pub fn shadow_tmax(len: f32, q: Vec3) -> f32 {
-    len * (1.0 - SHADOW_EPS) - 2.0 * RAY_ERR_GAMMA * q.abs().max_element()
+    shadow_tmax_lanes(len, q.into())
+}
+
+/// [`shadow_tmax`] in every lane (its one-lane form is the scalar one).
+#[inline(always)]
+pub fn shadow_tmax_lanes<L: Lane>(len: L, q: V3<L>) -> L {
+    len * L::splat(1.0 - SHADOW_EPS) - L::splat(2.0 * RAY_ERR_GAMMA) * q.abs().max_element()
 }
 
 /// The shadow rays from `p` (error bound `err`, geometric normal `ng`)
@@ -242,12 +248,10 @@ pub fn shadow_ray_lanes<L: Lane>(
     let to = q - o;
     let len = to.length();
     let finite = dist.abs().lt(L::splat(f32::INFINITY));
-    let tmax =
-        len * L::splat(1.0 - SHADOW_EPS) - L::splat(2.0 * RAY_ERR_GAMMA) * q.abs().max_element();
     (
         o,
         V3::select(finite, to / len, wi),
-        L::select(finite, tmax, L::splat(f32::MAX)),
+        L::select(finite, shadow_tmax_lanes(len, q), L::splat(f32::MAX)),
     )
 }
 

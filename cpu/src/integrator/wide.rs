@@ -22,7 +22,7 @@ use crate::bvh::Ray;
 use crate::film::Mis;
 use crate::frame::lanes::Frame;
 use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes, mask_bits};
-use crate::lights::{LightSample, Lights, background_direction_frame};
+use crate::lights::{EmitterSamples, LightSample, Lights, background_direction_frame};
 use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::BounceSamples;
@@ -122,7 +122,7 @@ macro_rules! gather3 {
 /// The lanes' light samples ([`Lights::sample`]) from points `p` (shading
 /// normals `ns`) of the vertices in `live`: the emitter samples in lanes
 /// (`Lights::sample_emitter_lanes`), the punctual lights' and the
-/// background's lane by lane. Where each is valid, and where a delta.
+/// background's lane by lane. The samples, and where each is a delta.
 #[inline(always)]
 fn light_samples(
     lights: &Lights,
@@ -131,40 +131,32 @@ fn light_samples(
     live: Mask8,
     p: V3<F32x8>,
     ns: V3<F32x8>,
-) -> LightLanes {
+) -> (EmitterSamples<F32x8>, Mask8) {
     type L = F32x8;
     let u_light = V2 {
         x: gather!(inp, |d| d.u_light.x),
         y: gather!(inp, |d| d.u_light.y),
     };
     let emitter = live & gather!(inp, |d| d.u_cat).lt(L::splat(lights.probs.area));
-    let none = live & !live;
     let mut ls = if L::none(emitter) {
-        LightLanes {
-            valid: none,
-            wi: p,
+        let zero = V3::splat(Vec3::ZERO);
+        EmitterSamples {
+            valid: emitter,
+            wi: zero,
             dist: L::zero(),
-            weight: p,
+            weight: zero,
             pdf: L::zero(),
-            delta: none,
         }
     } else {
         let u_idx = gather!(inp, |d| d.u_idx);
-        let e = lights.sample_emitter_lanes(scene, p, u_idx, u_light, emitter);
-        LightLanes {
-            valid: e.valid,
-            wi: e.wi,
-            dist: e.dist,
-            weight: e.weight,
-            pdf: e.pdf,
-            delta: none,
-        }
+        lights.sample_emitter_lanes(scene, p, u_idx, u_light, emitter)
     };
     let others = mask_bits::<L>(live & !emitter);
+    let mut delta = 0u8;
     if others != 0 {
         // The scalar samplers, as `PathTracer::vertex` calls them.
         let mut got = [None::<LightSample>; 8];
-        let (mut some, mut delta) = (0u8, 0u8);
+        let mut some = 0u8;
         for k in live_lanes(others) {
             let d = &inp[k];
             let bg = background_direction_frame(ns.lane(k), d.wo, false);
@@ -183,27 +175,15 @@ fn light_samples(
         };
         let got: [LightSample; 8] = crate::lanes::build8(|k| got[k].unwrap_or(none));
         let o = Mask8::from_bits(others);
-        ls = LightLanes {
+        ls = EmitterSamples {
             valid: L::select_mask(o, Mask8::from_bits(some), ls.valid),
             wi: V3::select(o, gather3!(got, |l| l.wi), ls.wi),
             dist: L::select(o, gather!(got, |l| l.dist), ls.dist),
             weight: V3::select(o, gather3!(got, |l| l.weight), ls.weight),
             pdf: L::select(o, gather!(got, |l| l.pdf), ls.pdf),
-            delta: Mask8::from_bits(delta),
         };
     }
-    ls
-}
-
-/// Light samples in lanes: [`crate::lights::EmitterSamples`] with the
-/// punctual lights' deltas.
-struct LightLanes {
-    valid: Mask8,
-    wi: V3<F32x8>,
-    dist: F32x8,
-    weight: V3<F32x8>,
-    pdf: F32x8,
-    delta: Mask8,
+    (ls, Mask8::from_bits(delta))
 }
 
 /// The lanes' arithmetic of the vertices in `live` (bits), eight per
@@ -225,7 +205,7 @@ fn diffuse_lanes(
     ];
     let (u, vb) = (gather!(inp, |d| d.u), gather!(inp, |d| d.v_));
     let ng = (v[1] - v[0]).cross(v[2] - v[0]).normalize();
-    let has_n = gather!(inp, |d| f32::from(u8::from(d.has_n))).gt(L::zero());
+    let has_n = Mask8::from_bits((0..8).fold(0, |b, l| b | u8::from(inp[l].has_n) << l));
     let ns = if L::none(has_n) {
         ng
     } else {
@@ -240,7 +220,7 @@ fn diffuse_lanes(
     let wo = frame.to_local(gather3!(inp, |d| d.wo));
     let rho = gather3!(inp, |d| d.rho);
     let p = gather3!(inp, |d| d.p);
-    let ls = light_samples(lights, scene, inp, live, p, ns);
+    let (ls, delta) = light_samples(lights, scene, inp, live, p, ns);
     // Next-event estimation's arithmetic (`PathTracer::next_event`).
     let wi_l = frame.to_local(ls.wi);
     let sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
@@ -249,7 +229,7 @@ fn diffuse_lanes(
     let p_err = gather3!(inp, |d| d.p_err);
     let (shadow_o, shadow_d, shadow_tmax) = shadow_ray_lanes(p, p_err, ng, ls.wi, ls.dist);
     let w = L::select(
-        ls.delta,
+        delta,
         L::one(),
         mis_light(mis, ls.pdf, diffuse_pdf(wo, wi_l)),
     );
