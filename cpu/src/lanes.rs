@@ -999,7 +999,8 @@ impl SimdLevel {
     }
 }
 
-/// `simd_at!(level, fn(args: T, ...) -> R { body } (values, ...))`: the
+/// `simd_at!(level, fn(args: T, ...) -> R { body } (values, ...))`, or
+/// `fn<M: Bound>(...)` over the caller's type parameter `M`: the
 /// function literal instantiated twice, once compiled for AVX2 and once for
 /// the baseline, and called for `level` (the baseline where the CPU lacks
 /// AVX2). The lane-generic code must be `#[inline(always)]` all the way
@@ -1008,13 +1009,20 @@ impl SimdLevel {
 /// variables, only its arguments.
 #[macro_export]
 macro_rules! simd_at {
-    ($level:expr, fn($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty $body:block ($($val:expr),* $(,)?)) => {{
+    // Generic over one type parameter `$g`, the caller's own (by name).
+    ($level:expr, fn<$g:ident: $bound:path>($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty $body:block ($($val:expr),* $(,)?)) => {
+        $crate::simd_at!(@at $level, [$g: $bound], [$g], ($($arg: $ty),*) -> $ret $body ($($val),*))
+    };
+    ($level:expr, fn($($arg:ident: $ty:ty),* $(,)?) -> $ret:ty $body:block ($($val:expr),* $(,)?)) => {
+        $crate::simd_at!(@at $level, [], [], ($($arg: $ty),*) -> $ret $body ($($val),*))
+    };
+    (@at $level:expr, [$($gen:tt)*], [$($inst:tt)*], ($($arg:ident: $ty:ty),*) -> $ret:ty $body:block ($($val:expr),*)) => {{
         #[inline(always)]
-        fn body($($arg: $ty),*) -> $ret $body
+        fn body<$($gen)*>($($arg: $ty),*) -> $ret $body
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2($($arg: $ty),*) -> $ret {
-            body($($arg),*)
+        unsafe fn avx2<$($gen)*>($($arg: $ty),*) -> $ret {
+            body::<$($inst)*>($($arg),*)
         }
         // The arguments first, outside the unsafe block.
         $(let $arg: $ty = $val;)*
@@ -1024,9 +1032,9 @@ macro_rules! simd_at {
                 if $crate::lanes::SimdLevel::detect() == $crate::lanes::SimdLevel::Avx2 =>
             {
                 // SAFETY: the CPU has AVX2 (checked just above).
-                unsafe { avx2($($arg),*) }
+                unsafe { avx2::<$($inst)*>($($arg),*) }
             }
-            _ => body($($arg),*),
+            _ => body::<$($inst)*>($($arg),*),
         }
     }};
 }

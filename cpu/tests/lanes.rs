@@ -843,9 +843,10 @@ fn batched_samples_are_the_scalar_sampler_s() {
 /// sampler) bit for bit, with the same rays, at every SIMD level, on every
 /// bundled scene, waves cut short included (21 spp: 8 + 8 + 5), with depth
 /// limits, a first sample off the batches' grid, no light sampling and the
-/// independent sampler, with the Lambertian vertices shaded one at a time
-/// and in lanes (`PathTracer::wide_shading`): the wave, the wide sampler
-/// and the wide vertices change the speed, not the image.
+/// independent sampler, and under a background, with the vertices shaded
+/// one at a time and, where the lanes know the model, in lanes
+/// (`PathTracer::wide_shading`): the wave, the wide sampler and the wide
+/// vertices change the speed, not the image.
 #[test]
 fn batched_render_is_the_unbatched_render_bit_for_bit() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets");
@@ -885,12 +886,20 @@ fn batched_render_is_the_unbatched_render_bit_for_bit() {
     ];
     for name in &names {
         let scene = glint_cpu::loader::load(&root.join(name)).unwrap();
-        for ((opts, level), wide) in variants
+        // And the scene under a background (a light sampled lane by lane
+        // in the wide vertices, its frame the BSDF's side or none for a
+        // transmitting one), in the default variant.
+        let mut lit = scene.clone();
+        lit.background += Vec3::new(0.3, 0.4, 0.5);
+        let lit_variant = [(&lit, &variants[0])];
+        for (((scene, opts), level), wide) in variants
             .iter()
+            .map(|o| (&scene, o))
+            .chain(lit_variant)
             .flat_map(|o| SimdLevel::available().into_iter().map(move |l| (o, l)))
             .flat_map(|c| [(c, false), (c, true)])
         {
-            let mut pt = glint_cpu::PathTracer::new(&scene, opts).unwrap();
+            let mut pt = glint_cpu::PathTracer::new(scene, opts).unwrap();
             pt.simd = level;
             pt.wide_shading = wide;
             let (film, stats) = pt.render(opts.spp, &|_, _| {});

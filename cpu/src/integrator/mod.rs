@@ -327,6 +327,8 @@ pub struct PathTracer<'a> {
     /// AVX2 instructions ([`wide::LANES_IN_REGISTERS`]); settable so tests
     /// run both paths in any build. The same bits either way.
     pub wide_shading: bool,
+    /// Each material's model in the lanes ([`wide::kinds`]).
+    wide_kinds: Vec<u8>,
 }
 
 /// The MIS weight of an emitter a BSDF-sampled ray found: 1 unless the
@@ -458,6 +460,7 @@ impl<'a> PathTracer<'a> {
             masks: scene.textures.has_masks(),
             simd: SimdLevel::detect(),
             wide_shading: wide::LANES_IN_REGISTERS,
+            wide_kinds: wide::kinds(scene),
         })
     }
 

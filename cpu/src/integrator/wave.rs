@@ -10,7 +10,6 @@
 
 use glam::Vec3;
 
-use super::wide::WIDE_MIN;
 use super::{Arrival, PathState, PathTracer};
 use crate::bvh::{PACKET, Ray};
 use crate::lanes::live_lanes;
@@ -106,22 +105,17 @@ impl PathTracer<'_> {
                 break;
             }
             let bounce = rng.bounces(depth, live);
-            // Lambertian vertices eight per instruction where enough
-            // paths stand on them, the rest one at a time.
-            let wide = if self.wide_shading {
-                self.diffuse_lanes_of(&arrivals, live)
-            } else {
-                0
-            };
+            // The vertices of the models the lanes know eight per
+            // instruction where enough paths stand on one, the rest one
+            // at a time.
             let mut one_by_one = live;
-            if wide.count_ones() >= WIDE_MIN {
-                one_by_one &= !wide;
-                live &= !self.diffuse_vertices(
+            if self.wide_shading {
+                live &= !self.wide_vertices(
                     &mut paths,
                     &mut ray_of,
                     &arrivals,
                     &bounce,
-                    wide,
+                    &mut one_by_one,
                     depth,
                     rays,
                 );

@@ -1,14 +1,17 @@
-//! A wave's Lambertian vertices shaded eight paths per instruction (issue
-//! 24 item 3): where several of a wave's live paths stand on untextured
-//! Lambertian surfaces, their vertices' arithmetic runs in lanes: the
-//! geometric and shading normals, the frame, the emitter light samples
-//! (the punctual lights' and the background's are drawn lane by lane), the
-//! BSDF's value, density and sample, the MIS weight, the next direction
-//! and the light-leak rule, the shadow rays and the next rays with their
-//! offset origins. It runs the lane-generic functions whose one-lane
-//! instantiations the scalar [`PathTracer::vertex`] calls (the ray
-//! offset's scalar form keeps its branches, the same bits); then the
-//! shadow rays' traversal and Russian roulette run path by path as
+//! A wave's vertices shaded eight paths per instruction (issue 24 item
+//! 3): where several of a wave's live paths stand on untextured surfaces
+//! of one model the lanes know ([`WideBsdf`]: the Lambertian, the glTF
+//! coated non-metal with a rough, opaque coat, the rough conductor and
+//! the rough dielectric without energy compensation), their vertices'
+//! arithmetic runs in lanes: the geometric and shading normals, the
+//! frame, the emitter light samples (the punctual lights' and the
+//! background's are drawn lane by lane), the BSDF's value, density and
+//! sample (what the three share at wo found once), the MIS weight, the
+//! next direction and the light-leak rule, the shadow rays and the next
+//! rays with their offset origins. It runs the lane-generic functions
+//! whose one-lane instantiations the scalar [`PathTracer::vertex`] calls
+//! (the ray offset's scalar form keeps its branches, the same bits); then
+//! the shadow rays' traversal and Russian roulette run path by path as
 //! [`PathTracer::vertex`] runs them. Every path gets the same numbers, so
 //! the same bits, as the scalar vertex gives it (`cpu/tests/lanes.rs`
 //! renders every bundled scene both ways).
@@ -16,8 +19,11 @@
 use glam::{Vec2, Vec3};
 
 use super::{Arrival, PathState, PathTracer, offset_origin_lanes, shadow_ray_lanes};
-use crate::bsdf::Bsdf;
+use crate::bsdf::coated::{self, Coat};
+use crate::bsdf::conductor::{self, RoughConductor};
+use crate::bsdf::dielectric::{self, RoughDielectric, dielectric_is_smooth};
 use crate::bsdf::diffuse::lanes::{diffuse_eval, diffuse_pdf, diffuse_sample};
+use crate::bsdf::{Bsdf, LaneSample, Shadowing, Tint};
 use crate::bvh::Ray;
 use crate::film::Mis;
 use crate::frame::lanes::Frame;
@@ -27,8 +33,8 @@ use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::BounceSamples;
 
-/// The fewest eligible paths for which a wave shades its Lambertian
-/// vertices in lanes (measured: docs/benchmarks.md).
+/// The fewest eligible paths for which a wave shades its vertices of one
+/// model in lanes (measured: docs/benchmarks.md).
 pub const WIDE_MIN: u32 = 3;
 
 /// Whether this build's lanes are AVX2 instructions (`lanes.rs`'s
@@ -37,6 +43,313 @@ pub const WIDE_MIN: u32 = 3;
 /// two to four instructions per lane operation in a function this large,
 /// and the vertices cost 1-9% more than one at a time (docs/benchmarks.md).
 pub const LANES_IN_REGISTERS: bool = cfg!(all(target_arch = "x86_64", target_feature = "avx2"));
+
+/// Eight lanes of `f(lane's input)`.
+macro_rules! gather {
+    ($inp:expr, |$d:ident| $e:expr) => {
+        F32x8(crate::lanes::build8(|l| {
+            let $d = &$inp[l];
+            $e
+        }))
+    };
+}
+
+macro_rules! gather3 {
+    ($inp:expr, |$d:ident| $e:expr) => {
+        V3::new(
+            gather!($inp, |$d| $e.x),
+            gather!($inp, |$d| $e.y),
+            gather!($inp, |$d| $e.z),
+        )
+    };
+}
+
+/// (1, 1, 1), for the parameters of lanes no one reads.
+const V3_ONE: V3<f32> = V3 {
+    x: 1.0,
+    y: 1.0,
+    z: 1.0,
+};
+
+/// A BSDF whose vertices a wave shades in lanes: its parameters, read
+/// lane by lane from the material, then what its value, density and
+/// sample share at wo, and the three, eight lanes per instruction. Each
+/// is the lane-generic function whose one-lane instantiation the scalar
+/// [`crate::bsdf::BsdfAt`] runs for the material, so the lanes give the
+/// scalar bits (`cpu/tests/lanes.rs`).
+pub(super) trait WideBsdf {
+    /// One lane's parameters.
+    type Params: Copy;
+    /// The parameters of a lane no one reads.
+    const UNSET: Self::Params;
+    /// Whether it transmits ([`Bsdf::has_transmission`]).
+    const TRANSMITS: bool = false;
+    /// The lanes' BSDF at wo.
+    type At;
+    /// The material's parameters where the lanes shade it.
+    fn params(bsdf: &Bsdf) -> Option<Self::Params>;
+    /// The lanes' BSDF seen from `wo` (local).
+    fn at(p: &[Self::Params; 8], wo: V3<F32x8>) -> Self::At;
+    fn eval(at: &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8>;
+    fn pdf(at: &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8;
+    fn sample(at: &Self::At, wo: V3<F32x8>, uc: F32x8, u: V2<F32x8>) -> LaneSample<F32x8>;
+}
+
+/// The Lambertian ([`Bsdf::Diffuse`]).
+pub(super) struct Lambertian;
+
+impl WideBsdf for Lambertian {
+    type Params = Vec3;
+    const UNSET: Vec3 = Vec3::ZERO;
+    type At = V3<F32x8>;
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<Vec3> {
+        match bsdf {
+            Bsdf::Diffuse { reflectance } => Some(*reflectance),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn at(p: &[Vec3; 8], _wo: V3<F32x8>) -> V3<F32x8> {
+        gather3!(p, |rho| rho)
+    }
+
+    #[inline(always)]
+    fn eval(rho: &V3<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        diffuse_eval(*rho, wo, wi)
+    }
+
+    #[inline(always)]
+    fn pdf(_rho: &V3<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        diffuse_pdf(wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample(rho: &V3<F32x8>, wo: V3<F32x8>, _uc: F32x8, u: V2<F32x8>) -> LaneSample<F32x8> {
+        diffuse_sample(*rho, wo, u)
+    }
+}
+
+/// The glTF coated non-metal ([`Bsdf::Coated`]) whose coat is rough and
+/// opaque, without a clear coat: [`coated::lanes`]' opaque part, which
+/// [`crate::bsdf::BsdfAt`] runs for it one lane at a time. (A smooth
+/// coat's mirror is a delta lobe that the lanes do not sample.)
+pub(super) struct CoatedOpaque;
+
+impl WideBsdf for CoatedOpaque {
+    type Params = Coat<f32>;
+    const UNSET: Coat<f32> = Coat {
+        base: V3_ONE,
+        specular: V3_ONE,
+        eta: 1.5,
+        ax: 1.0,
+        ay: 1.0,
+        smooth: false,
+    };
+    type At = (Coat<F32x8>, coated::lanes::AtWo<F32x8>);
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<Coat<f32>> {
+        match bsdf {
+            Bsdf::Coated {
+                base,
+                coat,
+                roughness,
+            } if coat.clearcoat <= 0.0 && coat.transmission <= 0.0 && !roughness.is_smooth() => {
+                Some(Coat::of(*base, coat, roughness))
+            }
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn at(p: &[Coat<f32>; 8], wo: V3<F32x8>) -> Self::At {
+        let c = Coat {
+            base: gather3!(p, |c| c.base),
+            specular: gather3!(p, |c| c.specular),
+            eta: gather!(p, |c| c.eta),
+            ax: gather!(p, |c| c.ax),
+            ay: gather!(p, |c| c.ay),
+            smooth: Mask8::from_bits((0..8).fold(0, |b, l| b | u8::from(p[l].smooth) << l)),
+        };
+        let w = coated::lanes::at_wo(&c, wo.z.abs());
+        (c, w)
+    }
+
+    #[inline(always)]
+    fn eval((c, w): &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        coated::lanes::opaque_eval(c, w, wo, wi)
+    }
+
+    #[inline(always)]
+    fn pdf((c, w): &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        coated::lanes::opaque_pdf(c, w, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample((c, w): &Self::At, wo: V3<F32x8>, uc: F32x8, u: V2<F32x8>) -> LaneSample<F32x8> {
+        coated::lanes::opaque_sample(c, w, wo, uc, u)
+    }
+}
+
+/// The rough conductor ([`Bsdf::Conductor`]) with the correlated Smith
+/// term and without energy compensation: [`conductor::lanes`]'
+/// single-scattering lobe, which `conductor_eval`, `conductor_pdf` and
+/// `conductor_sample` run for it one lane at a time.
+pub(super) struct RoughMetal;
+
+impl WideBsdf for RoughMetal {
+    type Params = RoughConductor<f32>;
+    const UNSET: RoughConductor<f32> = RoughConductor {
+        eta: V3_ONE,
+        k: V3_ONE,
+        specular_reflectance: V3_ONE,
+        ax: 1.0,
+        ay: 1.0,
+        separable: false,
+    };
+    type At = RoughConductor<F32x8>;
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<RoughConductor<f32>> {
+        match bsdf {
+            Bsdf::Conductor(c)
+                if !c.roughness.is_smooth()
+                    && !c.roughness.multiscatter
+                    && c.roughness.shadowing == Shadowing::Correlated =>
+            {
+                Some(RoughConductor::of(c))
+            }
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn at(p: &[RoughConductor<f32>; 8], _wo: V3<F32x8>) -> RoughConductor<F32x8> {
+        RoughConductor {
+            eta: gather3!(p, |c| c.eta),
+            k: gather3!(p, |c| c.k),
+            specular_reflectance: gather3!(p, |c| c.specular_reflectance),
+            ax: gather!(p, |c| c.ax),
+            ay: gather!(p, |c| c.ay),
+            separable: false,
+        }
+    }
+
+    #[inline(always)]
+    fn eval(c: &RoughConductor<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        conductor::lanes::rough_eval(c, wo, wi)
+    }
+
+    #[inline(always)]
+    fn pdf(c: &RoughConductor<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        conductor::lanes::rough_pdf(c, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample(
+        c: &RoughConductor<F32x8>,
+        wo: V3<F32x8>,
+        _uc: F32x8,
+        u: V2<F32x8>,
+    ) -> LaneSample<F32x8> {
+        conductor::lanes::rough_sample(c, wo, u)
+    }
+}
+
+/// The rough dielectric ([`Bsdf::Dielectric`]) with the correlated Smith
+/// term, without energy compensation or tints: [`dielectric::lanes`]'
+/// model, which `dielectric_eval`, `dielectric_pdf` and
+/// `dielectric_sample` run for it one lane at a time (the sample with
+/// its selects as branches, the same bits).
+pub(super) struct RoughGlass;
+
+impl WideBsdf for RoughGlass {
+    type Params = RoughDielectric<f32>;
+    const UNSET: RoughDielectric<f32> = RoughDielectric {
+        eta: 1.5,
+        ax: 1.0,
+        ay: 1.0,
+        separable: false,
+    };
+    const TRANSMITS: bool = true;
+    type At = RoughDielectric<F32x8>;
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<RoughDielectric<f32>> {
+        match bsdf {
+            Bsdf::Dielectric {
+                eta,
+                roughness,
+                tint,
+            } if !dielectric_is_smooth(*eta, roughness)
+                && !roughness.multiscatter
+                && roughness.shadowing == Shadowing::Correlated
+                && *tint == Tint::NONE =>
+            {
+                Some(RoughDielectric::of(*eta, roughness))
+            }
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn at(p: &[RoughDielectric<f32>; 8], _wo: V3<F32x8>) -> RoughDielectric<F32x8> {
+        RoughDielectric {
+            eta: gather!(p, |c| c.eta),
+            ax: gather!(p, |c| c.ax),
+            ay: gather!(p, |c| c.ay),
+            separable: false,
+        }
+    }
+
+    #[inline(always)]
+    fn eval(c: &RoughDielectric<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        let f = dielectric::lanes::rough_eval(c, wo, wi);
+        V3::new(f, f, f)
+    }
+
+    #[inline(always)]
+    fn pdf(c: &RoughDielectric<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        dielectric::lanes::rough_pdf(c, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample(
+        c: &RoughDielectric<F32x8>,
+        wo: V3<F32x8>,
+        uc: F32x8,
+        u: V2<F32x8>,
+    ) -> LaneSample<F32x8> {
+        dielectric::lanes::rough_sample(c, wo, uc, u)
+    }
+}
+
+/// Each material's model in the lanes: 1 [`Lambertian`], 2
+/// [`CoatedOpaque`], 3 [`RoughMetal`], 4 [`RoughGlass`], 0 none (a
+/// textured material, or another model: shaded one path at a time).
+pub(super) fn kinds(scene: &Scene) -> Vec<u8> {
+    (0..scene.materials.len())
+        .map(|m| {
+            let bsdf = &scene.materials[m].bsdf;
+            if scene.textures.material(m as u32).is_some() {
+                0
+            } else if Lambertian::params(bsdf).is_some() {
+                1
+            } else if CoatedOpaque::params(bsdf).is_some() {
+                2
+            } else if RoughMetal::params(bsdf).is_some() {
+                3
+            } else if RoughGlass::params(bsdf).is_some() {
+                4
+            } else {
+                0
+            }
+        })
+        .collect()
+}
 
 /// The shading normal at barycentrics (u, v) of a triangle whose vertex
 /// normals are `n` (geometric normal `ng`): their interpolation,
@@ -59,7 +372,7 @@ fn agree<L: Lane>(a: L::Mask, b: L::Mask) -> L::Mask {
 
 /// One path's vertex, as the lanes read it.
 #[derive(Clone, Copy, Debug, Default)]
-pub(super) struct DiffuseIn {
+pub(super) struct VertexIn {
     /// The triangle's vertices.
     v: [Vec3; 3],
     /// Its vertex normals (zero where it has none).
@@ -72,16 +385,16 @@ pub(super) struct DiffuseIn {
     /// The hit point's error bound.
     p_err: Vec3,
     wo: Vec3,
-    rho: Vec3,
     u_cat: f32,
     u_idx: f32,
     u_light: Vec2,
+    u_lobe: f32,
     u_bsdf: Vec2,
 }
 
 /// What the lanes found for each path (valid in the lanes they shaded).
 #[derive(Clone, Copy, Debug)]
-pub(super) struct DiffuseOut {
+pub(super) struct VertexOut {
     ns: [Vec3; 8],
     /// The lanes whose light sample has a nonzero f |cos|: their shadow
     /// ray (origin, direction, length) is traced.
@@ -96,27 +409,11 @@ pub(super) struct DiffuseOut {
     /// The next ray: its origin and direction.
     next_o: [Vec3; 8],
     wi: [Vec3; 8],
+    /// The BSDF sample's weight and density.
+    weight: [Vec3; 8],
     pdf: [f32; 8],
-}
-
-/// Eight lanes of `f(lane's input)`.
-macro_rules! gather {
-    ($inp:expr, |$d:ident| $e:expr) => {
-        F32x8(crate::lanes::build8(|l| {
-            let $d = &$inp[l];
-            $e
-        }))
-    };
-}
-
-macro_rules! gather3 {
-    ($inp:expr, |$d:ident| $e:expr) => {
-        V3::new(
-            gather!($inp, |$d| $e.x),
-            gather!($inp, |$d| $e.y),
-            gather!($inp, |$d| $e.z),
-        )
-    };
+    /// The relative IOR the sample crossed.
+    eta: [f32; 8],
 }
 
 /// The lanes' light samples ([`Lights::sample`]) from points `p` (shading
@@ -127,10 +424,11 @@ macro_rules! gather3 {
 fn light_samples(
     lights: &Lights,
     scene: &Scene,
-    inp: &[DiffuseIn; 8],
+    inp: &[VertexIn; 8],
     live: Mask8,
     p: V3<F32x8>,
     ns: V3<F32x8>,
+    transmits: bool,
 ) -> (EmitterSamples<F32x8>, Mask8) {
     type L = F32x8;
     let u_light = V2 {
@@ -159,7 +457,7 @@ fn light_samples(
         let mut some = 0u8;
         for k in live_lanes(others) {
             let d = &inp[k];
-            let bg = background_direction_frame(ns.lane(k), d.wo, false);
+            let bg = background_direction_frame(ns.lane(k), d.wo, transmits);
             got[k] = lights.sample(scene, d.p, bg, d.u_cat, d.u_idx, d.u_light);
             if let Some(l) = &got[k] {
                 some |= 1 << k;
@@ -186,16 +484,18 @@ fn light_samples(
     (ls, Mask8::from_bits(delta))
 }
 
-/// The lanes' arithmetic of the vertices in `live` (bits), eight per
-/// instruction (compiled for the wave's [`crate::lanes::SimdLevel`]).
+/// The lanes' arithmetic of the vertices in `live` (bits), BSDF `M`
+/// with the lanes' parameters `params`, eight per instruction (compiled
+/// for the wave's [`crate::lanes::SimdLevel`]).
 #[inline(always)]
-fn diffuse_lanes(
+fn vertex_lanes<M: WideBsdf>(
     lights: &Lights,
     scene: &Scene,
     mis: Mis,
-    inp: &[DiffuseIn; 8],
+    inp: &[VertexIn; 8],
+    params: &[M::Params; 8],
     live: u8,
-) -> DiffuseOut {
+) -> VertexOut {
     type L = F32x8;
     let live = Mask8::from_bits(live);
     let v = [
@@ -218,20 +518,20 @@ fn diffuse_lanes(
     };
     let frame = Frame::from_normal(ns);
     let wo = frame.to_local(gather3!(inp, |d| d.wo));
-    let rho = gather3!(inp, |d| d.rho);
+    let bsdf = M::at(params, wo);
     let p = gather3!(inp, |d| d.p);
-    let (ls, delta) = light_samples(lights, scene, inp, live, p, ns);
+    let (ls, delta) = light_samples(lights, scene, inp, live, p, ns, M::TRANSMITS);
     // Next-event estimation's arithmetic (`PathTracer::next_event`).
     let wi_l = frame.to_local(ls.wi);
     let sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
-    let f = diffuse_eval(rho, wo, wi_l).scale(wi_l.z.abs());
+    let f = M::eval(&bsdf, wo, wi_l).scale(wi_l.z.abs());
     let nee = ls.valid & sides & f.max_element().gt(L::zero());
     let p_err = gather3!(inp, |d| d.p_err);
     let (shadow_o, shadow_d, shadow_tmax) = shadow_ray_lanes(p, p_err, ng, ls.wi, ls.dist);
     let w = L::select(
         delta,
         L::one(),
-        mis_light(mis, ls.pdf, diffuse_pdf(wo, wi_l)),
+        mis_light(mis, ls.pdf, M::pdf(&bsdf, wo, wi_l)),
     );
     let light = (f * ls.weight).scale(w);
     // The BSDF's sample (`next_direction`).
@@ -239,13 +539,13 @@ fn diffuse_lanes(
         x: gather!(inp, |d| d.u_bsdf.x),
         y: gather!(inp, |d| d.u_bsdf.y),
     };
-    let bs = diffuse_sample(rho, wo, u_bsdf);
+    let bs = M::sample(&bsdf, wo, gather!(inp, |d| d.u_lobe), u_bsdf);
     let wi = frame.to_world(bs.wi).normalize();
     let leaks = !agree::<L>(wi.dot(ng).gt(L::zero()), bs.wi.z.gt(L::zero()));
     let next = live & bs.valid & !leaks;
     let next_o = offset_origin_lanes(p, p_err, ng, wi);
     let lanes3 = |x: V3<L>| -> [Vec3; 8] { crate::lanes::build8(|l| x.lane(l)) };
-    DiffuseOut {
+    VertexOut {
         ns: lanes3(ns),
         nee: mask_bits::<L>(nee),
         shadow_o: lanes3(shadow_o),
@@ -255,40 +555,71 @@ fn diffuse_lanes(
         next: mask_bits::<L>(next),
         next_o: lanes3(next_o),
         wi: lanes3(wi),
+        weight: lanes3(bs.weight),
         pdf: bs.pdf.0,
+        eta: bs.eta.0,
     }
 }
 
 impl PathTracer<'_> {
-    /// The lanes of `live` whose vertex the lanes can shade: an
-    /// untextured Lambertian surface without tangents. (None where
-    /// next-event estimation is off or the scene has no lights.)
-    pub(super) fn diffuse_lanes_of(&self, arrivals: &[Option<Arrival>; 8], live: u8) -> u8 {
+    /// The vertices of the lanes in `pending` that the lanes shade, model
+    /// by model ([`WideBsdf`]): those on an untextured surface without
+    /// tangents whose material is the model's, where [`WIDE_MIN`] or more
+    /// paths stand on one; each is [`PathTracer::vertex`], its arithmetic
+    /// eight paths per instruction, at bounce `depth`. The lanes shaded
+    /// leave `pending`; returns those whose path ends. (None are shaded
+    /// where next-event estimation is off or the scene has no lights.)
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn wide_vertices(
+        &self,
+        paths: &mut [PathState; 8],
+        rays_of: &mut [Ray; 8],
+        arrivals: &[Option<Arrival>; 8],
+        bounce: &[BounceSamples; 8],
+        pending: &mut u8,
+        depth: u32,
+        rays: &mut u64,
+    ) -> u8 {
         if !self.nee || self.lights.is_empty() {
             return 0;
         }
         let scene = self.scene;
-        let mut wide = 0u8;
-        for k in live_lanes(live) {
+        // The lanes by model (`kinds`' numbers).
+        let mut of = [0u8; 5];
+        for k in live_lanes(*pending) {
             let Some(at) = &arrivals[k] else { continue };
             let tri = &scene.triangles[at.hit.tri as usize];
-            if matches!(
-                scene.materials[at.material as usize].bsdf,
-                Bsdf::Diffuse { .. }
-            ) && tri.flags & TRI_TANGENTS == 0
-                && scene.textures.material(at.material).is_none()
-            {
-                wide |= 1 << k;
-            }
+            let kind = if tri.flags & TRI_TANGENTS != 0 {
+                0
+            } else {
+                self.wide_kinds[at.material as usize]
+            };
+            of[kind as usize] |= 1 << k;
         }
-        wide
+        let mut ended = 0u8;
+        macro_rules! shade {
+            ($($model:ty: $lanes:expr),*) => {$(
+                if $lanes.count_ones() >= WIDE_MIN {
+                    *pending &= !$lanes;
+                    ended |= self
+                        .vertices::<$model>(paths, rays_of, arrivals, bounce, $lanes, depth, rays);
+                }
+            )*};
+        }
+        shade!(
+            Lambertian: of[1],
+            CoatedOpaque: of[2],
+            RoughMetal: of[3],
+            RoughGlass: of[4]
+        );
+        ended
     }
 
-    /// The vertices of the lanes in `wide` (see [`Self::diffuse_lanes_of`])
-    /// at bounce `depth`: [`PathTracer::vertex`] for each, its arithmetic
-    /// eight paths per instruction. Returns the lanes whose path ends.
+    /// The vertices of the lanes in `wide`, all of model `M` (see
+    /// [`Self::wide_vertices`]). Returns the lanes whose path ends.
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn diffuse_vertices(
+    #[inline(always)]
+    fn vertices<M: WideBsdf>(
         &self,
         paths: &mut [PathState; 8],
         rays_of: &mut [Ray; 8],
@@ -299,12 +630,13 @@ impl PathTracer<'_> {
         rays: &mut u64,
     ) -> u8 {
         let scene = self.scene;
-        let mut inp = [DiffuseIn::default(); 8];
+        let mut inp = [VertexIn::default(); 8];
+        let mut params = [M::UNSET; 8];
         let first = wide.trailing_zeros() as usize;
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
             let tri = &scene.triangles[at.hit.tri as usize];
-            let Bsdf::Diffuse { reflectance } = scene.materials[at.material as usize].bsdf else {
+            let Some(pm) = M::params(&scene.materials[at.material as usize].bsdf) else {
                 continue;
             };
             let has_n = tri.flags & TRI_NORMALS != 0;
@@ -317,7 +649,8 @@ impl PathTracer<'_> {
                 }
             };
             let u = &bounce[k];
-            inp[k] = DiffuseIn {
+            params[k] = pm;
+            inp[k] = VertexIn {
                 v: tri.vertices(),
                 n: [normal(0), normal(1), normal(2)],
                 has_n,
@@ -326,10 +659,10 @@ impl PathTracer<'_> {
                 p: at.p,
                 p_err: at.p_err,
                 wo: at.wo,
-                rho: reflectance,
                 u_cat: u.light_cat,
                 u_idx: u.light_idx,
                 u_light: u.light,
+                u_lobe: u.bsdf_lobe,
                 u_bsdf: u.bsdf,
             };
         }
@@ -338,17 +671,19 @@ impl PathTracer<'_> {
         for k in 0..8 {
             if wide & (1 << k) == 0 {
                 inp[k] = inp[first];
+                params[k] = params[first];
             }
         }
-        let out = crate::simd_at!(self.simd, fn(
+        let out = crate::simd_at!(self.simd, fn<M: WideBsdf>(
             lights: &Lights,
             scene: &Scene,
             mis: Mis,
-            inp: &[DiffuseIn; 8],
+            inp: &[VertexIn; 8],
+            params: &[M::Params; 8],
             live: u8,
-        ) -> DiffuseOut {
-            diffuse_lanes(lights, scene, mis, inp, live)
-        }(&self.lights, scene, self.mis, &inp, wide));
+        ) -> VertexOut {
+            vertex_lanes::<M>(lights, scene, mis, inp, params, live)
+        }(&self.lights, scene, self.mis, &inp, &params, wide));
         let mut ended = 0u8;
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
@@ -368,16 +703,19 @@ impl PathTracer<'_> {
                 ended |= 1 << k;
                 continue;
             }
-            let wi = out.wi[k];
-            path.throughput *= inp[k].rho;
+            // The models' samples are no deltas.
+            path.throughput *= out.weight[k];
+            if M::TRANSMITS {
+                path.eta *= out.eta[k];
+            }
             path.prev_mis = true;
             path.prev_delta = false;
             path.prev_bsdf_pdf = out.pdf[k];
-            path.prev_bg_normal = background_direction_frame(out.ns[k], at.wo, false);
+            path.prev_bg_normal = background_direction_frame(out.ns[k], at.wo, M::TRANSMITS);
             path.prev_p = at.p;
             rays_of[k] = Ray {
                 o: out.next_o[k],
-                d: wi,
+                d: out.wi[k],
                 tmax: f32::MAX,
             };
             if !self.roulette(path, depth + 1, bounce[k].rr) {
