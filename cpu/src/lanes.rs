@@ -93,6 +93,11 @@ pub trait Lane:
     fn all(m: Self::Mask) -> bool;
     /// Whether `m` holds in no lane.
     fn none(m: Self::Mask) -> bool;
+    /// The lanes of `m` as bits (bit k: lane k).
+    #[inline(always)]
+    fn bits(m: Self::Mask) -> u8 {
+        (0..Self::LANES).fold(0, |b, i| b | u8::from(Self::mask_lane(m, i)) << i)
+    }
     /// `(v as i32) as f32` per lane: the integer part of a value inside
     /// i32's range (0 for NaN), as a truncating conversion gives it, so it
     /// rounds as the scalar code's `y as usize` does.
@@ -252,29 +257,11 @@ pub struct F32x8(pub [f32; 8]);
 #[repr(C, align(32))]
 pub struct Mask8(pub [u32; 8]);
 
-impl Mask8 {
-    /// The lanes `0..n` (n <= 8).
-    pub fn first(n: usize) -> Self {
-        Self(build8(|i| if i < n { !0 } else { 0 }))
-    }
-
-    #[inline(always)]
-    pub fn test(self, i: usize) -> bool {
-        self.0[i] != 0
-    }
-
-    /// The lanes whose bit is set in `bits` (bit k: lane k).
-    #[inline(always)]
-    pub fn from_bits(bits: u8) -> Self {
-        Self(build8(|i| mask_of(bits >> i & 1 != 0)))
-    }
-}
-
 /// The lanes of mask `m` as bits (bit k: lane k), the form
 /// [`live_lanes`] walks.
 #[inline(always)]
 pub fn mask_bits<L: Lane>(m: L::Mask) -> u8 {
-    (0..L::LANES).fold(0, |b, i| b | u8::from(L::mask_lane(m, i)) << i)
+    L::bits(m)
 }
 
 /// `[f(0), f(1), ..., f(7)]`, written out: `array::map` and
@@ -350,6 +337,32 @@ mod ymm {
     }
 }
 
+impl Mask8 {
+    /// The lanes `0..n` (n <= 8).
+    pub fn first(n: usize) -> Self {
+        Self(build8(|i| if i < n { !0 } else { 0 }))
+    }
+
+    #[inline(always)]
+    pub fn test(self, i: usize) -> bool {
+        self.0[i] != 0
+    }
+
+    /// The lanes whose bit is set in `bits` (bit k: lane k).
+    #[inline(always)]
+    pub fn from_bits(bits: u8) -> Self {
+        ymm_or!(
+            {
+                // Lane k's bit, 1 << k, compared with itself.
+                let bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+                let set = _mm256_and_si256(_mm256_set1_epi32(i32::from(bits)), bit);
+                stm(_mm256_castsi256_ps(_mm256_cmpeq_epi32(set, bit)))
+            },
+            Self(build8(|i| mask_of(bits >> i & 1 != 0)))
+        )
+    }
+}
+
 macro_rules! f32x8_op {
     ($tr:ident, $m:ident, $op:tt, $ymm:ident) => {
         impl $tr for F32x8 {
@@ -411,6 +424,8 @@ impl Not for Mask8 {
     }
 }
 
+// (Only the lanes as arrays call it.)
+#[cfg_attr(all(target_arch = "x86_64", target_feature = "avx2"), allow(dead_code))]
 #[inline(always)]
 fn mask_of(b: bool) -> u32 {
     if b { !0 } else { 0 }
@@ -616,6 +631,13 @@ impl Lane for F32x8 {
         ymm_or!(
             _mm256_movemask_ps(ldm(m)) == 0,
             m.0.iter().fold(0, |a, &b| a | b) == 0
+        )
+    }
+    #[inline(always)]
+    fn bits(m: Mask8) -> u8 {
+        ymm_or!(
+            _mm256_movemask_ps(ldm(m)) as u8,
+            (0..8).fold(0, |b, i| b | u8::from(m.test(i)) << i)
         )
     }
     #[inline(always)]
@@ -1053,6 +1075,21 @@ mod tests {
             worst = worst.max((s - rs).abs()).max((c - rc).abs());
         }
         assert!(worst <= 2e-7, "worst {worst:e}");
+    }
+
+    #[test]
+    fn masks_from_and_to_bits_round_trip() {
+        for b in 0..=255u8 {
+            let m = Mask8::from_bits(b);
+            assert_eq!(mask_bits::<F32x8>(m), b);
+            for i in 0..8 {
+                assert_eq!(
+                    m.0[i],
+                    if b >> i & 1 != 0 { !0 } else { 0 },
+                    "{b:#x} lane {i}"
+                );
+            }
+        }
     }
 
     #[test]
