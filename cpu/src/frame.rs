@@ -28,16 +28,13 @@ impl Frame {
     /// projected onto the tangent plane (Gram-Schmidt); falls back to
     /// [`Frame::from_normal`] when the tangent is degenerate or parallel to n.
     pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
-        let s = tangent - n * n.dot(tangent);
-        let len2 = s.length_squared();
-        // Also rejects NaN: a NaN tangent falls back to the normal-only frame.
-        if !(1e-12..=f32::MAX).contains(&len2) {
+        let (ok, s, t) = lanes::tangent_axes::<f32>(n.into(), tangent.into());
+        if !ok {
             return Self::from_normal(n);
         }
-        let s = s / len2.sqrt();
         Self {
-            s,
-            t: n.cross(s),
+            s: s.into(),
+            t: t.into(),
             n,
         }
     }
@@ -54,8 +51,8 @@ impl Frame {
 }
 
 /// The frames over any [`crate::lanes::Lane`] type (one source with the
-/// scalar [`Frame::from_normal`], and the same formulas as its `to_local`
-/// and `to_world`).
+/// scalar [`Frame::from_normal`] and [`Frame::from_normal_tangent`], and
+/// the same formulas as its `to_local` and `to_world`).
 pub mod lanes {
     use crate::lanes::{Lane, V3};
 
@@ -64,6 +61,19 @@ pub mod lanes {
         pub s: V3<L>,
         pub t: V3<L>,
         pub n: V3<L>,
+    }
+
+    /// The axes s and t of the frame around unit normal `n` whose s
+    /// follows `tangent` projected onto the tangent plane (Gram-Schmidt),
+    /// valid where the projection's squared length is in [1e-12, f32::MAX]
+    /// (not where the tangent is degenerate, parallel to n or NaN).
+    #[inline(always)]
+    pub fn tangent_axes<L: Lane>(n: V3<L>, tangent: V3<L>) -> (L::Mask, V3<L>, V3<L>) {
+        let s = tangent - n.scale(n.dot(tangent));
+        let len2 = s.length_squared();
+        let ok = len2.ge(L::splat(1e-12)) & len2.le(L::splat(f32::MAX));
+        let s = s / len2.sqrt();
+        (ok, s, n.cross(s))
     }
 
     impl<L: Lane> Frame<L> {
@@ -76,6 +86,18 @@ pub mod lanes {
             let s = V3::new(L::one() + sign * n.x * n.x * a, sign * b, -sign * n.x);
             let t = V3::new(b, sign + n.y * n.y * a, -n.y);
             Self { s, t, n }
+        }
+
+        /// [`super::Frame::from_normal_tangent`] in every lane.
+        #[inline(always)]
+        pub fn from_normal_tangent(n: V3<L>, tangent: V3<L>) -> Self {
+            let (ok, s, t) = tangent_axes(n, tangent);
+            let f = Self::from_normal(n);
+            Self {
+                s: V3::select(ok, s, f.s),
+                t: V3::select(ok, t, f.t),
+                n,
+            }
         }
 
         #[inline(always)]
@@ -120,6 +142,48 @@ mod tests {
                 let v = Vec3::new(0.2, -0.7, 0.4);
                 assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
             }
+        }
+    }
+
+    /// The tangent frames in lanes are the scalar frames bit for bit in
+    /// every lane, degenerate tangents (zero, parallel to n, NaN, huge)
+    /// falling back to the normal-only frame as one lane does.
+    #[test]
+    fn tangent_frames_in_lanes_are_the_scalar_ones() {
+        use crate::lanes::{F32x8, V3};
+        let n = [
+            Vec3::Z,
+            -Vec3::Z,
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+            Vec3::X,
+            Vec3::new(1e-7, 0.0, -1.0).normalize(),
+            Vec3::new(-0.6, 0.0, 0.8),
+            Vec3::Y,
+            Vec3::new(0.0, 0.6, -0.8),
+        ];
+        let t = [
+            Vec3::new(1.0, 2.0, 3.0).normalize(),
+            Vec3::ZERO,
+            Vec3::new(0.3, -0.5, 0.8).normalize(),
+            Vec3::new(f32::NAN, 0.0, 1.0),
+            Vec3::new(1e-7, 0.0, 0.0),
+            Vec3::new(3e19, -1e19, 2e19),
+            Vec3::new(0.0, 0.0, 1.0),
+            Vec3::new(1.0, 1e-3, 0.0),
+        ];
+        let lanes3 = |v: [Vec3; 8]| {
+            V3::new(
+                F32x8(v.map(|v| v.x)),
+                F32x8(v.map(|v| v.y)),
+                F32x8(v.map(|v| v.z)),
+            )
+        };
+        let f = lanes::Frame::<F32x8>::from_normal_tangent(lanes3(n), lanes3(t));
+        let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+        for l in 0..8 {
+            let one = Frame::from_normal_tangent(n[l], t[l]);
+            assert_eq!(bits(f.s.lane(l)), bits(one.s), "lane {l} s");
+            assert_eq!(bits(f.t.lane(l)), bits(one.t), "lane {l} t");
         }
     }
 }

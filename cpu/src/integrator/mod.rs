@@ -351,6 +351,7 @@ fn emitter_weight(
 /// direction; None where the BSDF samples nothing or the direction breaks
 /// the light-leak rule (folded, wi must leave on wo's side of the
 /// geometric surface, which it does up to rounding at the horizon).
+#[inline(always)]
 fn next_direction(
     bsdf: &BsdfAt,
     sf: &SurfaceFrame,

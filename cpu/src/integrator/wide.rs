@@ -392,6 +392,14 @@ pub(super) struct VertexIn {
     u_bsdf: Vec2,
 }
 
+/// The vertex tangents of the lanes' triangles that have them (read only
+/// where some have: most have none).
+pub(super) struct Tangents {
+    t: [[Vec3; 3]; 8],
+    /// The lanes whose triangle has tangents (bits).
+    has: u8,
+}
+
 /// What the lanes found for each path (valid in the lanes they shaded).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct VertexOut {
@@ -493,6 +501,7 @@ fn vertex_lanes<M: WideBsdf>(
     scene: &Scene,
     mis: Mis,
     inp: &[VertexIn; 8],
+    tangents: &Tangents,
     params: &[M::Params; 8],
     live: u8,
 ) -> VertexOut {
@@ -516,7 +525,28 @@ fn vertex_lanes<M: WideBsdf>(
         ];
         V3::select(has_n, shading_normal(ng, n, u, vb), ng)
     };
-    let frame = Frame::from_normal(ns);
+    let frame = if tangents.has == 0 {
+        Frame::from_normal(ns)
+    } else {
+        // The interpolated tangent (`PathTracer::surface`'s `lerp`).
+        let t = [
+            gather3!(tangents.t, |d| d[0]),
+            gather3!(tangents.t, |d| d[1]),
+            gather3!(tangents.t, |d| d[2]),
+        ];
+        let has_t = Mask8::from_bits(tangents.has);
+        let w = L::one() - u - vb;
+        let tangent = t[0].scale(w) + t[1].scale(u) + t[2].scale(vb);
+        let (with, without) = (
+            Frame::from_normal_tangent(ns, tangent),
+            Frame::from_normal(ns),
+        );
+        Frame {
+            s: V3::select(has_t, with.s, without.s),
+            t: V3::select(has_t, with.t, without.t),
+            n: ns,
+        }
+    };
     let wo = frame.to_local(gather3!(inp, |d| d.wo));
     let bsdf = M::at(params, wo);
     let p = gather3!(inp, |d| d.p);
@@ -563,8 +593,8 @@ fn vertex_lanes<M: WideBsdf>(
 
 impl PathTracer<'_> {
     /// The vertices of the lanes in `pending` that the lanes shade, model
-    /// by model ([`WideBsdf`]): those on an untextured surface without
-    /// tangents whose material is the model's, where [`WIDE_MIN`] or more
+    /// by model ([`WideBsdf`]): those on an untextured surface whose
+    /// material is the model's, where [`WIDE_MIN`] or more
     /// paths stand on one; each is [`PathTracer::vertex`], its arithmetic
     /// eight paths per instruction, at bounce `depth`. The lanes shaded
     /// leave `pending`; returns those whose path ends. (None are shaded
@@ -583,17 +613,11 @@ impl PathTracer<'_> {
         if !self.nee || self.lights.is_empty() {
             return 0;
         }
-        let scene = self.scene;
         // The lanes by model (`kinds`' numbers).
         let mut of = [0u8; 5];
         for k in live_lanes(*pending) {
             let Some(at) = &arrivals[k] else { continue };
-            let tri = &scene.triangles[at.hit.tri as usize];
-            let kind = if tri.flags & TRI_TANGENTS != 0 {
-                0
-            } else {
-                self.wide_kinds[at.material as usize]
-            };
+            let kind = self.wide_kinds[at.material as usize];
             of[kind as usize] |= 1 << k;
         }
         let mut ended = 0u8;
@@ -631,6 +655,10 @@ impl PathTracer<'_> {
     ) -> u8 {
         let scene = self.scene;
         let mut inp = [VertexIn::default(); 8];
+        let mut tangents = Tangents {
+            t: [[Vec3::ZERO; 3]; 8],
+            has: 0,
+        };
         let mut params = [M::UNSET; 8];
         let first = wide.trailing_zeros() as usize;
         for k in live_lanes(wide) {
@@ -639,15 +667,17 @@ impl PathTracer<'_> {
             let Some(pm) = M::params(&scene.materials[at.material as usize].bsdf) else {
                 continue;
             };
+            // The triangle's packed shading data (`Scene::set_shading`):
+            // normals, then tangents.
             let has_n = tri.flags & TRI_NORMALS != 0;
             let off = (tri.flags >> TRI_SHADING_SHIFT) as usize;
-            let normal = |i: usize| {
-                if has_n {
-                    Vec3::from_slice(&scene.shading[off + i][..3])
-                } else {
-                    Vec3::ZERO
-                }
-            };
+            let at3 = |o: usize| Vec3::from_slice(&scene.shading[o][..3]);
+            let normal = |i: usize| if has_n { at3(off + i) } else { Vec3::ZERO };
+            if tri.flags & TRI_TANGENTS != 0 {
+                let o = off + if has_n { 3 } else { 0 };
+                tangents.t[k] = [at3(o), at3(o + 1), at3(o + 2)];
+                tangents.has |= 1 << k;
+            }
             let u = &bounce[k];
             params[k] = pm;
             inp[k] = VertexIn {
@@ -679,11 +709,12 @@ impl PathTracer<'_> {
             scene: &Scene,
             mis: Mis,
             inp: &[VertexIn; 8],
+            tangents: &Tangents,
             params: &[M::Params; 8],
             live: u8,
         ) -> VertexOut {
-            vertex_lanes::<M>(lights, scene, mis, inp, params, live)
-        }(&self.lights, scene, self.mis, &inp, &params, wide));
+            vertex_lanes::<M>(lights, scene, mis, inp, tangents, params, live)
+        }(&self.lights, scene, self.mis, &inp, &tangents, &params, wide));
         let mut ended = 0u8;
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
