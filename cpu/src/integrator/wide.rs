@@ -1,8 +1,10 @@
 //! A wave's vertices shaded eight paths per instruction (issue 24 item
-//! 3): where several of a wave's live paths stand on untextured surfaces
-//! of one model the lanes know ([`WideBsdf`]: the Lambertian, the glTF
-//! coated non-metal with a rough, opaque coat, the rough conductor and
-//! the rough dielectric without energy compensation), their vertices'
+//! 3): where several of a wave's live paths stand on surfaces of one
+//! model the lanes know ([`WideBsdf`]: the Lambertian, the glTF coated
+//! non-metal with a rough, opaque coat, alone or as the metallic blend at
+//! metallic 0, the rough conductor and the rough dielectric without
+//! energy compensation; a textured material's model found per hit from
+//! its textured BSDF, where it has no normal map), their vertices'
 //! arithmetic runs in lanes: the geometric and shading normals, the
 //! frame, the emitter light samples (the punctual lights' and the
 //! background's are drawn lane by lane), the BSDF's value, density and
@@ -19,6 +21,7 @@
 use glam::{Vec2, Vec3};
 
 use super::{Arrival, PathState, PathTracer, offset_origin_lanes, shadow_ray_lanes};
+use crate::abi::ONE_MINUS_EPS;
 use crate::bsdf::coated::{self, Coat};
 use crate::bsdf::conductor::{self, RoughConductor};
 use crate::bsdf::dielectric::{self, RoughDielectric, dielectric_is_smooth};
@@ -32,6 +35,7 @@ use crate::lights::{EmitterSamples, LightSample, Lights, background_direction_fr
 use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
 use crate::sobol::BounceSamples;
+use crate::texture::textured_bsdf;
 
 /// The fewest eligible paths for which a wave shades its vertices of one
 /// model in lanes (measured: docs/benchmarks.md).
@@ -327,26 +331,100 @@ impl WideBsdf for RoughGlass {
     }
 }
 
-/// Each material's model in the lanes: 1 [`Lambertian`], 2
-/// [`CoatedOpaque`], 3 [`RoughMetal`], 4 [`RoughGlass`], 0 none (a
-/// textured material, or another model: shaded one path at a time).
+/// The glTF metallic-roughness blend ([`Bsdf::Metallic`]) at metallic 0
+/// (every texel of a textured non-metal), its non-metal as
+/// [`CoatedOpaque`]'s: `metallic_eval_at`, `metallic_pdf_at` and
+/// `metallic_sample_at` with the metal's weight zero, their sums and the
+/// sample's weight recomputed from f and the density as they do it.
+pub(super) struct NonMetalBlend;
+
+impl WideBsdf for NonMetalBlend {
+    type Params = Coat<f32>;
+    const UNSET: Coat<f32> = CoatedOpaque::UNSET;
+    type At = <CoatedOpaque as WideBsdf>::At;
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<Coat<f32>> {
+        match bsdf {
+            Bsdf::Metallic {
+                metallic,
+                base,
+                conductor,
+                coat,
+            } if *metallic == 0.0 => CoatedOpaque::params(&Bsdf::Coated {
+                base: *base,
+                coat: *coat,
+                roughness: conductor.roughness,
+            }),
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn at(p: &[Coat<f32>; 8], wo: V3<F32x8>) -> Self::At {
+        CoatedOpaque::at(p, wo)
+    }
+
+    // The blend m f_metal + (1 - m) f at m = 0: 0 x 0 + 1 x f, which is
+    // +0 + f (1 x f is f).
+    #[inline(always)]
+    fn eval(at: &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        V3::splat(Vec3::ZERO) + CoatedOpaque::eval(at, wo, wi)
+    }
+
+    #[inline(always)]
+    fn pdf(at: &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        F32x8::zero() + CoatedOpaque::pdf(at, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample(at: &Self::At, wo: V3<F32x8>, uc: F32x8, u: V2<F32x8>) -> LaneSample<F32x8> {
+        type L = F32x8;
+        // The non-metal's number, rescaled: (uc - 0) / (1 - 0) is uc.
+        let s = CoatedOpaque::sample(at, wo, uc.clamp(0.0, ONE_MINUS_EPS), u);
+        let cos = s.wi.z.abs();
+        let f = V3::splat(Vec3::ZERO) + s.weight.scale(s.pdf / cos);
+        let pdf = L::zero() + s.pdf;
+        LaneSample {
+            valid: s.valid & pdf.gt(L::zero()) & pdf.lt(L::splat(f32::INFINITY)),
+            weight: f.scale(cos / pdf),
+            pdf,
+            ..s
+        }
+    }
+}
+
+/// The model in the lanes of a BSDF: 1 [`Lambertian`], 2
+/// [`CoatedOpaque`], 3 [`RoughMetal`], 4 [`RoughGlass`], 5
+/// [`NonMetalBlend`], 0 none (shaded one path at a time).
+fn model_of(bsdf: &Bsdf) -> u8 {
+    if Lambertian::params(bsdf).is_some() {
+        1
+    } else if CoatedOpaque::params(bsdf).is_some() {
+        2
+    } else if RoughMetal::params(bsdf).is_some() {
+        3
+    } else if RoughGlass::params(bsdf).is_some() {
+        4
+    } else if NonMetalBlend::params(bsdf).is_some() {
+        5
+    } else {
+        0
+    }
+}
+
+/// [`PathTracer::wide_kinds`]' number of a textured material whose
+/// textures set only the BSDF's parameters (no normal map): its model is
+/// found per hit, from the textured BSDF.
+const TEXTURED: u8 = 6;
+
+/// Each material's model in the lanes ([`model_of`]), or [`TEXTURED`].
 pub(super) fn kinds(scene: &Scene) -> Vec<u8> {
     (0..scene.materials.len())
-        .map(|m| {
-            let bsdf = &scene.materials[m].bsdf;
-            if scene.textures.material(m as u32).is_some() {
-                0
-            } else if Lambertian::params(bsdf).is_some() {
-                1
-            } else if CoatedOpaque::params(bsdf).is_some() {
-                2
-            } else if RoughMetal::params(bsdf).is_some() {
-                3
-            } else if RoughGlass::params(bsdf).is_some() {
-                4
-            } else {
-                0
-            }
+        .map(|m| match scene.textures.material(m as u32) {
+            None => model_of(&scene.materials[m].bsdf),
+            Some(mt) if !mt.normal.is_some() && !mt.clearcoat_normal.is_some() => TEXTURED,
+            Some(_) => 0,
         })
         .collect()
 }
@@ -593,9 +671,8 @@ fn vertex_lanes<M: WideBsdf>(
 
 impl PathTracer<'_> {
     /// The vertices of the lanes in `pending` that the lanes shade, model
-    /// by model ([`WideBsdf`]): those on an untextured surface whose
-    /// material is the model's, where [`WIDE_MIN`] or more
-    /// paths stand on one; each is [`PathTracer::vertex`], its arithmetic
+    /// by model ([`WideBsdf`]): those whose material (textured, at the
+    /// hit) is the model's, where [`WIDE_MIN`] or more paths stand on one; each is [`PathTracer::vertex`], its arithmetic
     /// eight paths per instruction, at bounce `depth`. The lanes shaded
     /// leave `pending`; returns those whose path ends. (None are shaded
     /// where next-event estimation is off or the scene has no lights.)
@@ -613,20 +690,35 @@ impl PathTracer<'_> {
         if !self.nee || self.lights.is_empty() {
             return 0;
         }
-        // The lanes by model (`kinds`' numbers).
-        let mut of = [0u8; 5];
+        // The lanes by model (`model_of`'s numbers); a textured
+        // material's BSDF made here (`PathTracer::apply_textures` without a
+        // normal map), once, for the lanes that take it.
+        let scene = self.scene;
+        let mut of = [0u8; 6];
+        let mut textured = [None::<Bsdf>; 8];
         for k in live_lanes(*pending) {
             let Some(at) = &arrivals[k] else { continue };
-            let kind = self.wide_kinds[at.material as usize];
-            of[kind as usize] |= 1 << k;
+            let mut kind = self.wide_kinds[at.material as usize];
+            if kind == TEXTURED
+                && let Some(mt) = scene.textures.material(at.material)
+            {
+                let base = &scene.materials[at.material as usize].bsdf;
+                let bsdf = textured_bsdf(&scene.textures, mt, base, at.hit.tri, at.hit.u, at.hit.v);
+                kind = model_of(&bsdf);
+                textured[k] = Some(bsdf);
+            }
+            if kind < TEXTURED {
+                of[kind as usize] |= 1 << k;
+            }
         }
         let mut ended = 0u8;
         macro_rules! shade {
             ($($model:ty: $lanes:expr),*) => {$(
                 if $lanes.count_ones() >= WIDE_MIN {
                     *pending &= !$lanes;
-                    ended |= self
-                        .vertices::<$model>(paths, rays_of, arrivals, bounce, $lanes, depth, rays);
+                    ended |= self.vertices::<$model>(
+                        paths, rays_of, arrivals, bounce, &textured, $lanes, depth, rays,
+                    );
                 }
             )*};
         }
@@ -634,7 +726,8 @@ impl PathTracer<'_> {
             Lambertian: of[1],
             CoatedOpaque: of[2],
             RoughMetal: of[3],
-            RoughGlass: of[4]
+            RoughGlass: of[4],
+            NonMetalBlend: of[5]
         );
         ended
     }
@@ -649,6 +742,7 @@ impl PathTracer<'_> {
         rays_of: &mut [Ray; 8],
         arrivals: &[Option<Arrival>; 8],
         bounce: &[BounceSamples; 8],
+        textured: &[Option<Bsdf>; 8],
         wide: u8,
         depth: u32,
         rays: &mut u64,
@@ -664,7 +758,11 @@ impl PathTracer<'_> {
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
             let tri = &scene.triangles[at.hit.tri as usize];
-            let Some(pm) = M::params(&scene.materials[at.material as usize].bsdf) else {
+            let bsdf = match &textured[k] {
+                Some(b) => b,
+                None => &scene.materials[at.material as usize].bsdf,
+            };
+            let Some(pm) = M::params(bsdf) else {
                 continue;
             };
             // The triangle's packed shading data (`Scene::set_shading`):
