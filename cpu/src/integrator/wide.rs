@@ -2,7 +2,8 @@
 //! 3): where several of a wave's live paths stand on surfaces of one
 //! model the lanes know ([`WideBsdf`]: the Lambertian, the glTF coated
 //! non-metal with a rough, opaque coat, alone or as the metallic blend at
-//! metallic 0, the rough conductor and the rough dielectric without
+//! metallic 0, the rough conductor, alone or as the blend at metallic 1,
+//! and the rough dielectric without
 //! energy compensation; a textured material's model found per hit from
 //! its textured BSDF, where it has no normal map), their vertices'
 //! arithmetic runs in lanes: the geometric and shading normals, the
@@ -394,9 +395,76 @@ impl WideBsdf for NonMetalBlend {
     }
 }
 
+/// The glTF metallic-roughness blend ([`Bsdf::Metallic`]) at metallic 1
+/// (a textured metal's texels), opaque: its metal as [`RoughMetal`]'s,
+/// with the blend's sums and sample weight as `metallic_*_at` compute
+/// them with the non-metal's weight zero.
+pub(super) struct MetalBlend;
+
+impl WideBsdf for MetalBlend {
+    type Params = RoughConductor<f32>;
+    const UNSET: RoughConductor<f32> = RoughMetal::UNSET;
+    type At = RoughConductor<F32x8>;
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<RoughConductor<f32>> {
+        match bsdf {
+            // The coat's transmission would make the blend transmit
+            // (`Bsdf::has_transmission`) and its clear coat would layer it.
+            Bsdf::Metallic {
+                metallic,
+                conductor,
+                coat,
+                ..
+            } if *metallic == 1.0 && coat.transmission <= 0.0 && coat.clearcoat <= 0.0 => {
+                RoughMetal::params(&Bsdf::Conductor(*conductor))
+            }
+            _ => None,
+        }
+    }
+
+    #[inline(always)]
+    fn at(p: &[RoughConductor<f32>; 8], wo: V3<F32x8>) -> RoughConductor<F32x8> {
+        RoughMetal::at(p, wo)
+    }
+
+    // 1 x f + 0 x 0 is f + 0.
+    #[inline(always)]
+    fn eval(c: &RoughConductor<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        RoughMetal::eval(c, wo, wi) + V3::splat(Vec3::ZERO)
+    }
+
+    #[inline(always)]
+    fn pdf(c: &RoughConductor<F32x8>, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        RoughMetal::pdf(c, wo, wi) + F32x8::zero()
+    }
+
+    #[inline(always)]
+    fn sample(
+        c: &RoughConductor<F32x8>,
+        wo: V3<F32x8>,
+        uc: F32x8,
+        u: V2<F32x8>,
+    ) -> LaneSample<F32x8> {
+        type L = F32x8;
+        // uc < 1 picks the metal.
+        let s = RoughMetal::sample(c, wo, uc, u);
+        let cos = s.wi.z.abs();
+        let f = s.weight.scale(s.pdf / cos) + V3::splat(Vec3::ZERO);
+        let pdf = s.pdf + L::zero();
+        LaneSample {
+            valid: s.valid & pdf.gt(L::zero()) & pdf.lt(L::splat(f32::INFINITY)),
+            weight: f.scale(cos / pdf),
+            pdf,
+            ..s
+        }
+    }
+}
+
 /// The model in the lanes of a BSDF: 1 [`Lambertian`], 2
 /// [`CoatedOpaque`], 3 [`RoughMetal`], 4 [`RoughGlass`], 5
-/// [`NonMetalBlend`], 0 none (shaded one path at a time).
+/// [`NonMetalBlend`], 6 [`MetalBlend`], 0 none (shaded one path at a
+/// time).
 fn model_of(bsdf: &Bsdf) -> u8 {
     if Lambertian::params(bsdf).is_some() {
         1
@@ -408,6 +476,8 @@ fn model_of(bsdf: &Bsdf) -> u8 {
         4
     } else if NonMetalBlend::params(bsdf).is_some() {
         5
+    } else if MetalBlend::params(bsdf).is_some() {
+        6
     } else {
         0
     }
@@ -416,7 +486,7 @@ fn model_of(bsdf: &Bsdf) -> u8 {
 /// [`PathTracer::wide_kinds`]' number of a textured material whose
 /// textures set only the BSDF's parameters (no normal map): its model is
 /// found per hit, from the textured BSDF.
-const TEXTURED: u8 = 6;
+const TEXTURED: u8 = 7;
 
 /// Each material's model in the lanes ([`model_of`]), or [`TEXTURED`].
 pub(super) fn kinds(scene: &Scene) -> Vec<u8> {
@@ -694,7 +764,7 @@ impl PathTracer<'_> {
         // material's BSDF made here (`PathTracer::apply_textures` without a
         // normal map), once, for the lanes that take it.
         let scene = self.scene;
-        let mut of = [0u8; 6];
+        let mut of = [0u8; 7];
         let mut textured = [None::<Bsdf>; 8];
         for k in live_lanes(*pending) {
             let Some(at) = &arrivals[k] else { continue };
@@ -727,7 +797,8 @@ impl PathTracer<'_> {
             CoatedOpaque: of[2],
             RoughMetal: of[3],
             RoughGlass: of[4],
-            NonMetalBlend: of[5]
+            NonMetalBlend: of[5],
+            MetalBlend: of[6]
         );
         ended
     }
