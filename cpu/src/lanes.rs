@@ -93,7 +93,8 @@ pub trait Lane:
     fn all(m: Self::Mask) -> bool;
     /// Whether `m` holds in no lane.
     fn none(m: Self::Mask) -> bool;
-    /// The lanes of `m` as bits (bit k: lane k).
+    /// The lanes of `m` as bits (bit k: lane k), the form [`live_lanes`]
+    /// walks.
     #[inline(always)]
     fn bits(m: Self::Mask) -> u8 {
         (0..Self::LANES).fold(0, |b, i| b | u8::from(Self::mask_lane(m, i)) << i)
@@ -256,13 +257,6 @@ pub struct F32x8(pub [f32; 8]);
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(C, align(32))]
 pub struct Mask8(pub [u32; 8]);
-
-/// The lanes of mask `m` as bits (bit k: lane k), the form
-/// [`live_lanes`] walks.
-#[inline(always)]
-pub fn mask_bits<L: Lane>(m: L::Mask) -> u8 {
-    L::bits(m)
-}
 
 /// `[f(0), f(1), ..., f(7)]`, written out: `array::map` and
 /// `array::from_fn` go through closures and a drop guard that LLVM leaves
@@ -1081,7 +1075,7 @@ mod tests {
     fn masks_from_and_to_bits_round_trip() {
         for b in 0..=255u8 {
             let m = Mask8::from_bits(b);
-            assert_eq!(mask_bits::<F32x8>(m), b);
+            assert_eq!(F32x8::bits(m), b);
             for i in 0..8 {
                 assert_eq!(
                     m.0[i],

@@ -31,7 +31,7 @@ use crate::bsdf::{Bsdf, LaneSample, Shadowing, Tint};
 use crate::bvh::Ray;
 use crate::film::Mis;
 use crate::frame::lanes::Frame;
-use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes, mask_bits};
+use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes};
 use crate::lights::{EmitterSamples, LightSample, Lights, background_direction_frame};
 use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
@@ -69,13 +69,6 @@ macro_rules! gather3 {
     };
 }
 
-/// (1, 1, 1), for the parameters of lanes no one reads.
-const V3_ONE: V3<f32> = V3 {
-    x: 1.0,
-    y: 1.0,
-    z: 1.0,
-};
-
 /// A BSDF whose vertices a wave shades in lanes: its parameters, read
 /// lane by lane from the material, then what its value, density and
 /// sample share at wo, and the three, eight lanes per instruction. Each
@@ -85,8 +78,6 @@ const V3_ONE: V3<f32> = V3 {
 pub(super) trait WideBsdf {
     /// One lane's parameters.
     type Params: Copy;
-    /// The parameters of a lane no one reads.
-    const UNSET: Self::Params;
     /// Whether it transmits ([`Bsdf::has_transmission`]).
     const TRANSMITS: bool = false;
     /// The lanes' BSDF at wo.
@@ -105,7 +96,6 @@ pub(super) struct Lambertian;
 
 impl WideBsdf for Lambertian {
     type Params = Vec3;
-    const UNSET: Vec3 = Vec3::ZERO;
     type At = V3<F32x8>;
 
     #[inline(always)]
@@ -145,14 +135,6 @@ pub(super) struct CoatedOpaque;
 
 impl WideBsdf for CoatedOpaque {
     type Params = Coat<f32>;
-    const UNSET: Coat<f32> = Coat {
-        base: V3_ONE,
-        specular: V3_ONE,
-        eta: 1.5,
-        ax: 1.0,
-        ay: 1.0,
-        smooth: false,
-    };
     type At = (Coat<F32x8>, coated::lanes::AtWo<F32x8>);
 
     #[inline(always)]
@@ -207,14 +189,6 @@ pub(super) struct RoughMetal;
 
 impl WideBsdf for RoughMetal {
     type Params = RoughConductor<f32>;
-    const UNSET: RoughConductor<f32> = RoughConductor {
-        eta: V3_ONE,
-        k: V3_ONE,
-        specular_reflectance: V3_ONE,
-        ax: 1.0,
-        ay: 1.0,
-        separable: false,
-    };
     type At = RoughConductor<F32x8>;
 
     #[inline(always)]
@@ -273,12 +247,6 @@ pub(super) struct RoughGlass;
 
 impl WideBsdf for RoughGlass {
     type Params = RoughDielectric<f32>;
-    const UNSET: RoughDielectric<f32> = RoughDielectric {
-        eta: 1.5,
-        ax: 1.0,
-        ay: 1.0,
-        separable: false,
-    };
     const TRANSMITS: bool = true;
     type At = RoughDielectric<F32x8>;
 
@@ -341,7 +309,6 @@ pub(super) struct NonMetalBlend;
 
 impl WideBsdf for NonMetalBlend {
     type Params = Coat<f32>;
-    const UNSET: Coat<f32> = CoatedOpaque::UNSET;
     type At = <CoatedOpaque as WideBsdf>::At;
 
     #[inline(always)]
@@ -403,7 +370,6 @@ pub(super) struct MetalBlend;
 
 impl WideBsdf for MetalBlend {
     type Params = RoughConductor<f32>;
-    const UNSET: RoughConductor<f32> = RoughMetal::UNSET;
     type At = RoughConductor<F32x8>;
 
     #[inline(always)]
@@ -605,7 +571,7 @@ fn light_samples(
         let u_idx = gather!(inp, |d| d.u_idx);
         lights.sample_emitter_lanes(scene, p, u_idx, u_light, emitter)
     };
-    let others = mask_bits::<L>(live & !emitter);
+    let others = L::bits(live & !emitter);
     let mut delta = 0u8;
     if others != 0 {
         // The scalar samplers, as `PathTracer::vertex` calls them.
@@ -725,12 +691,12 @@ fn vertex_lanes<M: WideBsdf>(
     let lanes3 = |x: V3<L>| -> [Vec3; 8] { crate::lanes::build8(|l| x.lane(l)) };
     VertexOut {
         ns: lanes3(ns),
-        nee: mask_bits::<L>(nee),
+        nee: L::bits(nee),
         shadow_o: lanes3(shadow_o),
         shadow_d: lanes3(shadow_d),
         shadow_tmax: shadow_tmax.0,
         light: lanes3(light),
-        next: mask_bits::<L>(next),
+        next: L::bits(next),
         next_o: lanes3(next_o),
         wi: lanes3(wi),
         weight: lanes3(bs.weight),
@@ -824,16 +790,25 @@ impl PathTracer<'_> {
             t: [[Vec3::ZERO; 3]; 8],
             has: 0,
         };
-        let mut params = [M::UNSET; 8];
+        // Each lane's parameters, the lanes not shaded here holding the
+        // first shaded lane's.
+        let params_of = |k: usize| {
+            let at = arrivals[k].as_ref()?;
+            M::params(match &textured[k] {
+                Some(b) => b,
+                None => &scene.materials[at.material as usize].bsdf,
+            })
+        };
         let first = wide.trailing_zeros() as usize;
+        // (Never: the caller chose the lanes by `M::params`.)
+        let Some(first_params) = params_of(first) else {
+            return 0;
+        };
+        let mut params = [first_params; 8];
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
             let tri = &scene.triangles[at.hit.tri as usize];
-            let bsdf = match &textured[k] {
-                Some(b) => b,
-                None => &scene.materials[at.material as usize].bsdf,
-            };
-            let Some(pm) = M::params(bsdf) else {
+            let Some(pm) = params_of(k) else {
                 continue;
             };
             // The triangle's packed shading data (`Scene::set_shading`):
@@ -870,7 +845,6 @@ impl PathTracer<'_> {
         for k in 0..8 {
             if wide & (1 << k) == 0 {
                 inp[k] = inp[first];
-                params[k] = params[first];
             }
         }
         let out = crate::simd_at!(self.simd, fn<M: WideBsdf>(
