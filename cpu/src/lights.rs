@@ -163,20 +163,63 @@ pub mod lanes {
     }
 }
 
-/// The radiance each lane's emitter (`ems`, geometric normals `ng`) sends
-/// from barycentrics `b` toward -`wi`, lane by lane ([`emitted`]) where
-/// `valid`: where it sends any, and that radiance.
+/// What an emitter sends, found once for [`emission_lanes`]: its
+/// material's emission (emissive: `Scene::assign_emitters` makes emitters
+/// of emissive triangles only), the triangle's two sides, and whether a
+/// texture scales the emission (then it is looked up per lane,
+/// [`emitted_facing`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct EmitterRadiance {
+    le: Vec3,
+    two_sided: bool,
+    textured: bool,
+}
+
+impl EmitterRadiance {
+    fn new(scene: &Scene, tri: u32) -> Self {
+        let t = &scene.triangles[tri as usize];
+        let m = &scene.materials[t.material as usize];
+        debug_assert!(m.is_emissive());
+        Self {
+            le: m.emission,
+            two_sided: t.flags & TRI_DOUBLE_SIDED != 0,
+            textured: scene
+                .textures
+                .material(t.material)
+                .is_some_and(|mt| mt.emissive.is_some()),
+        }
+    }
+}
+
+/// The radiance each lane's emitter (`ems`, what they send `rad`,
+/// geometric normals `ng`) sends from barycentrics `b` toward -`wi` where
+/// `valid`: where it sends any, and that radiance (zero elsewhere). The
+/// same numbers as [`emitted_facing`] lane by lane (an untextured
+/// emission's factor is one); without textures, in lanes.
 #[inline(always)]
 fn emission_lanes<L: Lane>(
     scene: &Scene,
     ems: &[GpuEmitter; 8],
+    rad: &[EmitterRadiance; 8],
     ng: V3<L>,
     valid: L::Mask,
     b: V2<L>,
     wi: V3<L>,
 ) -> (L::Mask, V3<L>) {
-    let mut le = [Vec3::ZERO; 8];
     let front = ng.dot(-wi).gt(L::zero());
+    if !rad[..L::LANES].iter().any(|r| r.textured) {
+        let flag = |f: fn(&EmitterRadiance) -> bool| {
+            L::from_fn(|l| if f(&rad[l]) { 1.0 } else { 0.0 }).gt(L::zero())
+        };
+        let sends = valid & (front | flag(|r| r.two_sided));
+        let le = V3::new(
+            L::from_fn(|l| rad[l].le.x),
+            L::from_fn(|l| rad[l].le.y),
+            L::from_fn(|l| rad[l].le.z),
+        );
+        return (sends, V3::select(sends, le, V3::splat(Vec3::ZERO)));
+    }
+    let mut le = [Vec3::ZERO; 8];
     let emits = L::from_fn(|l| {
         let e = L::mask_lane(valid, l)
             .then(|| {
@@ -298,6 +341,9 @@ pub struct LightSample {
 #[derive(Clone, Debug, Default)]
 pub struct Lights {
     pub emitters: Vec<GpuEmitter>,
+    /// What each emitter sends (the CPU's; the GPU reads the triangle's
+    /// material).
+    pub radiance: Vec<EmitterRadiance>,
     pub punctual: Vec<GpuLight>,
     pub background: Vec3,
     /// The environment map, when there is one: it is the background.
@@ -360,8 +406,13 @@ impl Lights {
             punctual: if present[1] { p } else { 0.0 },
             background: if present[2] { p } else { 0.0 },
         };
+        let radiance = emitters
+            .iter()
+            .map(|e| EmitterRadiance::new(scene, e.tri))
+            .collect();
         Self {
             emitters,
+            radiance,
             punctual,
             background: scene.background,
             envmap: scene.envmap.clone(),
@@ -485,7 +536,14 @@ impl Lights {
         let dist2 = d.length_squared();
         let dist = dist2.sqrt();
         let wi = d / dist;
-        let (emits, le) = emission_lanes(scene, &ems, ng, found & dist.gt(L::zero()), b, wi);
+        let rad: [EmitterRadiance; 8] = std::array::from_fn(|l| {
+            if l < L::LANES {
+                self.radiance[idx[l] as usize]
+            } else {
+                EmitterRadiance::default()
+            }
+        });
+        let (emits, le) = emission_lanes(scene, &ems, &rad, ng, found & dist.gt(L::zero()), b, wi);
         let mut valid = emits;
         let area_p = L::splat(pr.area);
         let pdf_by_area = || {

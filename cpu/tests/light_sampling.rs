@@ -215,6 +215,11 @@ fn a_wrong_spherical_sampler_fails_the_chi_square() {
 
 /// A 2 x 2 quad light at y = 1 facing down (one-sided), radiance `le`.
 fn quad_light_scene(le: f32) -> glint_cpu::Scene {
+    quad_light_scene_of(emitter("light", Vec3::splat(le), false))
+}
+
+/// The 2 x 2 quad at y = 1, its front facing down, of material `light`.
+fn quad_light_scene_of(light: glint_cpu::scene::Material) -> glint_cpu::Scene {
     let tris = quad(
         Vec3::new(-1.0, 1.0, -1.0),
         Vec3::new(1.0, 1.0, -1.0),
@@ -223,13 +228,53 @@ fn quad_light_scene(le: f32) -> glint_cpu::Scene {
         0,
     );
     let cam = look_at(Vec3::new(0.0, -3.0, 0.1), Vec3::ZERO, Vec3::Y, 40.0);
-    scene(
-        tris,
-        vec![emitter("light", Vec3::splat(le), false)],
-        vec![],
-        cam,
-        Vec3::ZERO,
-    )
+    scene(tris, vec![light], vec![], cam, Vec3::ZERO)
+}
+
+/// A light sample carries its emitter's radiance from the sides it emits
+/// from: in front of the quad (below it) both a one-sided and a two-sided
+/// emitter send their emission, behind it (above) only the two-sided one
+/// does; the one-sided one gives no sample there.
+#[test]
+fn light_samples_send_from_the_emitting_sides() {
+    let le = Vec3::new(2.0, 1.0, 0.5);
+    for two_sided in [false, true] {
+        let s = quad_light_scene_of(emitter("light", le, two_sided));
+        let lights = Lights::new(&s);
+        let mut rng = Pcg32::new(5, 3);
+        let (mut front, mut back) = (0, 0);
+        for i in 0..400 {
+            let above = i % 2 == 1;
+            let y = if above {
+                1.5 + rng.f32()
+            } else {
+                0.5 - rng.f32()
+            };
+            let p = Vec3::new(2.0 * rng.f32() - 1.0, y, 2.0 * rng.f32() - 1.0);
+            let ls = lights.sample(&s, p, Vec3::Y, 0.0, rng.f32(), rng.vec2());
+            match ls {
+                Some(ls) => {
+                    assert!(
+                        !above || two_sided,
+                        "sample {i}: a one-sided light sends backwards"
+                    );
+                    let sent = ls.weight * ls.pdf;
+                    assert!(
+                        (sent - le).abs().max_element() < 1e-5 * le.max_element(),
+                        "sample {i} from {p}: {sent} for {le}"
+                    );
+                    if above {
+                        back += 1;
+                    } else {
+                        front += 1;
+                    }
+                }
+                None => assert!(above && !two_sided, "sample {i} from {p}: no sample"),
+            }
+        }
+        assert_eq!(front, 200);
+        assert_eq!(back, if two_sided { 200 } else { 0 });
+    }
 }
 
 /// Lambert's irradiance at `p` (normal `n`) from a polygon of radiance `le`
