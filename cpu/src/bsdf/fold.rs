@@ -29,9 +29,10 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{BsdfAt, BsdfSample};
+use super::{BsdfAt, BsdfSample, LaneSample};
 
-/// The geometric normal in the shading frame, on wo's side.
+/// The geometric normal in the shading frame, on wo's side. (The
+/// one-lane form of [`lanes::Fold`], which the wave's lanes run.)
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Fold {
     n: Vec3,
@@ -42,19 +43,23 @@ impl Fold {
     /// both in the shading frame.
     pub fn new(ng: Vec3, wo: Vec3) -> Fold {
         Fold {
-            n: if wo.dot(ng) < 0.0 { -ng } else { ng },
+            n: lanes::Fold::<f32>::new(ng.into(), wo.into()).n.into(),
         }
+    }
+
+    fn lanes(&self) -> lanes::Fold<f32> {
+        lanes::Fold { n: self.n.into() }
     }
 
     /// `w` mirrored at the geometric tangent plane.
     pub fn mirror(&self, w: Vec3) -> Vec3 {
-        w - 2.0 * w.dot(self.n) * self.n
+        self.lanes().mirror(w.into()).into()
     }
 
     /// Whether `w` leaves on wo's side of the geometric surface (where
     /// every folded direction lies).
     pub fn above(&self, w: Vec3) -> bool {
-        w.dot(self.n) > 0.0
+        self.lanes().above(w.into())
     }
 
     /// f_fold(wo, wi) |cos_s wi| and pdf_fold(wi) for `wi` above the
@@ -64,8 +69,14 @@ impl Fold {
             return (Vec3::ZERO, 0.0);
         }
         let m = self.mirror(wi);
-        let f = bsdf.eval(wi) * wi.z.abs() + bsdf.eval(m) * m.z.abs();
-        (f, bsdf.pdf(wi) + bsdf.pdf(m))
+        let (f, pdf) = self.lanes().eval_pdf(
+            wi.into(),
+            (bsdf.eval(wi) * wi.z.abs()).into(),
+            bsdf.pdf(wi),
+            (bsdf.eval(m) * m.z.abs()).into(),
+            bsdf.pdf(m),
+        );
+        (f.into(), pdf)
     }
 
     /// The BSDF's sample, folded ([`Fold::reweigh`], its mirror image
@@ -86,24 +97,85 @@ impl Fold {
     /// weight: its mirror image carries the same energy. None where the
     /// folded pdf vanishes. (The GPU kernel evaluates the mirror image in
     /// its light sample's loop, so that it holds one copy of the BSDFs.)
-    pub fn reweigh(
-        &self,
-        mut bs: BsdfSample,
-        partner_f: Vec3,
-        partner_pdf: f32,
-    ) -> Option<BsdfSample> {
-        let a = bs.wi;
-        if !bs.delta {
-            let pdf = bs.pdf + partner_pdf;
-            if pdf.is_nan() || pdf <= 0.0 {
-                return None;
+    pub fn reweigh(&self, bs: BsdfSample, partner_f: Vec3, partner_pdf: f32) -> Option<BsdfSample> {
+        let s = LaneSample::<f32> {
+            valid: true,
+            wi: bs.wi.into(),
+            weight: bs.weight.into(),
+            pdf: bs.pdf,
+            eta: bs.eta,
+            delta: bs.delta,
+        };
+        self.lanes()
+            .reweigh(s, partner_f.into(), partner_pdf)
+            .single()
+    }
+}
+
+/// The fold over any [`Lane`] type: the wave's lanes run it eight paths
+/// at a time, [`Fold`] is its one-lane form.
+pub mod lanes {
+    use crate::bsdf::LaneSample;
+    use crate::lanes::{Lane, V3};
+
+    /// The geometric normal in the shading frame, on wo's side.
+    #[derive(Clone, Copy, Debug)]
+    pub struct Fold<L: Lane> {
+        pub n: V3<L>,
+    }
+
+    impl<L: Lane> Fold<L> {
+        /// `ng` the unit geometric normal and `wo` the outgoing
+        /// direction, both in the shading frame.
+        #[inline(always)]
+        pub fn new(ng: V3<L>, wo: V3<L>) -> Self {
+            Fold {
+                n: V3::select(wo.dot(ng).lt(L::zero()), -ng, ng),
             }
-            bs.weight = (bs.weight * bs.pdf + partner_f) / pdf;
-            bs.pdf = pdf;
         }
-        if !self.above(a) {
-            bs.wi = self.mirror(a);
+
+        /// `w` mirrored at the geometric tangent plane.
+        #[inline(always)]
+        pub fn mirror(&self, w: V3<L>) -> V3<L> {
+            w - self.n.scale(L::splat(2.0) * w.dot(self.n))
         }
-        Some(bs)
+
+        /// Where `w` leaves on wo's side of the geometric surface.
+        #[inline(always)]
+        pub fn above(&self, w: V3<L>) -> L::Mask {
+            w.dot(self.n).gt(L::zero())
+        }
+
+        /// f_fold |cos_s wi| and pdf_fold at `wi` from the BSDF's f |cos|
+        /// and density at `wi` (`f`, `pdf`) and at its mirror image (`fm`,
+        /// `pdf_m`); zero below the geometric surface.
+        #[inline(always)]
+        pub fn eval_pdf(&self, wi: V3<L>, f: V3<L>, pdf: L, fm: V3<L>, pdf_m: L) -> (V3<L>, L) {
+            let above = self.above(wi);
+            (
+                V3::select(above, f + fm, V3::splat(glam::Vec3::ZERO)),
+                L::select(above, pdf + pdf_m, L::zero()),
+            )
+        }
+
+        /// [`super::Fold::reweigh`] in lanes: not valid where the folded
+        /// density vanishes (or is not a number).
+        #[inline(always)]
+        pub fn reweigh(
+            &self,
+            mut bs: LaneSample<L>,
+            partner_f: V3<L>,
+            partner_pdf: L,
+        ) -> LaneSample<L> {
+            let a = bs.wi;
+            if !bs.delta {
+                let pdf = bs.pdf + partner_pdf;
+                bs.valid = bs.valid & pdf.gt(L::zero());
+                bs.weight = (bs.weight.scale(bs.pdf) + partner_f) / pdf;
+                bs.pdf = pdf;
+            }
+            bs.wi = V3::select(self.above(a), a, self.mirror(a));
+            bs
+        }
     }
 }

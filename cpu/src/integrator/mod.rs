@@ -686,6 +686,24 @@ impl<'a> PathTracer<'a> {
             at.wo,
             &mut textured,
         );
+        self.vertex_shaded(path, ray, at, &sf, bsdf, u, depth, rays)
+    }
+
+    /// [`PathTracer::vertex`] with the hit already shaded ([`PathTracer::shade`]):
+    /// its frame `sf` and BSDF `bsdf`.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn vertex_shaded(
+        &self,
+        path: &mut PathState,
+        ray: &mut Ray,
+        at: &Arrival,
+        sf: &SurfaceFrame,
+        bsdf: &Bsdf,
+        u: &crate::sobol::BounceSamples,
+        depth: u32,
+        rays: &mut u64,
+    ) -> bool {
         let (p, wo) = (at.p, at.wo);
         let wo_local = sf.frame.to_local(wo);
         let bsdf_at = bsdf.at(wo_local);
@@ -698,10 +716,10 @@ impl<'a> PathTracer<'a> {
                     .sample(self.scene, p, bg_normal, u.light_cat, u.light_idx, u.light)
         {
             path.radiance +=
-                path.throughput * self.next_event(&ls, p, at.p_err, &sf, &bsdf_at, fold, rays);
+                path.throughput * self.next_event(&ls, p, at.p_err, sf, &bsdf_at, fold, rays);
         }
         // BSDF sampling: the next ray.
-        let Some((bs, wi)) = next_direction(&bsdf_at, &sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
+        let Some((bs, wi)) = next_direction(&bsdf_at, sf, wo, fold, u.bsdf_lobe, u.bsdf) else {
             return false;
         };
         path.throughput *= bs.weight;

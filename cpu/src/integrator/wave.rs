@@ -10,6 +10,7 @@
 
 use glam::Vec3;
 
+use super::wide::Shaded;
 use super::{Arrival, PathState, PathTracer};
 use crate::bvh::{PACKET, Ray};
 use crate::lanes::live_lanes;
@@ -109,12 +110,14 @@ impl PathTracer<'_> {
             // instruction where enough paths stand on one, the rest one
             // at a time.
             let mut one_by_one = live;
+            let mut shaded = Shaded::default();
             if self.wide_shading {
                 live &= !self.wide_vertices(
                     &mut paths,
                     &mut ray_of,
                     &arrivals,
                     &bounce,
+                    &mut shaded,
                     &mut one_by_one,
                     depth,
                     rays,
@@ -122,7 +125,23 @@ impl PathTracer<'_> {
             }
             for k in live_lanes(one_by_one) {
                 let Some(at) = &arrivals[k] else { continue };
-                if !self.vertex(&mut paths[k], &mut ray_of[k], at, &bounce[k], depth, rays) {
+                let (path, ray, u) = (&mut paths[k], &mut ray_of[k], &bounce[k]);
+                // A hit the lanes shaded but left (`Shaded`) is not shaded
+                // again. (One call of the vertex: two copies of its body
+                // here cost more than they save.)
+                let mut textured = None;
+                let (sf, bsdf) = match (shaded.sf[k], &shaded.textured[k]) {
+                    (Some(sf), Some(bsdf)) => (sf, bsdf),
+                    _ => self.shade(
+                        at.material,
+                        at.hit.tri,
+                        at.hit.u,
+                        at.hit.v,
+                        at.wo,
+                        &mut textured,
+                    ),
+                };
+                if !self.vertex_shaded(path, ray, at, &sf, bsdf, u, depth, rays) {
                     live &= !(1 << k);
                 }
             }

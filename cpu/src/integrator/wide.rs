@@ -5,7 +5,9 @@
 //! metallic 0, the rough conductor, alone or as the blend at metallic 1,
 //! and the rough dielectric without
 //! energy compensation; a textured material's model found per hit from
-//! its textured BSDF, where it has no normal map), their vertices'
+//! its textured BSDF; a normal-mapped hit's frame found lane by lane as
+//! the scalar vertex finds it, and its fold ([`crate::bsdf::fold`]) run
+//! in lanes, [`NormalMapped`]), their vertices'
 //! arithmetic runs in lanes: the geometric and shading normals, the
 //! frame, the emitter light samples (the punctual lights' and the
 //! background's are drawn lane by lane), the BSDF's value, density and
@@ -21,12 +23,13 @@
 
 use glam::{Vec2, Vec3};
 
-use super::{Arrival, PathState, PathTracer, offset_origin_lanes, shadow_ray_lanes};
+use super::{Arrival, PathState, PathTracer, SurfaceFrame, offset_origin_lanes, shadow_ray_lanes};
 use crate::abi::ONE_MINUS_EPS;
 use crate::bsdf::coated::{self, Coat};
 use crate::bsdf::conductor::{self, RoughConductor};
 use crate::bsdf::dielectric::{self, RoughDielectric, dielectric_is_smooth};
 use crate::bsdf::diffuse::lanes::{diffuse_eval, diffuse_pdf, diffuse_sample};
+use crate::bsdf::fold::lanes::Fold;
 use crate::bsdf::{Bsdf, LaneSample, Shadowing, Tint};
 use crate::bvh::Ray;
 use crate::film::Mis;
@@ -80,6 +83,9 @@ pub(super) trait WideBsdf {
     type Params: Copy;
     /// Whether it transmits ([`Bsdf::has_transmission`]).
     const TRANSMITS: bool = false;
+    /// Whether some lanes are normal-mapped ([`NormalMapped`]): their
+    /// frames come from [`MappedFrames`], and they may fold.
+    const MAPPED: bool = false;
     /// The lanes' BSDF at wo.
     type At;
     /// The material's parameters where the lanes shade it.
@@ -89,6 +95,43 @@ pub(super) trait WideBsdf {
     fn eval(at: &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8>;
     fn pdf(at: &Self::At, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8;
     fn sample(at: &Self::At, wo: V3<F32x8>, uc: F32x8, u: V2<F32x8>) -> LaneSample<F32x8>;
+}
+
+/// Model `M` where some of the lanes are normal-mapped: the same BSDF,
+/// the vertex's code for the mapped frames and the fold compiled in (a
+/// wave without mapped lanes runs `M` itself, which has none of it).
+pub(super) struct NormalMapped<M>(std::marker::PhantomData<M>);
+
+impl<M: WideBsdf> WideBsdf for NormalMapped<M> {
+    type Params = M::Params;
+    const TRANSMITS: bool = M::TRANSMITS;
+    const MAPPED: bool = true;
+    type At = M::At;
+
+    #[inline(always)]
+    fn params(bsdf: &Bsdf) -> Option<M::Params> {
+        M::params(bsdf)
+    }
+
+    #[inline(always)]
+    fn at(p: &[M::Params; 8], wo: V3<F32x8>) -> M::At {
+        M::at(p, wo)
+    }
+
+    #[inline(always)]
+    fn eval(at: &M::At, wo: V3<F32x8>, wi: V3<F32x8>) -> V3<F32x8> {
+        M::eval(at, wo, wi)
+    }
+
+    #[inline(always)]
+    fn pdf(at: &M::At, wo: V3<F32x8>, wi: V3<F32x8>) -> F32x8 {
+        M::pdf(at, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample(at: &M::At, wo: V3<F32x8>, uc: F32x8, u: V2<F32x8>) -> LaneSample<F32x8> {
+        M::sample(at, wo, uc, u)
+    }
 }
 
 /// The Lambertian ([`Bsdf::Diffuse`]).
@@ -454,13 +497,20 @@ fn model_of(bsdf: &Bsdf) -> u8 {
 /// found per hit, from the textured BSDF.
 const TEXTURED: u8 = 7;
 
-/// Each material's model in the lanes ([`model_of`]), or [`TEXTURED`].
+/// [`PathTracer::wide_kinds`]' number of a normal-mapped material: its
+/// model is found per hit from the textured BSDF, and its shading frame
+/// and fold ([`PathTracer::apply_textures`]) lane by lane.
+const MAPPED: u8 = 8;
+
+/// Each material's model in the lanes ([`model_of`]), or [`TEXTURED`] or
+/// [`MAPPED`]. (A clear coat's own normal needs no kind: the models have
+/// no clear coat, so its lanes go one by one.)
 pub(super) fn kinds(scene: &Scene) -> Vec<u8> {
     (0..scene.materials.len())
         .map(|m| match scene.textures.material(m as u32) {
             None => model_of(&scene.materials[m].bsdf),
-            Some(mt) if !mt.normal.is_some() && !mt.clearcoat_normal.is_some() => TEXTURED,
-            Some(_) => 0,
+            Some(mt) if mt.normal.is_some() => MAPPED,
+            Some(_) => TEXTURED,
         })
         .collect()
 }
@@ -512,6 +562,29 @@ pub(super) struct Tangents {
     t: [[Vec3; 3]; 8],
     /// The lanes whose triangle has tangents (bits).
     has: u8,
+}
+
+/// The shading frames of the lanes whose material is normal-mapped (read
+/// only where some are), found lane by lane as the scalar vertex finds
+/// them ([`PathTracer::apply_textures`]).
+pub(super) struct MappedFrames {
+    /// Each lane's frame: s, t, n (n the mapped shading normal).
+    frame: [[Vec3; 3]; 8],
+    /// The lanes whose frame is here (bits).
+    has: u8,
+    /// The lanes that fold ([`crate::bsdf::fold`]): those of `has` whose
+    /// BSDF does not transmit.
+    folds: u8,
+}
+
+/// What [`PathTracer::wide_vertices`] found of the wave's hits before it
+/// shaded them, kept for the lanes it leaves to the scalar vertex: each
+/// textured hit's BSDF, and each normal-mapped hit's frame (there the
+/// hit is shaded whole, [`PathTracer::shade`]).
+#[derive(Default)]
+pub(super) struct Shaded {
+    pub(super) sf: [Option<SurfaceFrame>; 8],
+    pub(super) textured: [Option<Bsdf>; 8],
 }
 
 /// What the lanes found for each path (valid in the lanes they shaded).
@@ -609,6 +682,7 @@ fn light_samples(
 /// The lanes' arithmetic of the vertices in `live` (bits), BSDF `M`
 /// with the lanes' parameters `params`, eight per instruction (compiled
 /// for the wave's [`crate::lanes::SimdLevel`]).
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn vertex_lanes<M: WideBsdf>(
     lights: &Lights,
@@ -616,10 +690,12 @@ fn vertex_lanes<M: WideBsdf>(
     mis: Mis,
     inp: &[VertexIn; 8],
     tangents: &Tangents,
+    mapped: &MappedFrames,
     params: &[M::Params; 8],
     live: u8,
 ) -> VertexOut {
     type L = F32x8;
+    let (mapped_has, folds) = (mapped.has & live, mapped.folds & live);
     let live = Mask8::from_bits(live);
     let v = [
         gather3!(inp, |d| d.v[0]),
@@ -661,31 +737,70 @@ fn vertex_lanes<M: WideBsdf>(
             n: ns,
         }
     };
-    let wo = frame.to_local(gather3!(inp, |d| d.wo));
+    // The normal-mapped lanes' frames.
+    let (frame, ns) = if !M::MAPPED || mapped_has == 0 {
+        (frame, ns)
+    } else {
+        let m = Mask8::from_bits(mapped_has);
+        let n = V3::select(m, gather3!(mapped.frame, |f| f[2]), ns);
+        let frame = Frame {
+            s: V3::select(m, gather3!(mapped.frame, |f| f[0]), frame.s),
+            t: V3::select(m, gather3!(mapped.frame, |f| f[1]), frame.t),
+            n,
+        };
+        (frame, n)
+    };
+    let wo_world = gather3!(inp, |d| d.wo);
+    let wo = frame.to_local(wo_world);
     let bsdf = M::at(params, wo);
+    // The folding lanes' fold (`SurfaceFrame::fold_for`).
+    let fold = (M::MAPPED && folds != 0).then(|| Fold::new(frame.to_local(ng), wo));
+    let folds = Mask8::from_bits(folds);
     let p = gather3!(inp, |d| d.p);
     let (ls, delta) = light_samples(lights, scene, inp, live, p, ns, M::TRANSMITS);
     // Next-event estimation's arithmetic (`PathTracer::next_event`).
     let wi_l = frame.to_local(ls.wi);
-    let sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
-    let f = M::eval(&bsdf, wo, wi_l).scale(wi_l.z.abs());
+    let mut sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
+    let mut f = M::eval(&bsdf, wo, wi_l).scale(wi_l.z.abs());
+    let mut pdf = M::pdf(&bsdf, wo, wi_l);
+    if let Some(fd) = &fold {
+        // `Fold::eval_pdf`: no side test, the mirror image's share added.
+        let m = fd.mirror(wi_l);
+        let fm = M::eval(&bsdf, wo, m).scale(m.z.abs());
+        let (ff, fp) = fd.eval_pdf(wi_l, f, pdf, fm, M::pdf(&bsdf, wo, m));
+        f = V3::select(folds, ff, f);
+        pdf = L::select(folds, fp, pdf);
+        sides = sides | folds;
+    }
     let nee = ls.valid & sides & f.max_element().gt(L::zero());
     let p_err = gather3!(inp, |d| d.p_err);
     let (shadow_o, shadow_d, shadow_tmax) = shadow_ray_lanes(p, p_err, ng, ls.wi, ls.dist);
-    let w = L::select(
-        delta,
-        L::one(),
-        mis_light(mis, ls.pdf, M::pdf(&bsdf, wo, wi_l)),
-    );
+    let w = L::select(delta, L::one(), mis_light(mis, ls.pdf, pdf));
     let light = (f * ls.weight).scale(w);
     // The BSDF's sample (`next_direction`).
     let u_bsdf = V2 {
         x: gather!(inp, |d| d.u_bsdf.x),
         y: gather!(inp, |d| d.u_bsdf.y),
     };
-    let bs = M::sample(&bsdf, wo, gather!(inp, |d| d.u_lobe), u_bsdf);
+    let mut bs = M::sample(&bsdf, wo, gather!(inp, |d| d.u_lobe), u_bsdf);
+    if let Some(fd) = &fold {
+        // `Fold::sample`.
+        let r = fd.mirror(bs.wi);
+        let fr = M::eval(&bsdf, wo, r).scale(r.z.abs());
+        let folded = fd.reweigh(bs, fr, M::pdf(&bsdf, wo, r));
+        bs.valid = L::select_mask(folds, folded.valid, bs.valid);
+        bs.wi = V3::select(folds, folded.wi, bs.wi);
+        bs.weight = V3::select(folds, folded.weight, bs.weight);
+        bs.pdf = L::select(folds, folded.pdf, bs.pdf);
+    }
     let wi = frame.to_world(bs.wi).normalize();
-    let leaks = !agree::<L>(wi.dot(ng).gt(L::zero()), bs.wi.z.gt(L::zero()));
+    let up = wi.dot(ng).gt(L::zero());
+    let mut leaks = !agree::<L>(up, bs.wi.z.gt(L::zero()));
+    if fold.is_some() {
+        // Folded, wi must leave on wo's side of the geometric surface.
+        let folded_leaks = !agree::<L>(up, wo_world.dot(ng).gt(L::zero()));
+        leaks = L::select_mask(folds, folded_leaks, leaks);
+    }
     let next = live & bs.valid & !leaks;
     let next_o = offset_origin_lanes(p, p_err, ng, wi);
     let lanes3 = |x: V3<L>| -> [Vec3; 8] { crate::lanes::build8(|l| x.lane(l)) };
@@ -719,6 +834,7 @@ impl PathTracer<'_> {
         rays_of: &mut [Ray; 8],
         arrivals: &[Option<Arrival>; 8],
         bounce: &[BounceSamples; 8],
+        shaded: &mut Shaded,
         pending: &mut u8,
         depth: u32,
         rays: &mut u64,
@@ -731,7 +847,12 @@ impl PathTracer<'_> {
         // normal map), once, for the lanes that take it.
         let scene = self.scene;
         let mut of = [0u8; 7];
-        let mut textured = [None::<Bsdf>; 8];
+        let textured = &mut shaded.textured;
+        let mut mapped = MappedFrames {
+            frame: [[Vec3::ZERO; 3]; 8],
+            has: 0,
+            folds: 0,
+        };
         for k in live_lanes(*pending) {
             let Some(at) = &arrivals[k] else { continue };
             let mut kind = self.wide_kinds[at.material as usize];
@@ -742,6 +863,29 @@ impl PathTracer<'_> {
                 let bsdf = textured_bsdf(&scene.textures, mt, base, at.hit.tri, at.hit.u, at.hit.v);
                 kind = model_of(&bsdf);
                 textured[k] = Some(bsdf);
+            } else if kind == MAPPED
+                && let Some(mt) = scene.textures.material(at.material)
+            {
+                // The scalar vertex's textures and frame (`PathTracer::shade`).
+                let (tri, u, v) = (at.hit.tri, at.hit.u, at.hit.v);
+                let base = &scene.materials[at.material as usize].bsdf;
+                let mut sf = self.surface(tri, u, v);
+                kind = model_of(self.apply_textures(
+                    mt,
+                    tri,
+                    u,
+                    v,
+                    at.wo,
+                    &mut sf,
+                    base,
+                    &mut textured[k],
+                ));
+                if kind != 0 {
+                    mapped.frame[k] = [sf.frame.s, sf.frame.t, sf.frame.n];
+                    mapped.has |= 1 << k;
+                    mapped.folds |= u8::from(sf.folds) << k;
+                }
+                shaded.sf[k] = Some(sf);
             }
             if kind < TEXTURED {
                 of[kind as usize] |= 1 << k;
@@ -752,9 +896,15 @@ impl PathTracer<'_> {
             ($($model:ty: $lanes:expr),*) => {$(
                 if $lanes.count_ones() >= WIDE_MIN {
                     *pending &= !$lanes;
-                    ended |= self.vertices::<$model>(
-                        paths, rays_of, arrivals, bounce, &textured, $lanes, depth, rays,
-                    );
+                    ended |= if mapped.has & $lanes != 0 {
+                        self.vertices::<NormalMapped<$model>>(
+                            paths, rays_of, arrivals, bounce, &shaded.textured, &mapped, $lanes, depth, rays,
+                        )
+                    } else {
+                        self.vertices::<$model>(
+                            paths, rays_of, arrivals, bounce, &shaded.textured, &mapped, $lanes, depth, rays,
+                        )
+                    };
                 }
             )*};
         }
@@ -780,6 +930,7 @@ impl PathTracer<'_> {
         arrivals: &[Option<Arrival>; 8],
         bounce: &[BounceSamples; 8],
         textured: &[Option<Bsdf>; 8],
+        mapped: &MappedFrames,
         wide: u8,
         depth: u32,
         rays: &mut u64,
@@ -853,11 +1004,12 @@ impl PathTracer<'_> {
             mis: Mis,
             inp: &[VertexIn; 8],
             tangents: &Tangents,
+            mapped: &MappedFrames,
             params: &[M::Params; 8],
             live: u8,
         ) -> VertexOut {
-            vertex_lanes::<M>(lights, scene, mis, inp, tangents, params, live)
-        }(&self.lights, scene, self.mis, &inp, &tangents, &params, wide));
+            vertex_lanes::<M>(lights, scene, mis, inp, tangents, mapped, params, live)
+        }(&self.lights, scene, self.mis, &inp, &tangents, mapped, &params, wide));
         let mut ended = 0u8;
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
