@@ -653,7 +653,7 @@ impl<'a> PathTracer<'a> {
             }
             // The fixed per-bounce budget of random numbers.
             let u = rng.bounce();
-            if !self.vertex(&mut path, &mut ray, &at, &u, depth, rays) {
+            if !self.vertex(&mut path, &mut ray, &at, None, &u, depth, rays) {
                 break;
             }
             depth += 1;
@@ -662,48 +662,38 @@ impl<'a> PathTracer<'a> {
     }
 
     /// The path's vertex at the hit `at`, bounce `depth`, with the
-    /// bounce's numbers `u`: shade it; where it samples lights, draw the
-    /// light sample, trace its shadow ray and add it; then the BSDF's
-    /// sample as the path's next ray (into `ray`), and Russian roulette. False where the
-    /// path ends. (Its pieces stay locals of one body: a struct carrying
-    /// them between steps was copied at every vertex.)
+    /// bounce's numbers `u`: shade it (unless `shaded` holds its frame and
+    /// BSDF, [`PathTracer::shade`]'s, found already); where it samples
+    /// lights, draw the light sample, trace its shadow ray and add it;
+    /// then the BSDF's sample as the path's next ray (into `ray`), and
+    /// Russian roulette. False where the path ends. (Its pieces stay
+    /// locals of one body: a struct carrying them between steps was
+    /// copied at every vertex.)
+    #[allow(clippy::too_many_arguments)]
     #[inline(always)]
     fn vertex(
         &self,
         path: &mut PathState,
         ray: &mut Ray,
         at: &Arrival,
+        shaded: Option<(&SurfaceFrame, &Bsdf)>,
         u: &crate::sobol::BounceSamples,
         depth: u32,
         rays: &mut u64,
     ) -> bool {
         let mut textured = None;
-        let (sf, bsdf) = self.shade(
-            at.material,
-            at.hit.tri,
-            at.hit.u,
-            at.hit.v,
-            at.wo,
-            &mut textured,
-        );
-        self.vertex_shaded(path, ray, at, &sf, bsdf, u, depth, rays)
-    }
-
-    /// [`PathTracer::vertex`] with the hit already shaded ([`PathTracer::shade`]):
-    /// its frame `sf` and BSDF `bsdf`.
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    fn vertex_shaded(
-        &self,
-        path: &mut PathState,
-        ray: &mut Ray,
-        at: &Arrival,
-        sf: &SurfaceFrame,
-        bsdf: &Bsdf,
-        u: &crate::sobol::BounceSamples,
-        depth: u32,
-        rays: &mut u64,
-    ) -> bool {
+        let (sf, bsdf) = match shaded {
+            Some((sf, bsdf)) => (*sf, bsdf),
+            None => self.shade(
+                at.material,
+                at.hit.tri,
+                at.hit.u,
+                at.hit.v,
+                at.wo,
+                &mut textured,
+            ),
+        };
+        let sf = &sf;
         let (p, wo) = (at.p, at.wo);
         let wo_local = sf.frame.to_local(wo);
         let bsdf_at = bsdf.at(wo_local);

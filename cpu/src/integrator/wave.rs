@@ -127,21 +127,9 @@ impl PathTracer<'_> {
                 let Some(at) = &arrivals[k] else { continue };
                 let (path, ray, u) = (&mut paths[k], &mut ray_of[k], &bounce[k]);
                 // A hit the lanes shaded but left (`Shaded`) is not shaded
-                // again. (One call of the vertex: two copies of its body
-                // here cost more than they save.)
-                let mut textured = None;
-                let (sf, bsdf) = match (shaded.sf[k], &shaded.textured[k]) {
-                    (Some(sf), Some(bsdf)) => (sf, bsdf),
-                    _ => self.shade(
-                        at.material,
-                        at.hit.tri,
-                        at.hit.u,
-                        at.hit.v,
-                        at.wo,
-                        &mut textured,
-                    ),
-                };
-                if !self.vertex_shaded(path, ray, at, &sf, bsdf, u, depth, rays) {
+                // again.
+                let pre = shaded.sf[k].as_ref().zip(shaded.textured[k].as_ref());
+                if !self.vertex(path, ray, at, pre, u, depth, rays) {
                     live &= !(1 << k);
                 }
             }
