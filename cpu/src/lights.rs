@@ -33,12 +33,8 @@ use glam::{Vec2, Vec3};
 
 use crate::envmap::EnvMap;
 use crate::film::LightSampling;
-use crate::frame::Frame;
 use crate::lanes::{Lane, V2, V3};
-use crate::sampling::{
-    UNIFORM_SPHERE_PDF, cosine_hemisphere_pdf, sample_cdf, square_to_cosine_hemisphere,
-    square_to_uniform_sphere,
-};
+use crate::sampling::{UNIFORM_SPHERE_PDF, cosine_hemisphere_pdf, sample_cdf};
 use crate::scene::{PunctualLight, Scene, TRI_DOUBLE_SIDED};
 use crate::texture::emission_factor;
 
@@ -102,6 +98,14 @@ pub mod lanes {
     };
     use crate::lanes::{Lane, V3};
     use crate::spherical::lanes::spherical_triangle_shape;
+
+    /// [`super::spot_falloff`] over lanes.
+    #[inline(always)]
+    pub fn spot_falloff<L: Lane>(cos_angle: L, cos_inner: L, cos_outer: L) -> L {
+        let scale = L::one() / (cos_inner - cos_outer).max(L::splat(0.001));
+        let t = ((cos_angle - cos_outer) * scale).clamp(0.0, 1.0);
+        t * t
+    }
 
     /// [`super::spherical_sampling_angle`]'s first exit: the emitter
     /// (centroid `center`, bounding radius `radius`, area `area`) is far
@@ -250,6 +254,18 @@ pub struct EmitterSamples<L: Lane> {
 }
 
 impl<L: Lane> EmitterSamples<L> {
+    /// `t`'s samples in the lanes of `m`, this one's in the others.
+    #[inline(always)]
+    pub fn select(self, m: L::Mask, t: Self) -> Self {
+        Self {
+            valid: L::select_mask(m, t.valid, self.valid),
+            wi: V3::select(m, t.wi, self.wi),
+            dist: L::select(m, t.dist, self.dist),
+            weight: V3::select(m, t.weight, self.weight),
+            pdf: L::select(m, t.pdf, self.pdf),
+        }
+    }
+
     /// Lane `i`'s sample, where it is valid.
     #[inline(always)]
     pub fn lane(&self, i: usize) -> Option<LightSample> {
@@ -306,9 +322,7 @@ impl From<&PunctualLight> for GpuLight {
 /// the outer cone (0) to the inner cone (1), squared (the spec's sample
 /// implementation, with its 0.001 guard on the ramp width).
 pub fn spot_falloff(cos_angle: f32, cos_inner: f32, cos_outer: f32) -> f32 {
-    let scale = 1.0 / (cos_inner - cos_outer).max(0.001);
-    let t = ((cos_angle - cos_outer) * scale).clamp(0.0, 1.0);
-    t * t
+    lanes::spot_falloff(cos_angle, cos_inner, cos_outer)
 }
 
 /// Probabilities of the three light categories (sum 1, or all 0 when the
@@ -611,38 +625,85 @@ impl Lights {
     /// A punctual light, uniformly (`u_idx`).
     #[inline]
     fn sample_punctual(&self, p: Vec3, u_idx: f32) -> Option<LightSample> {
+        let s = self.sample_punctual_lanes::<f32>(p.into(), u_idx, true);
+        s.lane(0).map(|s| LightSample { delta: true, ..s })
+    }
+
+    /// [`Self::sample_punctual`] in every lane of `live` (the others are
+    /// not valid; every valid sample is a delta): each lane's light
+    /// gathered (splat where the scene has one), the rest in lanes. The
+    /// scalar form is its one-lane instantiation.
+    #[inline(always)]
+    pub fn sample_punctual_lanes<L: Lane>(
+        &self,
+        p: V3<L>,
+        u_idx: L,
+        live: L::Mask,
+    ) -> EmitterSamples<L> {
+        const { assert!(L::LANES <= 8) };
         let n = self.punctual.len();
-        let i = ((u_idx * n as f32) as usize).min(n - 1);
-        let l = self.punctual[i];
         let sel = self.probs.punctual / n as f32;
-        let intensity = Vec3::from(l.intensity);
-        let (wi, dist, li) = if l.kind == abi::LIGHT_DIRECTIONAL {
-            (-Vec3::from(l.direction), f32::INFINITY, intensity)
-        } else {
-            let d = Vec3::from(l.position) - p;
-            let dist2 = d.length_squared();
-            let dist = dist2.sqrt();
-            if !(dist > 0.0) {
-                return None;
+        let one = n == 1;
+        let ls: [GpuLight; 8] = std::array::from_fn(|l| {
+            if l < L::LANES && !one {
+                self.punctual[((u_idx.lane(l) * n as f32) as usize).min(n - 1)]
+            } else {
+                self.punctual[0]
             }
-            let wi = d / dist;
-            let mut li = intensity / dist2;
-            if l.kind == abi::LIGHT_SPOT {
-                let cos_a = Vec3::from(l.direction).dot(-wi);
-                li *= spot_falloff(cos_a, l.cos_inner, l.cos_outer);
+        });
+        let scalar = |f: fn(&GpuLight) -> f32| {
+            if one {
+                L::splat(f(&ls[0]))
+            } else {
+                L::from_fn(|l| f(&ls[l]))
             }
-            (wi, dist, li)
         };
-        if li.max_element() <= 0.0 {
-            return None;
+        let vector = |f: fn(&GpuLight) -> [f32; 3]| {
+            if one {
+                V3::splat(f(&ls[0]).into())
+            } else {
+                V3::new(
+                    L::from_fn(|l| f(&ls[l])[0]),
+                    L::from_fn(|l| f(&ls[l])[1]),
+                    L::from_fn(|l| f(&ls[l])[2]),
+                )
+            }
+        };
+        let kind = |k: u32| {
+            let is = |l: usize| if ls[l].kind == k { 1.0 } else { 0.0 };
+            let v = if one { L::splat(is(0)) } else { L::from_fn(is) };
+            v.gt(L::zero())
+        };
+        let directional = kind(abi::LIGHT_DIRECTIONAL);
+        let intensity = vector(|g| g.intensity);
+        let mut wi = -vector(|g| g.direction);
+        let mut dist = L::splat(f32::INFINITY);
+        let mut li = intensity;
+        if !L::all(directional) {
+            let d = vector(|g| g.position) - p;
+            let dist2 = d.length_squared();
+            let near = dist2.sqrt();
+            let to = d / near;
+            let mut falls = intensity / dist2;
+            let spot = kind(abi::LIGHT_SPOT);
+            if !L::none(spot) {
+                let cos_a = vector(|g| g.direction).dot(-to);
+                let f =
+                    lanes::spot_falloff(cos_a, scalar(|g| g.cos_inner), scalar(|g| g.cos_outer));
+                falls = V3::select(spot, falls.scale(f), falls);
+            }
+            wi = V3::select(directional, wi, to);
+            dist = L::select(directional, dist, near);
+            li = V3::select(directional, li, falls);
         }
-        Some(LightSample {
+        let valid = live & (directional | dist.gt(L::zero())) & !li.max_element().le(L::zero());
+        EmitterSamples {
+            valid,
             wi,
             dist,
-            weight: li / sel,
-            pdf: 0.0,
-            delta: true,
-        })
+            weight: li / L::splat(sel),
+            pdf: L::zero(),
+        }
     }
 
     /// The environment map by its distribution, or the constant background
@@ -661,24 +722,42 @@ impl Lights {
                 delta: false,
             });
         }
-        let (wi, dir_pdf) = if bg_normal == Vec3::ZERO {
-            (square_to_uniform_sphere(u), UNIFORM_SPHERE_PDF)
-        } else {
-            let local = square_to_cosine_hemisphere(u);
-            let wi = Frame::from_normal(bg_normal).to_world(local);
-            (wi, cosine_hemisphere_pdf(local.z))
-        };
-        let pdf = pr.background * dir_pdf;
-        if !(pdf > 0.0) {
-            return None;
+        self.sample_constant_background_lanes::<f32>(bg_normal.into(), u.into(), true)
+            .lane(0)
+    }
+
+    /// The constant background's samples ([`Self::sample_background`]
+    /// without an environment map) in every lane of `live` (the others are
+    /// not valid): about `bg_normal` by the cosine, or over the sphere
+    /// where it is zero. The scalar form is its one-lane instantiation.
+    #[inline(always)]
+    pub fn sample_constant_background_lanes<L: Lane>(
+        &self,
+        bg_normal: V3<L>,
+        u: V2<L>,
+        live: L::Mask,
+    ) -> EmitterSamples<L> {
+        let zero = L::zero();
+        let sphere = bg_normal.x.eq(zero) & bg_normal.y.eq(zero) & bg_normal.z.eq(zero);
+        let (mut wi, mut dir_pdf) = (V3::splat(Vec3::ZERO), zero);
+        if !L::all(sphere) {
+            let local = crate::bsdf::warp::lanes::square_to_cosine_hemisphere(u);
+            wi = crate::frame::lanes::Frame::from_normal(bg_normal).to_world(local);
+            dir_pdf = local.z.max(zero) * L::splat(std::f32::consts::FRAC_1_PI);
         }
-        Some(LightSample {
+        if !L::none(sphere) {
+            let on_sphere = crate::sampling::lanes::square_to_uniform_sphere(u);
+            wi = V3::select(sphere, on_sphere, wi);
+            dir_pdf = L::select(sphere, L::splat(UNIFORM_SPHERE_PDF), dir_pdf);
+        }
+        let pdf = L::splat(self.probs.background) * dir_pdf;
+        EmitterSamples {
+            valid: live & pdf.gt(zero),
             wi,
-            dist: f32::INFINITY,
-            weight: self.background / pdf,
+            dist: L::splat(f32::INFINITY),
+            weight: V3::splat(self.background) / pdf,
             pdf,
-            delta: false,
-        })
+        }
     }
 
     /// Solid-angle density with which [`Lights::sample`], called at `p`,

@@ -22,7 +22,7 @@ pub fn pcg4d(v: [u32; 4]) -> [u32; 4] {
 /// scalar form).
 pub mod lanes {
     use crate::film::Mis;
-    use crate::lanes::{Lane, ULane, V2};
+    use crate::lanes::{Lane, ULane, V2, V3};
 
     /// a / s where s (a + b, or their squares' sum) is positive and finite;
     /// 1 where `a` is infinite; else 0.
@@ -59,6 +59,15 @@ pub mod lanes {
             Mis::Balance => balance_heuristic(light_pdf, bsdf_pdf),
             Mis::None => L::one(),
         }
+    }
+
+    /// [`super::square_to_uniform_sphere`].
+    #[inline(always)]
+    pub fn square_to_uniform_sphere<L: Lane>(u: V2<L>) -> V3<L> {
+        let z = L::one() - L::splat(2.0) * u.x;
+        let r = (L::one() - z * z).max(L::zero()).sqrt();
+        let (sin, cos) = (L::splat(2.0 * std::f32::consts::PI) * u.y).sin_cos();
+        V3::new(r * cos, r * sin, z)
     }
 
     /// [`super::square_to_uniform_triangle`].
@@ -234,41 +243,14 @@ impl Pcg32 {
     }
 }
 
-/// Shirley & Chiu's concentric square-to-disk map ("A Low Distortion Map
-/// Between Disk and Square", JGT 1997), in pbrt-v4's branch form.
-pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
-    let o = 2.0 * u - Vec2::ONE;
-    if o.x == 0.0 && o.y == 0.0 {
-        return Vec2::ZERO;
-    }
-    let (r, theta) = if o.x.abs() > o.y.abs() {
-        (o.x, std::f32::consts::FRAC_PI_4 * (o.y / o.x))
-    } else {
-        (
-            o.y,
-            std::f32::consts::FRAC_PI_2 - std::f32::consts::FRAC_PI_4 * (o.x / o.y),
-        )
-    };
-    r * Vec2::new(theta.cos(), theta.sin())
-}
-
-/// Cosine-weighted hemisphere around +z (Malley's method); pdf cos(theta)/pi.
-pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
-    let d = square_to_uniform_disk_concentric(u);
-    let z = (1.0 - d.length_squared()).max(0.0).sqrt();
-    Vec3::new(d.x, d.y, z)
-}
-
 pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * std::f32::consts::FRAC_1_PI
 }
 
-/// Uniform direction on the unit sphere; pdf 1 / (4 pi).
+/// Uniform direction on the unit sphere; pdf 1 / (4 pi). (The cosine
+/// hemisphere is [`crate::bsdf::warp::square_to_cosine_hemisphere`].)
 pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
-    let z = 1.0 - 2.0 * u.x;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * std::f32::consts::PI * u.y;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    lanes::square_to_uniform_sphere(u.into()).into()
 }
 
 pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * std::f32::consts::PI);
@@ -388,7 +370,7 @@ mod tests {
         let mut r = Rng::new(1, 2, 3);
         for _ in 0..1000 {
             let u = r.next_2d();
-            let w = square_to_cosine_hemisphere(u);
+            let w = crate::bsdf::warp::square_to_cosine_hemisphere(u);
             assert!(w.z >= 0.0 && (w.length() - 1.0).abs() < 1e-4);
             let s = square_to_uniform_sphere(u);
             assert!((s.length() - 1.0).abs() < 1e-4);

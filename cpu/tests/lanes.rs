@@ -1188,6 +1188,138 @@ fn emitter_samples_in_lanes_are_the_scalar_ones() {
     );
 }
 
+/// A punctual or background light test's lanes: the point, the light
+/// index number, the background's axis and the direction pair.
+type Pb = (Vec3, f32, Vec3, Vec2);
+
+/// The punctual light samples (one light of each kind, or one light alone:
+/// the splat form) and the constant background's (about an axis, or over
+/// the sphere where the axis is zero) in lanes are the scalar
+/// `Lights::sample`'s bits in every lane, at every SIMD level: points
+/// spread about the lights, on a point light itself (no sample), behind
+/// and inside the spot's cone and on its ramp, lanes of NaN, and lanes
+/// masked off holding garbage that are not valid and leave the others
+/// alone.
+#[test]
+fn punctual_and_background_samples_in_lanes_are_the_scalar_ones() {
+    use glint_cpu::lights::{CategoryProbs, GpuLight, Lights};
+    use glint_cpu::scene::PunctualLight;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../assets/cornell.gltf");
+    let scene = glint_cpu::loader::load(&path).unwrap();
+    let spot_at = Vec3::new(0.0, 1.5, 0.0);
+    let all: Vec<GpuLight> = [
+        PunctualLight::Point {
+            position: Vec3::new(0.3, 1.0, -0.2),
+            intensity: Vec3::new(2.0, 1.5, 1.0),
+        },
+        PunctualLight::Spot {
+            position: spot_at,
+            direction: Vec3::NEG_Y,
+            intensity: Vec3::new(3.0, 3.0, 2.0),
+            inner_cone_angle: 0.3,
+            outer_cone_angle: 0.6,
+        },
+        PunctualLight::Directional {
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            irradiance: Vec3::new(1.0, 0.9, 0.8),
+        },
+    ]
+    .iter()
+    .map(GpuLight::from)
+    .collect();
+    let mut r = Rand(91);
+    let point = |r: &mut Rand, kind: usize| match kind {
+        1 => Vec3::new(0.3, 1.0, -0.2),
+        2 => Vec3::new(f32::NAN, 1.0, 0.0),
+        3 => spot_at + Vec3::new(0.5 * r.f() - 0.25, -1.0, 0.5 * r.f() - 0.25),
+        4 => spot_at + Vec3::new(r.f() - 0.5, 0.2, r.f() - 0.5),
+        _ => Vec3::new(2.0 * r.f() - 1.0, 2.0 * r.f(), 2.0 * r.f() - 1.0),
+    };
+    let axis = |r: &mut Rand, kind: usize| match kind {
+        1 | 4 => Vec3::ZERO,
+        2 => Vec3::new(f32::NAN, 0.0, 1.0),
+        3 => Vec3::NEG_Z,
+        _ => r.dir(),
+    };
+    let inputs: Vec<[Pb; 8]> = (0..BATCHES)
+        .map(|b| {
+            std::array::from_fn(|i| {
+                let k = special(b, i);
+                (point(&mut r, k), r.f(), axis(&mut r, k), u_for(&mut r, k))
+            })
+        })
+        .collect();
+    let garbage: Pb = (
+        Vec3::splat(f32::NAN),
+        f32::NAN,
+        Vec3::splat(f32::NAN),
+        Vec2::splat(1e30),
+    );
+    let (mut delta, mut sky) = (0, 0);
+    for punctual in [all.clone(), vec![all[1]]] {
+        let lights = Lights {
+            punctual,
+            background: Vec3::new(0.3, 0.4, 0.5),
+            probs: CategoryProbs {
+                area: 0.0,
+                punctual: 0.5,
+                background: 0.5,
+            },
+            ..Lights::new(&scene)
+        };
+        let run = |lv: SimdLevel, l: [Pb; 8], mask: Mask8, bg: bool| {
+            simd_at!(lv, fn(lights: &Lights, l: [Pb; 8], mask: Mask8, bg: bool) -> [Option<LightSample>; 8] {
+                let s = if bg {
+                    lights.sample_constant_background_lanes(v3x8(l.map(|x| x.2)), l.map(|x| x.3).into(), mask)
+                } else {
+                    lights.sample_punctual_lanes(v3x8(l.map(|x| x.0)), F32x8(l.map(|x| x.1)), mask)
+                };
+                std::array::from_fn(|k| s.lane(k).map(|x| LightSample { delta: !bg, ..x }))
+            }(&lights, l, mask, bg))
+        };
+        for bg in [false, true] {
+            let u_cat = if bg { 0.75 } else { 0.25 };
+            let scalar = |(p, ui, n, u): Pb| lights.sample(&scene, p, n, u_cat, ui, u);
+            each_level(
+                |b, i| inputs[b][i],
+                |lv, l| run(lv, l, Mask8::first(8), bg),
+                scalar,
+                same_light,
+                if bg {
+                    "sample_constant_background_lanes"
+                } else {
+                    "sample_punctual_lanes"
+                },
+            );
+            for level in SimdLevel::available() {
+                for l in &inputs {
+                    let mut g = *l;
+                    g[5..].fill(garbage);
+                    let (a, b) = (
+                        run(level, *l, Mask8::first(5), bg),
+                        run(level, g, Mask8::first(5), bg),
+                    );
+                    for k in 0..8 {
+                        assert!(same_light(&a[k], &b[k]));
+                        assert!(k < 5 || a[k].is_none());
+                    }
+                }
+            }
+            for l in &inputs {
+                for &(p, ui, n, u) in l {
+                    let s = lights.sample(&scene, p, n, u_cat, ui, u);
+                    delta += usize::from(s.is_some_and(|s| s.delta));
+                    sky += usize::from(s.is_some_and(|s| !s.delta));
+                }
+            }
+        }
+    }
+    assert!(
+        delta > 2000 && sky > 6000,
+        "{delta} punctual, {sky} background samples"
+    );
+}
+
 /// A ray-offset test's lanes: p, err, ng, w, the light's distance.
 type Ro = (Vec3, Vec3, Vec3, Vec3, f32);
 

@@ -1,7 +1,7 @@
 // Light sampling for next-event estimation, twin of cpu/src/lights.rs
 // (same names; read its header for the selection rule). Needs bindings.glsl
-// and bsdf/warp.glsl (square_to_cosine_hemisphere, the same map as
-// glint_cpu::sampling's).
+// and bsdf/warp.glsl (square_to_cosine_hemisphere, the map
+// glint_cpu::bsdf::warp writes once for the CPU's BSDFs and lights).
 #ifndef GLINT_INTEGRATOR_LIGHTS_GLSL
 #define GLINT_INTEGRATOR_LIGHTS_GLSL
 

@@ -630,7 +630,17 @@ fn light_samples(
         x: gather!(inp, |d| d.u_light.x),
         y: gather!(inp, |d| d.u_light.y),
     };
-    let emitter = live & gather!(inp, |d| d.u_cat).lt(L::splat(lights.probs.area));
+    let pr = lights.probs;
+    let u_cat = gather!(inp, |d| d.u_cat);
+    // The categories as `Lights::sample` picks them.
+    let emitter = live & u_cat.lt(L::splat(pr.area));
+    let punctual = live & !emitter & u_cat.lt(L::splat(pr.area + pr.punctual));
+    let background = if pr.background > 0.0 {
+        live & !emitter & !punctual
+    } else {
+        Mask8::from_bits(0)
+    };
+    let u_idx = || gather!(inp, |d| d.u_idx);
     let mut ls = if L::none(emitter) {
         let zero = V3::splat(Vec3::ZERO);
         EmitterSamples {
@@ -641,42 +651,53 @@ fn light_samples(
             pdf: L::zero(),
         }
     } else {
-        let u_idx = gather!(inp, |d| d.u_idx);
-        lights.sample_emitter_lanes(scene, p, u_idx, u_light, emitter)
+        lights.sample_emitter_lanes(scene, p, u_idx(), u_light, emitter)
     };
-    let others = L::bits(live & !emitter);
     let mut delta = 0u8;
-    if others != 0 {
-        // The scalar samplers, as `PathTracer::vertex` calls them.
-        let mut got = [None::<LightSample>; 8];
-        let mut some = 0u8;
-        for k in live_lanes(others) {
-            let d = &inp[k];
-            let bg = background_direction_frame(ns.lane(k), d.wo, transmits);
-            got[k] = lights.sample(scene, d.p, bg, d.u_cat, d.u_idx, d.u_light);
-            if let Some(l) = &got[k] {
-                some |= 1 << k;
-                delta |= u8::from(l.delta) << k;
-            }
-        }
-        let none = LightSample {
-            wi: Vec3::Z,
-            dist: 1.0,
-            weight: Vec3::ZERO,
-            pdf: 0.0,
-            delta: false,
-        };
-        let got: [LightSample; 8] = crate::lanes::build8(|k| got[k].unwrap_or(none));
-        let o = Mask8::from_bits(others);
-        ls = EmitterSamples {
-            valid: L::select_mask(o, Mask8::from_bits(some), ls.valid),
-            wi: V3::select(o, gather3!(got, |l| l.wi), ls.wi),
-            dist: L::select(o, gather!(got, |l| l.dist), ls.dist),
-            weight: V3::select(o, gather3!(got, |l| l.weight), ls.weight),
-            pdf: L::select(o, gather!(got, |l| l.pdf), ls.pdf),
-        };
+    if !L::none(punctual) {
+        let got = lights.sample_punctual_lanes(p, u_idx(), punctual);
+        ls = ls.select(punctual, got);
+        delta = L::bits(got.valid);
     }
-    (ls, Mask8::from_bits(delta))
+    if L::none(background) {
+        return (ls, Mask8::from_bits(delta));
+    }
+    if lights.envmap.is_none() {
+        // The constant background: about the shading normal turned to wo
+        // (`background_direction_frame`), or over the sphere.
+        let bg = if transmits {
+            V3::splat(Vec3::ZERO)
+        } else {
+            V3::select(ns.dot(gather3!(inp, |d| d.wo)).ge(L::zero()), ns, -ns)
+        };
+        let got = lights.sample_constant_background_lanes(bg, u_light, background);
+        return (ls.select(background, got), Mask8::from_bits(delta));
+    }
+    // The environment map's samples, as `PathTracer::vertex` draws them.
+    let mut got = [None::<LightSample>; 8];
+    let mut some = 0u8;
+    for k in live_lanes(L::bits(background)) {
+        let d = &inp[k];
+        let bg = background_direction_frame(ns.lane(k), d.wo, transmits);
+        got[k] = lights.sample(scene, d.p, bg, d.u_cat, d.u_idx, d.u_light);
+        some |= u8::from(got[k].is_some()) << k;
+    }
+    let none = LightSample {
+        wi: Vec3::Z,
+        dist: 1.0,
+        weight: Vec3::ZERO,
+        pdf: 0.0,
+        delta: false,
+    };
+    let got: [LightSample; 8] = crate::lanes::build8(|k| got[k].unwrap_or(none));
+    let got = EmitterSamples {
+        valid: Mask8::from_bits(some),
+        wi: gather3!(got, |l| l.wi),
+        dist: gather!(got, |l| l.dist),
+        weight: gather3!(got, |l| l.weight),
+        pdf: gather!(got, |l| l.pdf),
+    };
+    (ls.select(background, got), Mask8::from_bits(delta))
 }
 
 /// The lanes' arithmetic of the vertices in `live` (bits), BSDF `M`
