@@ -3,6 +3,7 @@
 use glam::{Vec2, Vec3};
 
 use crate::bvh::Ray;
+use crate::lanes::{Lane, V2, V3};
 use crate::scene::{Camera, Scene};
 
 /// A perspective camera prepared for one image size: the world-space origin
@@ -46,14 +47,23 @@ impl PinholeCamera {
     /// The ray through pixel (x, y) (top row first) at offset `u` in [0,1)^2
     /// within the pixel: a box filter one pixel wide.
     pub fn ray(&self, x: u32, y: u32, u: Vec2) -> Ray {
-        let sx = 2.0 * (x as f32 + u.x) / self.width as f32 - 1.0;
-        let sy = 1.0 - 2.0 * (y as f32 + u.y) / self.height as f32;
-        let d = (self.forward + self.right * sx + self.up * sy).normalize();
         Ray {
             o: self.origin,
-            d,
+            d: self.directions::<f32>(x, y, u.into()).into(),
             tmax: f32::MAX,
         }
+    }
+
+    /// The directions of [`Self::ray`] at the offsets `u`, lane by lane
+    /// (the wave's camera rays; its one-lane instantiation is the scalar
+    /// form).
+    #[inline(always)]
+    pub fn directions<L: Lane>(&self, x: u32, y: u32, u: V2<L>) -> V3<L> {
+        let two = L::splat(2.0);
+        let sx = two * (L::splat(x as f32) + u.x) / L::splat(self.width as f32) - L::one();
+        let sy = L::one() - two * (L::splat(y as f32) + u.y) / L::splat(self.height as f32);
+        let along = |axis: Vec3, s: L| V3::splat(axis).scale(s);
+        (V3::splat(self.forward) + along(self.right, sx) + along(self.up, sy)).normalize()
     }
 }
 

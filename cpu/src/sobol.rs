@@ -138,7 +138,7 @@ pub struct SampleBatch {
     key: u32,
     pixel: u32,
     first: u32,
-    pixel_2d: [Vec2; 8],
+    pixel_2d: V2<F32x8>,
     /// The pixel's pair keys, pair by pair, for the block of 2^16 samples
     /// `block` (when the batch lies in one block).
     keys: Vec<lanes::PairKeys<u32>>,
@@ -152,7 +152,10 @@ impl SampleBatch {
             key: 0,
             pixel: 0,
             first: 0,
-            pixel_2d: [Vec2::ZERO; 8],
+            pixel_2d: V2 {
+                x: F32x8([0.0; 8]),
+                y: F32x8([0.0; 8]),
+            },
             keys: Vec::new(),
             block: None,
         }
@@ -179,12 +182,17 @@ impl SampleBatch {
                 lanes::sobol_2d(U32x8::splat(key), U32x8::splat(pixel), batch_samples(first), U32x8::splat(0))
             }(key, pixel, first)),
         };
-        self.pixel_2d = std::array::from_fn(|i| Vec2::new(p.x.0[i], p.y.0[i]));
+        self.pixel_2d = p;
     }
 
     /// Lane `lane`'s position in the pixel ([`PathSampler::pixel_2d`]).
     pub fn pixel_2d(&self, lane: usize) -> Vec2 {
-        self.pixel_2d[lane]
+        Vec2::new(self.pixel_2d.x.0[lane], self.pixel_2d.y.0[lane])
+    }
+
+    /// Every lane's [`Self::pixel_2d`].
+    pub fn pixels_2d(&self) -> V2<F32x8> {
+        self.pixel_2d
     }
 
     /// Bounce `bounce`'s numbers ([`PathSampler::bounce`]) of the lanes in

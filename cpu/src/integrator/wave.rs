@@ -13,7 +13,7 @@ use glam::Vec3;
 use super::wide::Shaded;
 use super::{Arrival, PathState, PathTracer};
 use crate::bvh::{PACKET, Ray};
-use crate::lanes::live_lanes;
+use crate::lanes::{F32x8, V2, live_lanes};
 use crate::sobol::{BounceSamples, PathSampler, SampleBatch};
 
 /// Where a wave's random numbers come from. (Made once per wave and moved
@@ -28,10 +28,11 @@ pub enum WaveSampler<'a> {
 }
 
 impl WaveSampler<'_> {
-    fn pixel_2d(&mut self, lane: usize) -> glam::Vec2 {
+    /// Each lane's position in the pixel.
+    fn pixels_2d(&mut self) -> V2<F32x8> {
         match self {
-            Self::Batch(batch) => batch.pixel_2d(lane),
-            Self::Paths(paths) => paths[lane].pixel_2d(),
+            Self::Batch(batch) => batch.pixels_2d(),
+            Self::Paths(paths) => crate::lanes::build8(|k| paths[k].pixel_2d()).into(),
         }
     }
 
@@ -73,8 +74,14 @@ impl PathTracer<'_> {
             tmax: 0.0,
         };
         let mut ray_of = [none; PACKET];
+        // The camera rays' directions in lanes (`PinholeCamera::ray`'s).
+        let d = self.camera.directions(x, y, rng.pixels_2d());
         for (k, ray) in ray_of.iter_mut().enumerate() {
-            *ray = self.camera.ray(x, y, rng.pixel_2d(k));
+            *ray = Ray {
+                o: self.camera.origin,
+                d: d.lane(k),
+                tmax: f32::MAX,
+            };
         }
         let mut live = ((1u16 << n) - 1) as u8;
         let mut arrivals = [None::<Arrival>; 8];
