@@ -196,9 +196,9 @@ impl SampleBatch {
     }
 
     /// Bounce `bounce`'s numbers ([`PathSampler::bounce`]) of the lanes in
-    /// `live` (bit k: lane k, sample `first + k`); the other lanes' are
-    /// zero.
-    pub fn bounces(&mut self, bounce: u32, live: u8) -> [BounceSamples; 8] {
+    /// `live` (bit k: lane k, sample `first + k`), in lanes; the other
+    /// lanes' are zero, or (drawn eight per instruction) their samples'.
+    pub fn bounces(&mut self, bounce: u32, live: u8) -> lanes::BounceLanes<F32x8> {
         if live.count_ones() < u32::from(self.level.break_even()) {
             // A loop over the live lanes, not `array::from_fn`, whose
             // array was copied out (a memcpy per call).
@@ -213,13 +213,13 @@ impl SampleBatch {
                     lanes::bounce_keyed(self.bounce_keys(bounce), i).into()
                 };
             }
-            return u;
+            return lanes::BounceLanes::pack(&u);
         }
         let (key, pixel, first) = (self.key, self.pixel, self.first);
         match self.block {
             Some(_) => {
                 let k = self.bounce_keys(bounce);
-                simd_at!(self.level, fn(first: u32, k: [lanes::PairKeys<u32>; 4]) -> [BounceSamples; 8] {
+                simd_at!(self.level, fn(first: u32, k: [lanes::PairKeys<u32>; 4]) -> lanes::BounceLanes<F32x8> {
                     let i = batch_samples(first).and(U32x8::splat((1 << SOBOL_BLOCK_BITS) - 1));
                     let k = [
                         lanes::PairKeys::<U32x8>::splat(k[0]),
@@ -227,13 +227,13 @@ impl SampleBatch {
                         lanes::PairKeys::<U32x8>::splat(k[2]),
                         lanes::PairKeys::<U32x8>::splat(k[3]),
                     ];
-                    unpack(lanes::bounce_keyed(k, i))
+                    lanes::bounce_keyed(k, i)
                 }(first, k))
             }
             // The batch straddles two blocks of 2^16 (their seeds differ).
             None => {
-                simd_at!(self.level, fn(key: u32, pixel: u32, first: u32, b: u32) -> [BounceSamples; 8] {
-                    unpack(lanes::bounce(U32x8::splat(key), U32x8::splat(pixel), batch_samples(first), U32x8::splat(b)))
+                simd_at!(self.level, fn(key: u32, pixel: u32, first: u32, b: u32) -> lanes::BounceLanes<F32x8> {
+                    lanes::bounce(U32x8::splat(key), U32x8::splat(pixel), batch_samples(first), U32x8::splat(b))
                 }(key, pixel, first, bounce))
             }
         }
@@ -261,17 +261,39 @@ impl SampleBatch {
     }
 }
 
-/// Eight lanes' bounce numbers, path by path.
-#[inline(always)]
-fn unpack(n: lanes::BounceLanes<F32x8>) -> [BounceSamples; 8] {
-    std::array::from_fn(|i| BounceSamples {
-        light_cat: n.light_cat.0[i],
-        light_idx: n.light_idx.0[i],
-        light: Vec2::new(n.light.x.0[i], n.light.y.0[i]),
-        bsdf_lobe: n.bsdf_lobe.0[i],
-        bsdf: Vec2::new(n.bsdf.x.0[i], n.bsdf.y.0[i]),
-        rr: n.rr.0[i],
-    })
+impl lanes::BounceLanes<F32x8> {
+    /// Lane `i`'s numbers.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> BounceSamples {
+        BounceSamples {
+            light_cat: self.light_cat.0[i],
+            light_idx: self.light_idx.0[i],
+            light: Vec2::new(self.light.x.0[i], self.light.y.0[i]),
+            bsdf_lobe: self.bsdf_lobe.0[i],
+            bsdf: Vec2::new(self.bsdf.x.0[i], self.bsdf.y.0[i]),
+            rr: self.rr.0[i],
+        }
+    }
+
+    /// Eight paths' numbers side by side.
+    #[inline(always)]
+    pub fn pack(u: &[BounceSamples; 8]) -> Self {
+        let of = |f: fn(&BounceSamples) -> f32| F32x8(std::array::from_fn(|i| f(&u[i])));
+        Self {
+            light_cat: of(|b| b.light_cat),
+            light_idx: of(|b| b.light_idx),
+            light: V2 {
+                x: of(|b| b.light.x),
+                y: of(|b| b.light.y),
+            },
+            bsdf_lobe: of(|b| b.bsdf_lobe),
+            bsdf: V2 {
+                x: of(|b| b.bsdf.x),
+                y: of(|b| b.bsdf.y),
+            },
+            rr: of(|b| b.rr),
+        }
+    }
 }
 
 /// The sample indices `first .. first + 8` as lanes.

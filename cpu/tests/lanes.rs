@@ -824,7 +824,7 @@ fn batched_samples_are_the_scalar_sampler_s() {
                         for (lane, b) in paths.iter_mut().enumerate() {
                             if mask & (1 << lane) != 0 {
                                 assert_eq!(
-                                    got[lane],
+                                    got.lane(lane),
                                     b.bounce(),
                                     "{level:?} pixel {pixel} lane {lane} bounce {d}"
                                 );

@@ -14,6 +14,7 @@ use super::wide::Shaded;
 use super::{Arrival, PathState, PathTracer};
 use crate::bvh::{PACKET, Ray};
 use crate::lanes::{F32x8, V2, live_lanes};
+use crate::sobol::lanes::BounceLanes;
 use crate::sobol::{BounceSamples, PathSampler, SampleBatch};
 
 /// Where a wave's random numbers come from. (Made once per wave and moved
@@ -37,7 +38,7 @@ impl WaveSampler<'_> {
     }
 
     /// Bounce `bounce`'s numbers of the lanes in `live` (bit k: lane k).
-    fn bounces(&mut self, bounce: u32, live: u8) -> [BounceSamples; 8] {
+    fn bounces(&mut self, bounce: u32, live: u8) -> BounceLanes<F32x8> {
         match self {
             Self::Batch(batch) => batch.bounces(bounce, live),
             Self::Paths(paths) => {
@@ -46,7 +47,7 @@ impl WaveSampler<'_> {
                 for k in live_lanes(live) {
                     u[k] = paths[k].bounce();
                 }
-                u
+                BounceLanes::pack(&u)
             }
         }
     }
@@ -132,7 +133,7 @@ impl PathTracer<'_> {
             }
             for k in live_lanes(one_by_one) {
                 let Some(at) = &arrivals[k] else { continue };
-                let (path, ray, u) = (&mut paths[k], &mut ray_of[k], &bounce[k]);
+                let (path, ray, u) = (&mut paths[k], &mut ray_of[k], &bounce.lane(k));
                 // A hit the lanes shaded but left (`Shaded`) is not shaded
                 // again.
                 let pre = shaded.sf[k].as_ref().zip(shaded.textured[k].as_ref());

@@ -21,7 +21,7 @@
 //! the same bits, as the scalar vertex gives it (`cpu/tests/lanes.rs`
 //! renders every bundled scene both ways).
 
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 
 use super::{Arrival, PathState, PathTracer, SurfaceFrame, offset_origin_lanes, shadow_ray_lanes};
 use crate::abi::ONE_MINUS_EPS;
@@ -38,7 +38,7 @@ use crate::lanes::{F32x8, Lane, Mask8, V2, V3, live_lanes};
 use crate::lights::{EmitterSamples, LightSample, Lights, background_direction_frame};
 use crate::sampling::lanes::mis_light;
 use crate::scene::{Scene, TRI_NORMALS, TRI_SHADING_SHIFT, TRI_TANGENTS};
-use crate::sobol::BounceSamples;
+use crate::sobol::lanes::BounceLanes;
 use crate::texture::textured_bsdf;
 
 /// The fewest eligible paths for which a wave shades its vertices of one
@@ -549,11 +549,6 @@ pub(super) struct VertexIn {
     /// The hit point's error bound.
     p_err: Vec3,
     wo: Vec3,
-    u_cat: f32,
-    u_idx: f32,
-    u_light: Vec2,
-    u_lobe: f32,
-    u_bsdf: Vec2,
 }
 
 /// The vertex tangents of the lanes' triangles that have them (read only
@@ -611,27 +606,28 @@ pub(super) struct VertexOut {
     eta: [f32; 8],
 }
 
-/// The lanes' light samples ([`Lights::sample`]) from points `p` (shading
-/// normals `ns`) of the vertices in `live`: the emitter samples in lanes
-/// (`Lights::sample_emitter_lanes`), the punctual lights' and the
-/// background's lane by lane. The samples, and where each is a delta.
+/// The lanes' light samples ([`Lights::sample`], the bounce's numbers
+/// `u`) from points `p` (shading normals `ns`) of the vertices in `live`:
+/// the emitter, punctual and constant background samples in lanes
+/// (`Lights::sample_emitter_lanes`, `sample_punctual_lanes`,
+/// `sample_constant_background_lanes`), an environment map's lane by lane.
+/// The samples, and where each is a delta.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn light_samples(
     lights: &Lights,
     scene: &Scene,
     inp: &[VertexIn; 8],
+    u: &BounceLanes<F32x8>,
     live: Mask8,
     p: V3<F32x8>,
     ns: V3<F32x8>,
     transmits: bool,
 ) -> (EmitterSamples<F32x8>, Mask8) {
     type L = F32x8;
-    let u_light = V2 {
-        x: gather!(inp, |d| d.u_light.x),
-        y: gather!(inp, |d| d.u_light.y),
-    };
+    let u_light = u.light;
     let pr = lights.probs;
-    let u_cat = gather!(inp, |d| d.u_cat);
+    let u_cat = u.light_cat;
     // The categories as `Lights::sample` picks them.
     let emitter = live & u_cat.lt(L::splat(pr.area));
     let punctual = live & !emitter & u_cat.lt(L::splat(pr.area + pr.punctual));
@@ -640,7 +636,7 @@ fn light_samples(
     } else {
         Mask8::from_bits(0)
     };
-    let u_idx = || gather!(inp, |d| d.u_idx);
+    let u_idx = || u.light_idx;
     let mut ls = if L::none(emitter) {
         let zero = V3::splat(Vec3::ZERO);
         EmitterSamples {
@@ -679,7 +675,8 @@ fn light_samples(
     for k in live_lanes(L::bits(background)) {
         let d = &inp[k];
         let bg = background_direction_frame(ns.lane(k), d.wo, transmits);
-        got[k] = lights.sample(scene, d.p, bg, d.u_cat, d.u_idx, d.u_light);
+        let n = u.lane(k);
+        got[k] = lights.sample(scene, d.p, bg, n.light_cat, n.light_idx, n.light);
         some |= u8::from(got[k].is_some()) << k;
     }
     let none = LightSample {
@@ -710,6 +707,7 @@ fn vertex_lanes<M: WideBsdf>(
     scene: &Scene,
     mis: Mis,
     inp: &[VertexIn; 8],
+    rnd: &BounceLanes<F32x8>,
     tangents: &Tangents,
     mapped: &MappedFrames,
     params: &[M::Params; 8],
@@ -778,7 +776,7 @@ fn vertex_lanes<M: WideBsdf>(
     let fold = (M::MAPPED && folds != 0).then(|| Fold::new(frame.to_local(ng), wo));
     let folds = Mask8::from_bits(folds);
     let p = gather3!(inp, |d| d.p);
-    let (ls, delta) = light_samples(lights, scene, inp, live, p, ns, M::TRANSMITS);
+    let (ls, delta) = light_samples(lights, scene, inp, rnd, live, p, ns, M::TRANSMITS);
     // Next-event estimation's arithmetic (`PathTracer::next_event`).
     let wi_l = frame.to_local(ls.wi);
     let mut sides = agree::<L>(ls.wi.dot(ng).gt(L::zero()), wi_l.z.gt(L::zero()));
@@ -799,11 +797,7 @@ fn vertex_lanes<M: WideBsdf>(
     let w = L::select(delta, L::one(), mis_light(mis, ls.pdf, pdf));
     let light = (f * ls.weight).scale(w);
     // The BSDF's sample (`next_direction`).
-    let u_bsdf = V2 {
-        x: gather!(inp, |d| d.u_bsdf.x),
-        y: gather!(inp, |d| d.u_bsdf.y),
-    };
-    let mut bs = M::sample(&bsdf, wo, gather!(inp, |d| d.u_lobe), u_bsdf);
+    let mut bs = M::sample(&bsdf, wo, rnd.bsdf_lobe, rnd.bsdf);
     if let Some(fd) = &fold {
         // `Fold::sample`.
         let r = fd.mirror(bs.wi);
@@ -854,7 +848,7 @@ impl PathTracer<'_> {
         paths: &mut [PathState; 8],
         rays_of: &mut [Ray; 8],
         arrivals: &[Option<Arrival>; 8],
-        bounce: &[BounceSamples; 8],
+        bounce: &BounceLanes<F32x8>,
         shaded: &mut Shaded,
         pending: &mut u8,
         depth: u32,
@@ -949,7 +943,7 @@ impl PathTracer<'_> {
         paths: &mut [PathState; 8],
         rays_of: &mut [Ray; 8],
         arrivals: &[Option<Arrival>; 8],
-        bounce: &[BounceSamples; 8],
+        bounce: &BounceLanes<F32x8>,
         textured: &[Option<Bsdf>; 8],
         mapped: &MappedFrames,
         wide: u8,
@@ -994,7 +988,6 @@ impl PathTracer<'_> {
                 tangents.t[k] = [at3(o), at3(o + 1), at3(o + 2)];
                 tangents.has |= 1 << k;
             }
-            let u = &bounce[k];
             params[k] = pm;
             inp[k] = VertexIn {
                 v: tri.vertices(),
@@ -1005,11 +998,6 @@ impl PathTracer<'_> {
                 p: at.p,
                 p_err: at.p_err,
                 wo: at.wo,
-                u_cat: u.light_cat,
-                u_idx: u.light_idx,
-                u_light: u.light,
-                u_lobe: u.bsdf_lobe,
-                u_bsdf: u.bsdf,
             };
         }
         // The lanes not shaded here compute a copy of a shaded one (and
@@ -1024,13 +1012,14 @@ impl PathTracer<'_> {
             scene: &Scene,
             mis: Mis,
             inp: &[VertexIn; 8],
+            u: &BounceLanes<F32x8>,
             tangents: &Tangents,
             mapped: &MappedFrames,
             params: &[M::Params; 8],
             live: u8,
         ) -> VertexOut {
-            vertex_lanes::<M>(lights, scene, mis, inp, tangents, mapped, params, live)
-        }(&self.lights, scene, self.mis, &inp, &tangents, mapped, &params, wide));
+            vertex_lanes::<M>(lights, scene, mis, inp, u, tangents, mapped, params, live)
+        }(&self.lights, scene, self.mis, &inp, bounce, &tangents, mapped, &params, wide));
         let mut ended = 0u8;
         for k in live_lanes(wide) {
             let Some(at) = &arrivals[k] else { continue };
@@ -1065,7 +1054,7 @@ impl PathTracer<'_> {
                 d: out.wi[k],
                 tmax: f32::MAX,
             };
-            if !self.roulette(path, depth + 1, bounce[k].rr) {
+            if !self.roulette(path, depth + 1, bounce.rr.0[k]) {
                 ended |= 1 << k;
             }
         }
