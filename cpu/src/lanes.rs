@@ -450,7 +450,8 @@ fn sin_cos_poly(x: f32) -> (f32, f32) {
     // Quadrant k mod 4: (s, c), (c, -s), (-s, -c), (-c, s).
     let (a, b) = if k & 1 == 0 { (s, c) } else { (c, s) };
     let sin = if k & 2 != 0 { -a } else { a };
-    let cos = if (k + 1) & 2 != 0 { -b } else { b };
+    // (Wrapping: a lane of garbage past 2^31 quadrants saturates k.)
+    let cos = if k.wrapping_add(1) & 2 != 0 { -b } else { b };
     (sin, cos)
 }
 
