@@ -99,6 +99,16 @@ pub mod lanes {
     use crate::lanes::{Lane, V3};
     use crate::spherical::lanes::spherical_triangle_shape;
 
+    /// [`super::background_direction_frame`] over lanes.
+    #[inline(always)]
+    pub fn background_direction_frame<L: Lane>(ns: V3<L>, wo: V3<L>, transmits: bool) -> V3<L> {
+        if transmits {
+            V3::splat(glam::Vec3::ZERO)
+        } else {
+            V3::select(ns.dot(wo).ge(L::zero()), ns, -ns)
+        }
+    }
+
     /// [`super::spot_falloff`] over lanes.
     #[inline(always)]
     pub fn spot_falloff<L: Lane>(cos_angle: L, cos_inner: L, cos_outer: L) -> L {
@@ -242,8 +252,10 @@ fn emission_lanes<L: Lane>(
     (valid & emits.gt(L::zero()), le)
 }
 
-/// Emitter light samples in lanes ([`Lights::sample_emitter_lanes`]):
-/// where each is valid, its direction, distance, Le / pdf and density.
+/// Light samples in lanes ([`Lights::sample_emitter_lanes`],
+/// [`Lights::sample_punctual_lanes`],
+/// [`Lights::sample_constant_background_lanes`]): where each is valid, its
+/// direction, distance, radiance (or intensity) / pdf and density.
 #[derive(Clone, Copy, Debug)]
 pub struct EmitterSamples<L: Lane> {
     pub valid: L::Mask,
@@ -315,6 +327,17 @@ impl From<&PunctualLight> for GpuLight {
                 ..Default::default()
             },
         }
+    }
+}
+
+/// Each lane's `f` of its light `ls[l]`, or of `ls[0]` splat across the
+/// lanes where the scene has `one` light ([`Lights::sample_punctual_lanes`]).
+#[inline(always)]
+fn per_light<L: Lane>(ls: &[GpuLight; 8], one: bool, f: impl Fn(&GpuLight) -> f32) -> L {
+    if one {
+        L::splat(f(&ls[0]))
+    } else {
+        L::from_fn(|l| f(&ls[l]))
     }
 }
 
@@ -651,29 +674,16 @@ impl Lights {
                 self.punctual[0]
             }
         });
-        let scalar = |f: fn(&GpuLight) -> f32| {
-            if one {
-                L::splat(f(&ls[0]))
-            } else {
-                L::from_fn(|l| f(&ls[l]))
-            }
-        };
+        let scalar = |f: fn(&GpuLight) -> f32| per_light::<L>(&ls, one, f);
         let vector = |f: fn(&GpuLight) -> [f32; 3]| {
-            if one {
-                V3::splat(f(&ls[0]).into())
-            } else {
-                V3::new(
-                    L::from_fn(|l| f(&ls[l])[0]),
-                    L::from_fn(|l| f(&ls[l])[1]),
-                    L::from_fn(|l| f(&ls[l])[2]),
-                )
-            }
+            V3::new(
+                per_light(&ls, one, |g| f(g)[0]),
+                per_light(&ls, one, |g| f(g)[1]),
+                per_light(&ls, one, |g| f(g)[2]),
+            )
         };
-        let kind = |k: u32| {
-            let is = |l: usize| if ls[l].kind == k { 1.0 } else { 0.0 };
-            let v = if one { L::splat(is(0)) } else { L::from_fn(is) };
-            v.gt(L::zero())
-        };
+        let kind =
+            |k: u32| per_light::<L>(&ls, one, |g| f32::from(u8::from(g.kind == k))).gt(L::zero());
         let directional = kind(abi::LIGHT_DIRECTIONAL);
         let intensity = vector(|g| g.intensity);
         let mut wi = -vector(|g| g.direction);
@@ -743,7 +753,7 @@ impl Lights {
         if !L::all(sphere) {
             let local = crate::bsdf::warp::lanes::square_to_cosine_hemisphere(u);
             wi = crate::frame::lanes::Frame::from_normal(bg_normal).to_world(local);
-            dir_pdf = local.z.max(zero) * L::splat(std::f32::consts::FRAC_1_PI);
+            dir_pdf = crate::sampling::lanes::cosine_hemisphere_pdf(local.z);
         }
         if !L::none(sphere) {
             let on_sphere = crate::sampling::lanes::square_to_uniform_sphere(u);
@@ -833,13 +843,7 @@ fn emitted_facing(scene: &Scene, tri: u32, u: f32, v: f32, front: bool) -> Optio
 /// Lambertian surface under a constant sky), or zero (uniform sphere) when
 /// the BSDF transmits, so light from behind the surface is reachable too.
 pub fn background_direction_frame(ns: Vec3, wo: Vec3, transmits: bool) -> Vec3 {
-    if transmits {
-        Vec3::ZERO
-    } else if ns.dot(wo) >= 0.0 {
-        ns
-    } else {
-        -ns
-    }
+    lanes::background_direction_frame::<f32>(ns.into(), wo.into(), transmits).into()
 }
 
 #[cfg(test)]

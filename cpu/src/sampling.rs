@@ -61,6 +61,12 @@ pub mod lanes {
         }
     }
 
+    /// [`super::cosine_hemisphere_pdf`].
+    #[inline(always)]
+    pub fn cosine_hemisphere_pdf<L: Lane>(cos_theta: L) -> L {
+        cos_theta.max(L::zero()) * L::splat(std::f32::consts::FRAC_1_PI)
+    }
+
     /// [`super::square_to_uniform_sphere`].
     #[inline(always)]
     pub fn square_to_uniform_sphere<L: Lane>(u: V2<L>) -> V3<L> {
@@ -244,7 +250,7 @@ impl Pcg32 {
 }
 
 pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
-    cos_theta.max(0.0) * std::f32::consts::FRAC_1_PI
+    lanes::cosine_hemisphere_pdf(cos_theta)
 }
 
 /// Uniform direction on the unit sphere; pdf 1 / (4 pi). (The cosine

@@ -625,18 +625,15 @@ fn light_samples(
     transmits: bool,
 ) -> (EmitterSamples<F32x8>, Mask8) {
     type L = F32x8;
-    let u_light = u.light;
     let pr = lights.probs;
-    let u_cat = u.light_cat;
     // The categories as `Lights::sample` picks them.
-    let emitter = live & u_cat.lt(L::splat(pr.area));
-    let punctual = live & !emitter & u_cat.lt(L::splat(pr.area + pr.punctual));
+    let emitter = live & u.light_cat.lt(L::splat(pr.area));
+    let punctual = live & !emitter & u.light_cat.lt(L::splat(pr.area + pr.punctual));
     let background = if pr.background > 0.0 {
         live & !emitter & !punctual
     } else {
         Mask8::from_bits(0)
     };
-    let u_idx = || u.light_idx;
     let mut ls = if L::none(emitter) {
         let zero = V3::splat(Vec3::ZERO);
         EmitterSamples {
@@ -647,36 +644,37 @@ fn light_samples(
             pdf: L::zero(),
         }
     } else {
-        lights.sample_emitter_lanes(scene, p, u_idx(), u_light, emitter)
+        lights.sample_emitter_lanes(scene, p, u.light_idx, u.light, emitter)
     };
     let mut delta = 0u8;
     if !L::none(punctual) {
-        let got = lights.sample_punctual_lanes(p, u_idx(), punctual);
+        let got = lights.sample_punctual_lanes(p, u.light_idx, punctual);
         ls = ls.select(punctual, got);
         delta = L::bits(got.valid);
     }
     if L::none(background) {
         return (ls, Mask8::from_bits(delta));
     }
+    // About the shading normal turned to wo, or over the sphere.
+    let bg =
+        crate::lights::lanes::background_direction_frame(ns, gather3!(inp, |d| d.wo), transmits);
     if lights.envmap.is_none() {
-        // The constant background: about the shading normal turned to wo
-        // (`background_direction_frame`), or over the sphere.
-        let bg = if transmits {
-            V3::splat(Vec3::ZERO)
-        } else {
-            V3::select(ns.dot(gather3!(inp, |d| d.wo)).ge(L::zero()), ns, -ns)
-        };
-        let got = lights.sample_constant_background_lanes(bg, u_light, background);
+        let got = lights.sample_constant_background_lanes(bg, u.light, background);
         return (ls.select(background, got), Mask8::from_bits(delta));
     }
     // The environment map's samples, as `PathTracer::vertex` draws them.
     let mut got = [None::<LightSample>; 8];
     let mut some = 0u8;
     for k in live_lanes(L::bits(background)) {
-        let d = &inp[k];
-        let bg = background_direction_frame(ns.lane(k), d.wo, transmits);
         let n = u.lane(k);
-        got[k] = lights.sample(scene, d.p, bg, n.light_cat, n.light_idx, n.light);
+        got[k] = lights.sample(
+            scene,
+            inp[k].p,
+            bg.lane(k),
+            n.light_cat,
+            n.light_idx,
+            n.light,
+        );
         some |= u8::from(got[k].is_some()) << k;
     }
     let none = LightSample {
